@@ -1,0 +1,1 @@
+"""legged_gente: legged locomotion over generated, physically realistic terrains."""
