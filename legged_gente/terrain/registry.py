@@ -1,0 +1,112 @@
+"""The one place atomic terrains are declared.
+
+Every atomic terrain is a plain function registered with :func:`atomic_terrain`. Its parameters, their SI
+units, ranges and docs live here, on the function's registration, and nowhere else: the curriculum, the
+LLM tool schemas, the offline planner's vocabulary and the validator all read :data:`ATOMIC_TERRAINS`.
+
+Two kinds exist:
+
+* ``"geometric"``: ``fn(shape, resolution, rng, **params) -> np.ndarray`` returns float32 heights in
+  metres of ``shape == (nx, ny)`` cells of ``resolution`` metres (x along axis 0).
+* ``"physical"``: ``fn(shape, resolution, rng, heights, **params) -> MaterialPatch`` returns the material
+  properties for the region (water, soil, friction) given the region's current heights.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+from typing import Any, Callable, Literal
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class Param:
+    """One keyword parameter of an atomic terrain.
+
+    ``low``/``high`` bound numeric values (inclusive); ``choices`` lists the allowed strings for a categorical
+    parameter. ``unit`` is an SI unit string ("m", "rad", "m/s", "1" for dimensionless, "" for categorical).
+    """
+
+    default: Any
+    doc: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[str, ...] | None = None
+    integer: bool = False
+
+    def check(self, name: str, value: Any, terrain: str) -> Any:
+        """Return ``value`` if valid, else raise ValueError naming the terrain, the parameter and the fix."""
+        if self.choices is not None:
+            if value not in self.choices:
+                raise ValueError(
+                    f"{terrain}: {name}={value!r} is not one of {list(self.choices)}; pick one of those."
+                )
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"{terrain}: {name} must be a number ({self.unit}), got {type(value).__name__} {value!r}.")
+        if self.integer and float(value) != int(value):
+            raise ValueError(f"{terrain}: {name} must be a whole number, got {value!r}.")
+        if not np.isfinite(value):
+            raise ValueError(f"{terrain}: {name} must be finite, got {value!r}.")
+        if (self.low is not None and value < self.low) or (self.high is not None and value > self.high):
+            raise ValueError(
+                f"{terrain}: {name}={value!r} {self.unit} is outside [{self.low}, {self.high}] {self.unit}; "
+                f"choose a value in that range."
+            )
+        return int(value) if self.integer else float(value)
+
+
+@dataclasses.dataclass(frozen=True)
+class AtomicTerrain:
+    """A registered atomic terrain: its function, kind, one-line description, parameters and curriculum map."""
+
+    name: str
+    kind: Literal["geometric", "physical"]
+    description: str
+    params: dict[str, Param]
+    fn: Callable[..., Any]
+    difficulty: Callable[[float], dict[str, Any]] | None = None
+
+    def check_params(self, params: dict[str, Any]) -> dict[str, Any]:
+        """Validate ``params`` (unknown or out-of-range keys raise) and fill defaults."""
+        unknown = sorted(set(params) - set(self.params))
+        if unknown:
+            raise ValueError(
+                f"{self.name}: unknown parameter(s) {unknown}; valid parameters are {sorted(self.params)}."
+            )
+        return {k: p.check(k, params.get(k, p.default), self.name) for k, p in self.params.items()}
+
+    def params_for_difficulty(self, difficulty: float) -> dict[str, Any]:
+        """Parameters for a curriculum difficulty in [0, 1] (defaults where the terrain has no mapping)."""
+        if not 0.0 <= difficulty <= 1.0:
+            raise ValueError(f"difficulty must be in [0, 1], got {difficulty}.")
+        mapped = self.difficulty(difficulty) if self.difficulty is not None else {}
+        return self.check_params(mapped)
+
+
+ATOMIC_TERRAINS: dict[str, AtomicTerrain] = {}
+
+
+def atomic_terrain(
+    name: str,
+    kind: Literal["geometric", "physical"],
+    description: str,
+    params: dict[str, Param],
+    difficulty: Callable[[float], dict[str, Any]] | None = None,
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Register ``fn`` as the atomic terrain ``name``; the function's keyword arguments must equal ``params``."""
+
+    def register(fn: Callable[..., Any]) -> Callable[..., Any]:
+        fixed = ("shape", "resolution", "rng") + (("heights",) if kind == "physical" else ())
+        sig = [p for p in inspect.signature(fn).parameters if p not in fixed]
+        if set(sig) != set(params):
+            raise TypeError(f"atomic terrain {name!r}: function keywords {sig} differ from declared params {list(params)}")
+        if name in ATOMIC_TERRAINS:
+            raise ValueError(f"atomic terrain {name!r} is registered twice")
+        ATOMIC_TERRAINS[name] = AtomicTerrain(name, kind, description, dict(params), fn, difficulty)
+        return fn
+
+    return register
