@@ -87,6 +87,9 @@ def _validation_schema(terrain: AtomicTerrain, size_x: float, size_y: float) -> 
     return schema
 
 
+_TYPE_NAMES = {"number": "a number", "integer": "a whole number", "string": "a string", "object": "an object"}
+
+
 def _fmt(value: Any) -> str:
     text = json.dumps(value) if not isinstance(value, float) else repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
@@ -110,7 +113,7 @@ def _describe(tool: str, err: jsonschema.ValidationError, schema: Mapping[str, A
     if kind == "type":
         if not path:
             return [f"{tool}: arguments must be a JSON object, got {_fmt(err.instance)}."]
-        return [f"{tool}: {arg}={_fmt(err.instance)} has the wrong type; expected a {err.validator_value}. "
+        return [f"{tool}: {arg}={_fmt(err.instance)} has the wrong type; expected {_TYPE_NAMES.get(err.validator_value, err.validator_value)}. "
                 f"{err.schema.get('description', '')}".strip()]
     if kind in ("minimum", "maximum"):
         lo, hi = err.schema.get("minimum"), err.schema.get("maximum")
