@@ -1,0 +1,530 @@
+"""Warp kernels of the terrain force fields, batched over (worlds x leg segments) and (worlds x feet).
+
+The ``*_fn`` functions are the device twins of the numpy references in ``models.py`` (same names without
+the suffix) and are tested against them. The kernels are launched by ``field.TerrainForces`` from
+mujoco_warp's ``contactfilter`` and ``passive`` callbacks and after each ``mjw.step``; they never read
+anything back to the host, so the whole substep can be captured in a CUDA graph.
+
+Conventions (mujoco_warp 4.0, read from its source): ``xfrc_applied[w, b]`` is a spatial_vector
+(force, torque) in world frame, the force acting at the body's centre of mass ``xipos``;
+``cvel[w, b]`` is (angular, linear) velocity with the linear part taken at ``subtree_com`` of the body's
+root, so the velocity of a world point p on body b is lin + ang x (p - subtree_com[root(b)]).
+"""
+
+from __future__ import annotations
+
+import warp as wp
+from mujoco_warp._src.support import contact_force_fn
+from mujoco_warp._src.types import vec5
+
+# Soil parameter columns (same order as soil.PARAM_NAMES).
+KC, KPHI, N, BULL_A, BULL_N, MU, K = 0, 1, 2, 3, 4, 5, 6
+NSOILPARAM = 7
+OBS_PER_FOOT = 12
+"""Privileged observation values per foot, see :meth:`field.TerrainForces.privileged_obs`."""
+
+PI = wp.constant(3.14159265358979)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Formulas (device twins of models.py)
+
+
+@wp.func
+def cylinder_drag_fn(rho: float, cd: float, radius: float, length: float, speed: float, paper_area: int) -> float:
+    """Morison / Hoerner drag magnitude; projected area 2rL, or the paper's 2*pi*r*L when paper_area != 0."""
+    area = 2.0 * radius * length
+    if paper_area != 0:
+        area = 2.0 * PI * radius * length
+    return 0.5 * cd * rho * area * speed * speed
+
+
+@wp.func
+def buoyancy_fn(rho: float, g: float, radius: float, length: float) -> float:
+    """Archimedes: rho g pi r^2 L."""
+    return rho * g * PI * radius * radius * length
+
+
+@wp.func
+def added_mass_fn(rho: float, cm: float, radius: float, length: float) -> float:
+    """Morison inertia term's added mass: cm rho pi r^2 L."""
+    return cm * rho * PI * radius * radius * length
+
+
+@wp.func
+def flow_force_fn(kind: int, t: float, amplitude: float, omega: float, phase: float) -> float:
+    """GenTe flow term: still (0) -> 0, current (1) -> A, tide (2) -> A cos(omega t + phase)."""
+    if kind == 1:
+        return amplitude
+    if kind == 2:
+        return amplitude * wp.cos(omega * t + phase)
+    return 0.0
+
+
+@wp.func
+def flow_rate_fn(kind: int, t: float, amplitude: float, omega: float, phase: float) -> float:
+    """Time derivative of flow_force_fn (for the added-mass relative acceleration)."""
+    if kind == 2:
+        return -amplitude * omega * wp.sin(omega * t + phase)
+    return 0.0
+
+
+@wp.func
+def bekker_sinkage_fn(pressure: float, kc: float, kphi: float, n: float, width: float) -> float:
+    """Bekker (1969): z = (p / (kc/b + kphi))^(1/n); 0 for p <= 0."""
+    if pressure <= 0.0:
+        return 0.0
+    return wp.pow(pressure / (kc / width + kphi), 1.0 / n)
+
+
+@wp.func
+def bulldozing_force_fn(a: float, n: float, sinkage: float) -> float:
+    """GenTe / Bekker bulldozing resistance a z^n."""
+    return a * wp.pow(wp.max(sinkage, 0.0), n)
+
+
+@wp.func
+def presliding_friction_fn(mu: float, normal_force: float, slip: float, k: float) -> float:
+    """Janosi-Hanamoto: mu F_N (1 - exp(-j/K))."""
+    return mu * normal_force * (1.0 - wp.exp(-slip / k))
+
+
+# --------------------------------------------------------------------------------------------------------
+# Helpers
+
+
+@wp.func
+def cell_of(p: wp.vec3, origin: wp.vec2, resolution: float, nx: int, ny: int) -> wp.vec2i:
+    """Nearest heightfield cell of world point p (clamped to the grid: the terrain's border covers it)."""
+    i = int(wp.round((p[0] - origin[0]) / resolution))
+    j = int(wp.round((p[1] - origin[1]) / resolution))
+    return wp.vec2i(wp.clamp(i, 0, nx - 1), wp.clamp(j, 0, ny - 1))
+
+
+@wp.func
+def point_velocity(
+    cvel: wp.array2d[wp.spatial_vector],
+    subtree_com: wp.array2d[wp.vec3],
+    body_rootid: wp.array[int],
+    w: int,
+    b: int,
+    p: wp.vec3,
+) -> wp.vec3:
+    v = cvel[w, b]
+    ang = wp.vec3(v[0], v[1], v[2])
+    lin = wp.vec3(v[3], v[4], v[5])
+    return lin + wp.cross(ang, p - subtree_com[w, body_rootid[b]])
+
+
+@wp.func
+def apply_force(
+    xfrc: wp.array2d[wp.spatial_vector], xipos: wp.array2d[wp.vec3], w: int, b: int, f: wp.vec3, p: wp.vec3
+):
+    """Add force f acting at world point p to body b: force plus its torque about the body's CoM."""
+    t = wp.cross(p - xipos[w, b], f)
+    wp.atomic_add(xfrc, w, b, wp.spatial_vector(f, t))
+
+
+@wp.func
+def flow_velocity(
+    kind: int, t: float, speed: float, direction: float, omega: float, phase: float, xi: float
+) -> wp.vec3:
+    u = xi * flow_force_fn(kind, t, speed, omega, phase)
+    return wp.vec3(u * wp.cos(direction), u * wp.sin(direction), 0.0)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Noise and per-episode draws
+
+
+@wp.kernel
+def reset_kernel(
+    mask: wp.array[bool],
+    seed: int,
+    counter: wp.array[int],
+    noise_std: float,
+    soil_table: wp.array3d[float],  # (npreset, NSOILPARAM, 2) mean, std
+    eps: wp.array[float],
+    soil_params: wp.array3d[float],  # (nworld, npreset, NSOILPARAM)
+    seg_vel_valid: wp.array2d[int],
+    foot_slip: wp.array2d[wp.vec3],
+):
+    """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset.
+
+    Soil draws are truncated below at 10 % of the mean so kphi, n, K stay positive (documented in docs).
+    """
+    w = wp.tid()
+    if not mask[w]:
+        return
+    state = wp.rand_init(seed, w + eps.shape[0] * counter[0])
+    eps[w] = 1.0 + noise_std * wp.randn(state)
+    for s in range(soil_table.shape[0]):
+        for q in range(NSOILPARAM):
+            mean = soil_table[s, q, 0]
+            value = mean + soil_table[s, q, 1] * wp.randn(state)
+            floor = 0.1 * mean
+            if mean > 0.0 and value < floor:
+                value = floor
+            soil_params[w, s, q] = value
+    for i in range(seg_vel_valid.shape[1]):
+        seg_vel_valid[w, i] = 0
+    for f in range(foot_slip.shape[1]):
+        foot_slip[w, f] = wp.vec3(0.0)
+
+
+@wp.kernel
+def flow_noise_kernel(seed: int, counter: wp.array[int], noise_std: float, xi: wp.array[float]):
+    """xi ~ N(1, noise_std) per env, redrawn each policy step (the paper's xi(t))."""
+    w = wp.tid()
+    state = wp.rand_init(seed + 7919, w + xi.shape[0] * counter[0])
+    xi[w] = 1.0 + noise_std * wp.randn(state)
+
+
+@wp.kernel
+def increment_kernel(counter: wp.array[int]):
+    counter[0] = counter[0] + 1
+
+
+# --------------------------------------------------------------------------------------------------------
+# Wading
+
+
+@wp.kernel
+def wading_kernel(
+    # segments (host constants)
+    seg_geom: wp.array[int],
+    seg_body: wp.array[int],
+    seg_radius: wp.array[float],
+    seg_halflen: wp.array[float],
+    body_rootid: wp.array[int],
+    # sim state
+    geom_xpos: wp.array2d[wp.vec3],
+    geom_xmat: wp.array2d[wp.mat33],
+    xipos: wp.array2d[wp.vec3],
+    cvel: wp.array2d[wp.spatial_vector],
+    subtree_com: wp.array2d[wp.vec3],
+    time: wp.array[float],
+    # material map
+    origin: wp.vec2,
+    resolution: float,
+    water_surface: wp.array2d[float],
+    flow_kind: wp.array2d[int],
+    flow_speed: wp.array2d[float],
+    flow_dir: wp.array2d[float],
+    flow_omega: wp.array2d[float],
+    flow_phase: wp.array2d[float],
+    # parameters
+    rho: float,
+    cd: float,
+    cm: float,
+    g: float,
+    dt: float,
+    vertical_drag: int,
+    paper_area: int,
+    paper_added_mass: int,
+    paper_flow_force: int,
+    eps: wp.array[float],
+    xi: wp.array[float],
+    # state kept across substeps
+    seg_vel: wp.array2d[wp.vec3],
+    seg_vel_valid: wp.array2d[int],
+    # out
+    xfrc: wp.array2d[wp.spatial_vector],
+    seg_force: wp.array2d[wp.vec3],
+):
+    """Drag, buoyancy, added mass (and the paper's flow force) on the submerged part of each leg capsule.
+
+    The capsule is the segment c +- (halflen + radius) * axis (its tips included); its submerged length
+    follows from the endpoints' heights and the water surface at the capsule centre's cell.
+    """
+    w, s = wp.tid()
+    gid = seg_geom[s]
+    b = seg_body[s]
+    r = seg_radius[s]
+    c = geom_xpos[w, gid]
+    xm = geom_xmat[w, gid]
+    axis = wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    half = seg_halflen[s] + r
+    pa = c - half * axis
+    pb = c + half * axis
+    lo = pa
+    hi = pb
+    if pa[2] > pb[2]:
+        lo = pb
+        hi = pa
+    cell = cell_of(c, origin, resolution, water_surface.shape[0], water_surface.shape[1])
+    zw = water_surface[cell[0], cell[1]]
+    length = 2.0 * half
+    frac = float(1.0)
+    if hi[2] > zw:
+        if lo[2] >= zw:
+            frac = 0.0
+        else:
+            frac = (zw - lo[2]) / (hi[2] - lo[2])
+    lsub = frac * length
+    force = wp.vec3(0.0)
+    if lsub <= 0.0:
+        seg_vel_valid[w, s] = 0
+        seg_force[w, s] = force
+        return
+    centroid = lo + 0.5 * frac * (hi - lo)  # centre of buoyancy of the submerged part
+    t = time[w]
+    kind = flow_kind[cell[0], cell[1]]
+    amp = flow_speed[cell[0], cell[1]]
+    fdir = flow_dir[cell[0], cell[1]]
+    om = flow_omega[cell[0], cell[1]]
+    ph = flow_phase[cell[0], cell[1]]
+    u = flow_velocity(kind, t, amp, fdir, om, ph, xi[w])
+    v = point_velocity(cvel, subtree_com, body_rootid, w, b, centroid)
+    vrel = v - u
+    if vertical_drag == 0:
+        vrel = wp.vec3(vrel[0], vrel[1], 0.0)
+    speed = wp.length(vrel)
+    if speed > 1.0e-9:
+        force = force - (eps[w] * cylinder_drag_fn(rho, cd, r, lsub, speed, paper_area) / speed) * vrel
+    force = force + wp.vec3(0.0, 0.0, eps[w] * buoyancy_fn(rho, g, r, lsub))
+    ma = added_mass_fn(rho, cm, r, lsub)
+    if paper_added_mass != 0:
+        # GenTe's effective weight m_eff = m + m_a: the added mass only adds weight.
+        force = force - wp.vec3(0.0, 0.0, eps[w] * ma * g)
+    else:
+        if seg_vel_valid[w, s] != 0:
+            # Relative acceleration = body acceleration (finite difference) - the flow's own acceleration.
+            du = xi[w] * flow_rate_fn(kind, t, amp, om, ph)
+            arel = (v - seg_vel[w, s]) / dt - wp.vec3(du * wp.cos(fdir), du * wp.sin(fdir), 0.0)
+            arel = arel - wp.dot(arel, axis) * axis  # cross-flow: no added mass along the cylinder axis
+            force = force - ma * wp.vec3(arel[0], arel[1], eps[w] * arel[2])
+    if paper_flow_force != 0:
+        fl = xi[w] * flow_force_fn(kind, t, amp, om, ph)
+        force = force + wp.vec3(fl * wp.cos(fdir), fl * wp.sin(fdir), 0.0)
+    seg_vel[w, s] = v
+    seg_vel_valid[w, s] = 1
+    seg_force[w, s] = force
+    apply_force(xfrc, xipos, w, b, force, centroid)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Soil and ground friction (contact filter)
+
+
+@wp.kernel
+def foot_clear_kernel(foot_sinkage: wp.array2d[float], foot_soil: wp.array2d[int]):
+    w, f = wp.tid()
+    foot_sinkage[w, f] = 0.0
+    foot_soil[w, f] = -1
+
+
+@wp.kernel
+def contact_filter_kernel(
+    nacon: wp.array[int],
+    geom_foot: wp.array[int],  # ngeom: foot index or -1
+    geom_bodyid: wp.array[int],
+    origin: wp.vec2,
+    resolution: float,
+    soil: wp.array2d[int],
+    friction: wp.array2d[float],
+    friction_reference: float,
+    use_friction: int,
+    use_soil: int,
+    sole_area: float,
+    sole_width: float,
+    soil_params: wp.array3d[float],
+    foot_fn: wp.array2d[float],
+    # contacts (modified)
+    contact_pos: wp.array[wp.vec3],
+    contact_geom: wp.array[wp.vec2i],
+    contact_worldid: wp.array[int],
+    contact_dist: wp.array[float],
+    contact_friction: wp.array[vec5],
+    # out
+    foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
+):
+    """Ground contacts take the cell's friction; a foot on soil sinks by Bekker's z (contact dist += z).
+
+    Raising the reported distance by z makes the solver hold the foot z deeper in the ground, so the
+    sinkage shows as a lowered foot with the same contact stiffness.
+    """
+    i = wp.tid()
+    if i >= nacon[0]:
+        return
+    g = contact_geom[i]
+    ground = int(-1)
+    other = int(-1)
+    if geom_bodyid[g[0]] == 0:
+        ground = g[0]
+        other = g[1]
+    elif geom_bodyid[g[1]] == 0:
+        ground = g[1]
+        other = g[0]
+    if ground < 0 or other < 0:
+        return
+    cell = cell_of(contact_pos[i], origin, resolution, soil.shape[0], soil.shape[1])
+    if use_friction != 0:
+        scale = friction[cell[0], cell[1]] / friction_reference
+        fr = contact_friction[i]
+        fr[0] = fr[0] * scale
+        fr[1] = fr[1] * scale
+        contact_friction[i] = fr
+    f = geom_foot[other]
+    s = soil[cell[0], cell[1]]
+    if use_soil == 0 or f < 0 or s < 0:
+        return
+    w = contact_worldid[i]
+    z = bekker_sinkage_fn(
+        foot_fn[w, f] / sole_area, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], sole_width
+    )
+    contact_dist[i] = contact_dist[i] + z
+    foot_sinkage[w, f] = z
+    foot_soil[w, f] = s
+
+
+# --------------------------------------------------------------------------------------------------------
+# Soil forces (passive callback)
+
+
+@wp.kernel
+def soil_force_kernel(
+    foot_geom: wp.array[int],
+    foot_body: wp.array[int],
+    body_rootid: wp.array[int],
+    geom_xpos: wp.array2d[wp.vec3],
+    xipos: wp.array2d[wp.vec3],
+    cvel: wp.array2d[wp.spatial_vector],
+    subtree_com: wp.array2d[wp.vec3],
+    sole_width: float,
+    speed_reg: float,
+    soil_params: wp.array3d[float],
+    foot_fn: wp.array2d[float],
+    foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
+    foot_slip: wp.array2d[wp.vec3],
+    # out
+    foot_vel: wp.array2d[wp.vec3],
+    foot_force: wp.array2d[wp.vec3],
+    xfrc: wp.array2d[wp.spatial_vector],
+):
+    """Bulldozing b*a*z^n against the foot's horizontal velocity and Janosi-Hanamoto shear against its slip.
+
+    The bulldozing direction is regularised, v / max(|v|, speed_reg), so it fades out linearly below
+    speed_reg instead of chattering around zero speed.
+    """
+    w, f = wp.tid()
+    gid = foot_geom[f]
+    b = foot_body[f]
+    p = geom_xpos[w, gid]
+    v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+    vh = wp.vec3(v[0], v[1], 0.0)
+    foot_vel[w, f] = vh
+    s = foot_soil[w, f]
+    force = wp.vec3(0.0)
+    if s >= 0 and foot_fn[w, f] > 0.0:
+        a = sole_width * soil_params[w, s, BULL_A]
+        fb = bulldozing_force_fn(a, soil_params[w, s, BULL_N], foot_sinkage[w, f])
+        force = force - (fb / wp.max(wp.length(vh), speed_reg)) * vh
+        slip = foot_slip[w, f]
+        j = wp.length(slip)
+        if j > 1.0e-9:
+            fs = presliding_friction_fn(soil_params[w, s, MU], foot_fn[w, f], j, soil_params[w, s, K])
+            force = force - (fs / j) * slip
+        apply_force(xfrc, xipos, w, b, force, p)
+    foot_force[w, f] = force
+
+
+# --------------------------------------------------------------------------------------------------------
+# After each mjw.step: foot normal forces and slip for the next substep, privileged observations
+
+
+@wp.kernel
+def foot_normal_kernel(
+    opt_cone: int,
+    nacon: wp.array[int],
+    geom_foot: wp.array[int],
+    contact_frame: wp.array[wp.mat33],
+    contact_friction: wp.array[vec5],
+    contact_dim: wp.array[int],
+    contact_efc_address: wp.array2d[int],
+    contact_adhesion: wp.array[float],
+    contact_geom: wp.array[wp.vec2i],
+    contact_worldid: wp.array[int],
+    efc_force: wp.array2d[float],
+    njmax: int,
+    foot_fn: wp.array2d[float],
+):
+    """Sum each foot's contact normal forces (N) from the solver's constraint forces."""
+    i = wp.tid()
+    if i >= nacon[0]:
+        return
+    g = contact_geom[i]
+    f = geom_foot[g[0]]
+    if f < 0:
+        f = geom_foot[g[1]]
+    if f < 0:
+        return
+    w = contact_worldid[i]
+    frc = contact_force_fn(
+        opt_cone, contact_frame, contact_friction, contact_dim, contact_efc_address, contact_adhesion,
+        efc_force, njmax, nacon, w, i, False,
+    )
+    wp.atomic_add(foot_fn, w, f, wp.max(frc[0], 0.0))
+
+
+@wp.kernel
+def foot_state_kernel(
+    dt: float,
+    contact_threshold: float,
+    foot_geom: wp.array[int],
+    geom_xpos: wp.array2d[wp.vec3],
+    heights: wp.array2d[float],
+    origin: wp.vec2,
+    resolution: float,
+    time: wp.array[float],
+    water_surface: wp.array2d[float],
+    flow_kind: wp.array2d[int],
+    flow_speed: wp.array2d[float],
+    flow_dir: wp.array2d[float],
+    flow_omega: wp.array2d[float],
+    flow_phase: wp.array2d[float],
+    xi: wp.array[float],
+    soil_params: wp.array3d[float],
+    foot_fn: wp.array2d[float],
+    foot_vel: wp.array2d[wp.vec3],
+    foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
+    foot_slip: wp.array2d[wp.vec3],
+    obs: wp.array2d[float],
+):
+    """Accumulate slip since touchdown (reset at lift-off) and write the privileged observations."""
+    w, f = wp.tid()
+    if foot_fn[w, f] > contact_threshold:
+        foot_slip[w, f] = foot_slip[w, f] + dt * foot_vel[w, f]
+    else:
+        foot_slip[w, f] = wp.vec3(0.0)
+    p = geom_xpos[w, foot_geom[f]]
+    cell = cell_of(p, origin, resolution, heights.shape[0], heights.shape[1])
+    ci = cell[0]
+    cj = cell[1]
+    depth = wp.max(water_surface[ci, cj] - heights[ci, cj], 0.0)
+    u = flow_velocity(flow_kind[ci, cj], time[w], flow_speed[ci, cj], flow_dir[ci, cj], flow_omega[ci, cj],
+                      flow_phase[ci, cj], xi[w])
+    o = f * OBS_PER_FOOT
+    obs[w, o + 0] = depth
+    obs[w, o + 1] = u[0]
+    obs[w, o + 2] = u[1]
+    s = foot_soil[w, f]
+    on_soil = float(0.0)
+    if s >= 0:
+        on_soil = 1.0
+    obs[w, o + 3] = on_soil
+    obs[w, o + 4] = foot_sinkage[w, f]
+    obs[w, o + 5] = foot_fn[w, f] / 100.0
+    for q in range(NSOILPARAM - 1):
+        obs[w, o + 6 + q] = 0.0
+    if s >= 0:
+        # scaled to O(1): kc/1e4, kphi/1e6, n, a/1e5, bulldozing n, mu, K in cm
+        obs[w, o + 6] = soil_params[w, s, KC] / 1.0e4
+        obs[w, o + 7] = soil_params[w, s, KPHI] / 1.0e6
+        obs[w, o + 8] = soil_params[w, s, N]
+        obs[w, o + 9] = soil_params[w, s, BULL_A] / 1.0e5
+        obs[w, o + 10] = soil_params[w, s, MU]
+        obs[w, o + 11] = soil_params[w, s, K] * 100.0
