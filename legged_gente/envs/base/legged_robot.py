@@ -1,0 +1,520 @@
+"""LeggedRobot: an rsl-rl ``VecEnv`` of ``num_envs`` MuJoCo-Warp worlds sharing one terrain.
+
+legged_gym's task shape on MuJoCo-Warp: PD position actuators run inside the physics; ``decimation``
+substeps (plus terrain force kernels) are one captured CUDA graph on GPU; everything else is batched torch
+on zero-copy views of the simulator's arrays. Resets, command resampling and curriculum updates are masked
+tensor operations, so a policy step never waits on the host.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+from rsl_rl.env import VecEnv
+from tensordict import TensorDict
+
+from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
+from legged_gente.sim.assembly import build_model
+from legged_gente.sim.backend import Simulation
+from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
+
+
+class LeggedRobot(VecEnv):
+    def __init__(self, cfg: LeggedRobotCfg, device: str = "cpu", train_cfg_steps_per_env: int = 24):
+        self.cfg = cfg
+        self.device = device
+        self.num_envs = int(cfg.env.num_envs)
+        self.dt = cfg.sim.dt * cfg.control.decimation  # s, policy step
+        self.max_episode_length_s = cfg.env.episode_length_s
+        self.max_episode_length = int(math.ceil(self.max_episode_length_s / self.dt))
+        self._log_every = train_cfg_steps_per_env
+        self._validate_cfg()
+
+        self.terrain = self._create_terrain()
+        self.mjm, self.layout = build_model(cfg, self.terrain)
+        self.sim = Simulation(self.mjm, self.num_envs, device, cfg.sim)
+        self.num_actions = len(self.layout.joint_names)
+        self.forces = self._create_forces()
+
+        self._init_buffers()
+        self._prepare_reward_function()
+        self._init_origins()
+        self._randomize_model()
+        self.reset()
+
+    # ------------------------------------------------------------------------------------------------------
+    # construction
+    # ------------------------------------------------------------------------------------------------------
+    def _validate_cfg(self) -> None:
+        cfg = self.cfg
+        if self.num_envs < 1:
+            raise ValueError(f"cfg.env.num_envs must be >= 1, got {self.num_envs}.")
+        if cfg.control.decimation < 1:
+            raise ValueError(f"cfg.control.decimation must be >= 1, got {cfg.control.decimation}.")
+        if cfg.terrain.mesh_type not in ("plane", "heightfield"):
+            raise ValueError(f"cfg.terrain.mesh_type={cfg.terrain.mesh_type!r}; use 'plane' or 'heightfield'.")
+        if not cfg.asset.file:
+            raise ValueError("cfg.asset.file is empty: name the robot's MJCF file.")
+        if not cfg.asset.foot_bodies:
+            raise ValueError("cfg.asset.foot_bodies is empty: name the robot's feet (body names or patterns).")
+
+    def _create_terrain(self):
+        if self.cfg.terrain.mesh_type == "plane":
+            return None
+        from legged_gente.terrain.terrain import Terrain
+
+        return Terrain(self.cfg.terrain, self.num_envs)
+
+    def _create_forces(self):
+        """Terrain force fields (water, soil, friction) where the terrain has such materials."""
+        if self.terrain is None or not self.cfg.forces.enabled:
+            return None
+        material = self.terrain.material
+        if not (material.has_water().any() or material.has_soil().any() or
+                (material.friction != self.cfg.terrain.static_friction).any()):
+            return None
+        from legged_gente.external_forces.field import TerrainForces
+
+        forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain, self.cfg.forces,
+                               seed=int(self.cfg.terrain.seed))
+        forces.install()
+        self.sim.after_substep.append(forces.after_substep)
+        return forces
+
+    def _init_buffers(self) -> None:
+        n, dev, lay = self.num_envs, self.device, self.layout
+        t = lambda a, dtype=torch.float32: torch.as_tensor(np.asarray(a), dtype=dtype, device=dev)  # noqa: E731
+        self.qpos_adr = t(lay.qpos_adr, torch.long)
+        self.dof_adr = t(lay.dof_adr, torch.long)
+        self.feet = t(lay.foot_bodies, torch.long)
+        self.penalized_bodies = t(lay.penalized_bodies, torch.long)
+        self.terminate_bodies = t(lay.terminate_bodies, torch.long)
+        self.hip_ids = t(lay.hip_joint_ids, torch.long)
+        self.default_dof_pos = t(lay.default_joint_pos)[None, :]
+        self.dof_limits = t(lay.joint_limits)
+        mid, half = self.dof_limits.mean(1), 0.5 * (self.dof_limits[:, 1] - self.dof_limits[:, 0])
+        soft = self.cfg.rewards.soft_dof_pos_limit
+        self.soft_dof_limits = torch.stack([mid - soft * half, mid + soft * half], dim=1)
+        self.torque_limits = t(lay.torque_limits)
+        self.base = lay.base_body
+        self.root_body = int(self.mjm.body_rootid[self.base])
+
+        self.actions = torch.zeros(n, self.num_actions, device=dev)
+        self.last_actions = torch.zeros_like(self.actions)
+        self.last_dof_vel = torch.zeros(n, self.num_actions, device=dev)
+        self.episode_length_buf = torch.zeros(n, dtype=torch.long, device=dev)
+        self.reset_buf = torch.ones(n, dtype=torch.bool, device=dev)
+        self.time_out_buf = torch.zeros(n, dtype=torch.bool, device=dev)
+        self.rew_buf = torch.zeros(n, device=dev)
+        self.commands = torch.zeros(n, 4, device=dev)  # vx, vy, yaw rate, heading
+        scales = self.cfg.normalization.obs_scales
+        self.commands_scale = torch.tensor([scales.lin_vel, scales.lin_vel, scales.ang_vel], device=dev)
+        self.feet_air_time = torch.zeros(n, len(lay.foot_bodies), device=dev)
+        self.last_contacts = torch.zeros(n, len(lay.foot_bodies), dtype=torch.bool, device=dev)
+        self.gravity_vec = torch.tensor([0.0, 0.0, -1.0], device=dev).repeat(n, 1)
+        self.friction_coeffs = torch.full((n, 1), self.cfg.terrain.static_friction, device=dev)
+        self.added_base_mass = torch.zeros(n, 1, device=dev)
+        self.common_step_counter = 0
+        self._resample_steps = max(1, int(round(self.cfg.commands.resampling_time / self.dt)))
+        push = self.cfg.domain_rand
+        self._push_steps = max(1, int(round(push.push_interval_s / self.dt)))
+        self.init_base_state = torch.tensor(self.cfg.init_state.pos + self.cfg.init_state.rot +
+                                            self.cfg.init_state.lin_vel + self.cfg.init_state.ang_vel, device=dev)
+        self.height_points = self._init_height_points()
+        self.num_height_points = 0 if self.height_points is None else self.height_points.shape[0]
+        if self.terrain is not None:
+            self.height_samples = torch.as_tensor(self.terrain.height_field, dtype=torch.float32, device=dev)
+            self.terrain_origin_xy = torch.tensor(self.terrain.origin_xy, dtype=torch.float32, device=dev)
+        # episode statistics, reduced on device and reported once per rollout (no per-step host sync)
+        self._stat_sums: dict[str, torch.Tensor] = {}
+        self._stat_count = torch.zeros((), device=dev)
+        self.nonfinite_resets = torch.zeros((), device=dev)
+        self._update_state()
+
+    def _init_height_points(self) -> torch.Tensor | None:
+        cfg = self.cfg.terrain
+        if self.terrain is None or not cfg.measure_heights:
+            return None
+        xs = torch.tensor(cfg.measured_points_x, device=self.device, dtype=torch.float32)
+        ys = torch.tensor(cfg.measured_points_y, device=self.device, dtype=torch.float32)
+        gx, gy = torch.meshgrid(xs, ys, indexing="ij")
+        return torch.stack([gx.flatten(), gy.flatten(), torch.zeros_like(gx.flatten())], dim=1)
+
+    def _prepare_reward_function(self) -> None:
+        """Every non-zero scale needs a ``_reward_<name>`` method; scales are multiplied by the policy dt."""
+        self.reward_scales: dict[str, float] = {}
+        self.reward_functions = []
+        for name in sorted(n for n in dir(self.cfg.rewards.scales) if not n.startswith("_")):
+            scale = float(getattr(self.cfg.rewards.scales, name))
+            if scale == 0.0:
+                continue
+            method = getattr(self, f"_reward_{name}", None)
+            if method is None:
+                raise AttributeError(f"cfg.rewards.scales.{name} is non-zero but {type(self).__name__} has no "
+                                     f"_reward_{name} method; implement it or set the scale to 0.")
+            self.reward_scales[name] = scale * self.dt
+            self.reward_functions.append((name, method))
+        self.episode_sums = {name: torch.zeros(self.num_envs, device=self.device) for name in self.reward_scales}
+
+    def _init_origins(self) -> None:
+        n, dev = self.num_envs, self.device
+        if self.terrain is None:
+            cols = int(math.ceil(math.sqrt(n)))
+            idx = torch.arange(n, device=dev)
+            spacing = self.cfg.env.env_spacing
+            self.env_origins = torch.stack([(idx // cols) * spacing, (idx % cols) * spacing,
+                                            torch.zeros(n, device=dev)], dim=1).float()
+            self.terrain_levels = torch.zeros(n, dtype=torch.long, device=dev)
+            self.max_terrain_level = 1
+            return
+        self.terrain_origins = torch.as_tensor(self.terrain.terrain_origins, dtype=torch.float32, device=dev)
+        rows, cols = self.terrain_origins.shape[:2]
+        self.max_terrain_level = rows
+        max_init = min(self.cfg.terrain.max_init_terrain_level, rows - 1)
+        if not self.cfg.terrain.curriculum:
+            max_init = rows - 1
+        self.terrain_levels = torch.randint(0, max_init + 1, (n,), device=dev)
+        self.terrain_types = torch.div(torch.arange(n, device=dev) * cols, n, rounding_mode="floor")
+        self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_types]
+
+    def _randomize_model(self) -> None:
+        """Per-world friction and base mass, written into the batched model fields once at start."""
+        rand = self.cfg.domain_rand
+        if rand.randomize_friction:
+            self.friction_coeffs = rand_uniform(*rand.friction_range, (self.num_envs, 1), self.device)
+            # MuJoCo combines geom frictions with max(): set every geom so the pair's friction is the sample
+            self.sim.geom_friction[:, :, 0] = self.friction_coeffs
+        if rand.randomize_base_mass:
+            self.added_base_mass = rand_uniform(*rand.added_mass_range, (self.num_envs, 1), self.device)
+            mass0 = float(self.mjm.body_mass[self.base])
+            ratio = (mass0 + self.added_base_mass[:, 0]) / mass0
+            self.sim.body_mass[:, self.base] = mass0 * ratio
+            self.sim.body_inertia[:, self.base] = torch.as_tensor(
+                self.mjm.body_inertia[self.base], dtype=torch.float32, device=self.device) * ratio[:, None]
+
+    # ------------------------------------------------------------------------------------------------------
+    # VecEnv
+    # ------------------------------------------------------------------------------------------------------
+    def get_observations(self) -> TensorDict:
+        return self.obs_buf
+
+    def reset(self) -> TensorDict:
+        all_envs = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
+        self._reset_envs(all_envs)
+        self._update_state()
+        self._compute_observations()
+        return self.obs_buf
+
+    def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        clip = self.cfg.normalization.clip_actions
+        self.actions = torch.clamp(actions.to(self.device), -clip, clip)
+        self.sim.ctrl[:] = self.default_dof_pos + self.cfg.control.action_scale * self.actions
+        if self.forces is not None:
+            self.forces.new_policy_step()
+        self.sim.step(self.cfg.control.decimation)
+        return self._post_physics_step()
+
+    # ------------------------------------------------------------------------------------------------------
+    # step internals
+    # ------------------------------------------------------------------------------------------------------
+    def _post_physics_step(self):
+        self.episode_length_buf += 1
+        self.common_step_counter += 1
+        nonfinite = self._sanitize_nonfinite()
+        self._update_state()
+        self._check_termination(nonfinite)
+        self._compute_reward()
+        self._log_and_update_curriculum(self.reset_buf)
+        self._reset_envs(self.reset_buf)
+        self._resample_commands((self.episode_length_buf % self._resample_steps == 0) & ~self.reset_buf)
+        if self.cfg.domain_rand.push_robots and self.common_step_counter % self._push_steps == 0:
+            self._push_robots()
+        self._update_state()
+        self._compute_observations()
+        self.last_actions[:] = self.actions
+        self.last_dof_vel[:] = self.dof_vel
+        extras = {"time_outs": self.time_out_buf.clone()}
+        if self.common_step_counter % self._log_every == 0:
+            extras["episode"] = self._episode_statistics()
+        return self.obs_buf, self.rew_buf, self.reset_buf.clone(), extras
+
+    def _sanitize_nonfinite(self) -> torch.Tensor:
+        """Worlds whose state went non-finite or whose constraint rows overflowed: zero them, flag for reset."""
+        bad = ~(torch.isfinite(self.sim.qpos).all(1) & torch.isfinite(self.sim.qvel).all(1))
+        bad |= self.sim.nefc >= self.cfg.sim.njmax
+        self.sim.qpos[:] = torch.where(bad[:, None], torch.zeros_like(self.sim.qpos), self.sim.qpos)
+        self.sim.qvel[:] = torch.where(bad[:, None], torch.zeros_like(self.sim.qvel), self.sim.qvel)
+        self.nonfinite_resets += bad.sum()
+        return bad
+
+    def _update_state(self) -> None:
+        """Base and joint state in the frames the observations and rewards use (views, no copies of sim)."""
+        qpos, qvel = self.sim.qpos, self.sim.qvel
+        self.base_pos = qpos[:, 0:3]
+        self.base_quat = qpos[:, 3:7]
+        # free joint: linear velocity in the world frame, angular velocity in the body frame (MuJoCo convention)
+        self.base_lin_vel = quat_rotate_inverse(self.base_quat, qvel[:, 0:3])
+        self.base_ang_vel = qvel[:, 3:6]
+        self.projected_gravity = quat_rotate_inverse(self.base_quat, self.gravity_vec)
+        self.dof_pos = qpos[:, self.qpos_adr]
+        self.dof_vel = qvel[:, self.dof_adr]
+        self.torques = self.sim.actuator_force
+        self.contact_forces = self.sim.body_contact_force
+        self.feet_pos = self.sim.xpos[:, self.feet]
+
+    def _body_linear_velocity(self, bodies: torch.Tensor) -> torch.Tensor:
+        """World linear velocity of body origins from MuJoCo's com-based spatial velocity (rot, lin)."""
+        cvel = self.sim.cvel[:, bodies]
+        offset = self.sim.xpos[:, bodies] - self.sim.subtree_com[:, self.root_body][:, None, :]
+        return cvel[..., 3:6] + torch.cross(cvel[..., 0:3], offset, dim=-1)
+
+    def _check_termination(self, nonfinite: torch.Tensor) -> None:
+        asset = self.cfg.asset
+        contact = torch.norm(self.contact_forces[:, self.terminate_bodies], dim=-1).gt(1.0).any(1) \
+            if self.terminate_bodies.numel() else torch.zeros_like(nonfinite)
+        tilted = self.projected_gravity[:, 2] > -math.cos(asset.terminate_tilt)
+        self.reset_buf = contact | tilted | nonfinite
+        if asset.terminate_height > 0:
+            self.reset_buf |= (self.base_pos[:, 2] - self._ground_height(self.base_pos[:, :2])) < asset.terminate_height
+        self.time_out_buf = self.episode_length_buf >= self.max_episode_length
+        self.reset_buf |= self.time_out_buf
+
+    def _compute_reward(self) -> None:
+        self.rew_buf.zero_()
+        for name, fn in self.reward_functions:
+            if name == "termination":
+                continue
+            term = torch.nan_to_num(fn(), nan=0.0, posinf=0.0, neginf=0.0) * self.reward_scales[name]
+            self.rew_buf += term
+            self.episode_sums[name] += term
+        if self.cfg.rewards.only_positive_rewards:
+            self.rew_buf.clamp_(min=0.0)
+        if "termination" in self.reward_scales:
+            term = self._reward_termination() * self.reward_scales["termination"]
+            self.rew_buf += term
+            self.episode_sums["termination"] += term
+
+    def _log_and_update_curriculum(self, done: torch.Tensor) -> None:
+        """Accumulate finished episodes' statistics on device, then move finished robots' terrain levels."""
+        mask = done.float()
+        for name, sums in self.episode_sums.items():
+            key = f"rew_{name}"
+            self._stat_sums[key] = self._stat_sums.get(key, 0.0) + (sums * mask).sum() / self.max_episode_length_s
+        if self.terrain is not None and self.cfg.terrain.curriculum and self.cfg.terrain.mode == "curriculum":
+            self._update_terrain_curriculum(done)
+        self._stat_sums["terrain_level"] = self._stat_sums.get("terrain_level", 0.0) + \
+            (self.terrain_levels.float() * mask).sum()
+        self._stat_count += mask.sum()
+
+    def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
+        """Up a level after walking more than half a tile; down after less than half the commanded distance;
+        a random level after solving the hardest one (legged_gym's game-inspired curriculum)."""
+        distance = torch.norm(self.base_pos[:, :2] - self.env_origins[:, :2], dim=1)
+        move_up = distance > 0.5 * self.cfg.terrain.terrain_length
+        commanded = torch.norm(self.commands[:, :2], dim=1) * self.max_episode_length_s
+        move_down = (distance < 0.5 * commanded) & ~move_up
+        level = self.terrain_levels + move_up.long() - move_down.long()
+        random_level = torch.randint_like(level, 0, self.max_terrain_level)
+        level = torch.where(level >= self.max_terrain_level, random_level, level.clamp(min=0))
+        self.terrain_levels = torch.where(done, level, self.terrain_levels)
+        self.env_origins = torch.where(done[:, None], self.terrain_origins[self.terrain_levels, self.terrain_types],
+                                       self.env_origins)
+
+    def _episode_statistics(self) -> dict[str, torch.Tensor]:
+        count = self._stat_count.clamp(min=1.0)
+        stats = {key: value / count for key, value in self._stat_sums.items()}
+        stats["nonfinite_resets"] = self.nonfinite_resets.clone()
+        self._stat_sums = {}
+        self._stat_count = torch.zeros((), device=self.device)
+        return stats
+
+    def _reset_envs(self, mask: torch.Tensor) -> None:
+        """Masked reset: only worlds where ``mask`` is True get a new state; nothing leaves the device."""
+        n, dev = self.num_envs, self.device
+        m = mask[:, None]
+        qpos, qvel = self.sim.qpos, self.sim.qvel
+        dof_pos = self.default_dof_pos + rand_uniform(-1.0, 1.0, (n, self.num_actions), dev) * \
+            self.cfg.init_state.joint_pos_noise
+        dof_pos = torch.clamp(dof_pos, self.dof_limits[:, 0], self.dof_limits[:, 1])
+        base = self.init_base_state
+        base_pos = self.env_origins + base[0:3]
+        yaw = rand_uniform(-math.pi, math.pi, (n,), dev)
+        base_quat = yaw_quat(yaw)
+        new_qpos = qpos.clone()
+        new_qpos[:, 0:3] = base_pos
+        new_qpos[:, 3:7] = base_quat
+        new_qpos[:, self.qpos_adr] = dof_pos
+        new_qvel = torch.zeros_like(qvel)
+        new_qvel[:, 0:2] = rand_uniform(-0.5, 0.5, (n, 2), dev)
+        qpos[:] = torch.where(m, new_qpos, qpos)
+        qvel[:] = torch.where(m, new_qvel, qvel)
+        self.sim.ctrl[:] = torch.where(m, self.default_dof_pos + torch.zeros_like(self.sim.ctrl), self.sim.ctrl)
+        self.sim.qacc[:] = torch.where(m, torch.zeros_like(self.sim.qacc), self.sim.qacc)
+        self.sim.time[:] = torch.where(mask, torch.zeros_like(self.sim.time), self.sim.time)
+        self.sim.body_contact_force[:] = torch.where(m[..., None], torch.zeros_like(self.sim.body_contact_force),
+                                                     self.sim.body_contact_force)
+        self._resample_commands(mask)
+        for buf in (self.actions, self.last_actions, self.last_dof_vel, self.feet_air_time):
+            buf[:] = torch.where(m, torch.zeros_like(buf), buf)
+        self.last_contacts &= ~m
+        self.episode_length_buf[:] = torch.where(mask, torch.zeros_like(self.episode_length_buf),
+                                                 self.episode_length_buf)
+        for sums in self.episode_sums.values():
+            sums[:] = torch.where(mask, torch.zeros_like(sums), sums)
+        if self.forces is not None:
+            self.forces.reset(mask)
+
+    def _resample_commands(self, mask: torch.Tensor) -> None:
+        n, dev, ranges = self.num_envs, self.device, self.cfg.commands.ranges
+        new = torch.stack([rand_uniform(*ranges.lin_vel_x, (n,), dev), rand_uniform(*ranges.lin_vel_y, (n,), dev),
+                           rand_uniform(*ranges.ang_vel_yaw, (n,), dev), rand_uniform(*ranges.heading, (n,), dev)], 1)
+        small = torch.norm(new[:, :2], dim=1) < 0.2  # too slow to learn a gait from: stand still instead
+        still = torch.rand(n, device=dev) < self.cfg.commands.still_fraction
+        new[:, :2] *= (~(small | still))[:, None]
+        new[:, 2] *= (~still)
+        self.commands = torch.where(mask[:, None], new, self.commands)
+
+    def _push_robots(self) -> None:
+        v = self.cfg.domain_rand.max_push_vel_xy
+        self.sim.qvel[:, 0:2] += rand_uniform(-v, v, (self.num_envs, 2), self.device)
+
+    def _ground_height(self, xy: torch.Tensor) -> torch.Tensor:
+        """Terrain height under world points ``xy`` (..., 2), bilinear between heightfield vertices."""
+        if self.terrain is None:
+            return torch.zeros(xy.shape[:-1], device=self.device)
+        grid = (xy - self.terrain_origin_xy) / self.terrain.resolution
+        nx, ny = self.height_samples.shape
+        gx = grid[..., 0].clamp(0, nx - 1.001)
+        gy = grid[..., 1].clamp(0, ny - 1.001)
+        i0, j0 = gx.floor().long(), gy.floor().long()
+        fx, fy = gx - i0, gy - j0
+        h = self.height_samples
+        return (h[i0, j0] * (1 - fx) * (1 - fy) + h[i0 + 1, j0] * fx * (1 - fy) +
+                h[i0, j0 + 1] * (1 - fx) * fy + h[i0 + 1, j0 + 1] * fx * fy)
+
+    def _measure_heights(self) -> torch.Tensor:
+        """Heights of the scan points (in the base's yaw frame) below the base, relative to the target height."""
+        yaw = yaw_quat(yaw_of(self.base_quat))
+        points = quat_rotate(yaw[:, None, :].expand(-1, self.num_height_points, -1),
+                             self.height_points[None].expand(self.num_envs, -1, -1))
+        points = points[..., :2] + self.base_pos[:, None, :2]
+        return self.base_pos[:, 2:3] - self.cfg.rewards.base_height_target - self._ground_height(points)
+
+    def _task_observations(self) -> torch.Tensor:
+        """Extra proprioceptive observations a task adds (e.g. a gait clock); none by default."""
+        return torch.zeros(self.num_envs, 0, device=self.device)
+
+    def _compute_observations(self) -> None:
+        s = self.cfg.normalization.obs_scales
+        if self.cfg.commands.heading_command:
+            heading_error = wrap_to_pi(self.commands[:, 3] - yaw_of(self.base_quat))
+            yaw_rate = self.cfg.commands.heading_stiffness * heading_error
+            self.commands[:, 2] = yaw_rate.clamp(*self.cfg.commands.ranges.ang_vel_yaw)
+        parts = [self.base_lin_vel * s.lin_vel, self.base_ang_vel * s.ang_vel, self.projected_gravity,
+                 self.commands[:, :3] * self.commands_scale, (self.dof_pos - self.default_dof_pos) * s.dof_pos,
+                 self.dof_vel * s.dof_vel, self.actions, self._task_observations()]
+        if self.height_points is not None:
+            parts.append(torch.clamp(self._measure_heights(), -1.0, 1.0) * s.height_measurements)
+        clean = torch.cat(parts, dim=-1)
+        policy = clean + self._noise(clean) if self.cfg.noise.add_noise else clean
+        feet_forces = self.contact_forces[:, self.feet].flatten(1) * 0.01
+        privileged = [clean, self.friction_coeffs, self.added_base_mass, feet_forces]
+        if self.forces is not None:
+            privileged.append(self.forces.privileged_obs())
+        clip = self.cfg.normalization.clip_observations
+        self.obs_buf = TensorDict(
+            {"policy": policy.clamp(-clip, clip), "critic": torch.cat(privileged, dim=-1).clamp(-clip, clip)},
+            batch_size=[self.num_envs], device=self.device)
+
+    def _noise(self, clean: torch.Tensor) -> torch.Tensor:
+        if not hasattr(self, "_noise_scale"):
+            ns, s, lvl = self.cfg.noise.noise_scales, self.cfg.normalization.obs_scales, self.cfg.noise.noise_level
+            na, nt = self.num_actions, self._task_observations().shape[1]
+            pieces = [torch.full((3,), ns.lin_vel * s.lin_vel), torch.full((3,), ns.ang_vel * s.ang_vel),
+                      torch.full((3,), ns.gravity), torch.zeros(3), torch.full((na,), ns.dof_pos * s.dof_pos),
+                      torch.full((na,), ns.dof_vel * s.dof_vel), torch.zeros(na), torch.zeros(nt)]
+            if self.height_points is not None:
+                pieces.append(torch.full((self.num_height_points,), ns.height_measurements * s.height_measurements))
+            self._noise_scale = torch.cat(pieces).to(self.device) * lvl
+        return (2.0 * torch.rand_like(clean) - 1.0) * self._noise_scale
+
+    # ------------------------------------------------------------------------------------------------------
+    # helpers for rewards
+    # ------------------------------------------------------------------------------------------------------
+    def foot_contacts(self) -> torch.Tensor:
+        return self.contact_forces[:, self.feet, 2] > 1.0
+
+    # ------------------------------------------------------------------------------------------------------
+    # reward terms (legged_gym's set); each returns a (num_envs,) tensor, scaled by cfg.rewards.scales
+    # ------------------------------------------------------------------------------------------------------
+    def _reward_lin_vel_z(self):
+        return torch.square(self.base_lin_vel[:, 2])
+
+    def _reward_ang_vel_xy(self):
+        return torch.sum(torch.square(self.base_ang_vel[:, :2]), dim=1)
+
+    def _reward_orientation(self):
+        return torch.sum(torch.square(self.projected_gravity[:, :2]), dim=1)
+
+    def _reward_base_height(self):
+        height = self.base_pos[:, 2] - self._ground_height(self.base_pos[:, :2])
+        return torch.square(height - self.cfg.rewards.base_height_target)
+
+    def _reward_torques(self):
+        return torch.sum(torch.square(self.torques), dim=1)
+
+    def _reward_dof_vel(self):
+        return torch.sum(torch.square(self.dof_vel), dim=1)
+
+    def _reward_dof_acc(self):
+        return torch.sum(torch.square((self.last_dof_vel - self.dof_vel) / self.dt), dim=1)
+
+    def _reward_action_rate(self):
+        return torch.sum(torch.square(self.last_actions - self.actions), dim=1)
+
+    def _reward_collision(self):
+        if not self.penalized_bodies.numel():
+            return torch.zeros(self.num_envs, device=self.device)
+        return torch.sum(torch.norm(self.contact_forces[:, self.penalized_bodies], dim=-1) > 0.1, dim=1).float()
+
+    def _reward_termination(self):
+        return (self.reset_buf & ~self.time_out_buf).float()
+
+    def _reward_dof_pos_limits(self):
+        below = (self.soft_dof_limits[:, 0] - self.dof_pos).clamp(min=0.0)
+        above = (self.dof_pos - self.soft_dof_limits[:, 1]).clamp(min=0.0)
+        return torch.sum(below + above, dim=1)
+
+    def _reward_tracking_lin_vel(self):
+        error = torch.sum(torch.square(self.commands[:, :2] - self.base_lin_vel[:, :2]), dim=1)
+        return torch.exp(-error / self.cfg.rewards.tracking_sigma)
+
+    def _reward_tracking_ang_vel(self):
+        error = torch.square(self.commands[:, 2] - self.base_ang_vel[:, 2])
+        return torch.exp(-error / self.cfg.rewards.tracking_sigma)
+
+    def _reward_feet_air_time(self):
+        """Reward steps whose swing lasted longer than the target, paid at touchdown (legged_gym)."""
+        contact = self.foot_contacts()
+        contact_filt = contact | self.last_contacts
+        self.last_contacts = contact
+        first_contact = (self.feet_air_time > 0.0) & contact_filt
+        self.feet_air_time += self.dt
+        reward = torch.sum((self.feet_air_time - self.cfg.rewards.feet_air_time_target) * first_contact, dim=1)
+        reward *= torch.norm(self.commands[:, :2], dim=1) > 0.1
+        self.feet_air_time *= ~contact_filt
+        return reward
+
+    def _reward_feet_stumble(self):
+        forces = self.contact_forces[:, self.feet]
+        return torch.any(torch.norm(forces[..., :2], dim=-1) > 5.0 * torch.abs(forces[..., 2]), dim=1).float()
+
+    def _reward_stand_still(self):
+        still = torch.norm(self.commands[:, :2], dim=1) < 0.1
+        return torch.sum(torch.abs(self.dof_pos - self.default_dof_pos), dim=1) * still
+
+    def _reward_feet_contact_forces(self):
+        excess = torch.norm(self.contact_forces[:, self.feet], dim=-1) - self.cfg.rewards.max_contact_force
+        return torch.sum(excess.clamp(min=0.0), dim=1)

@@ -1,0 +1,225 @@
+"""Configuration of a legged-robot locomotion task and of its PPO training (rsl-rl-lib 5.5).
+
+Every robot-specific fact is given by *name* (bodies, joints, geoms): the environment resolves names
+against the MJCF, so no body or DoF index is ever hard-coded.
+"""
+
+from __future__ import annotations
+
+import math
+
+from legged_gente.envs.base.base_config import BaseConfig, class_to_dict
+
+
+class LeggedRobotCfg(BaseConfig):
+    class env:
+        num_envs = 4096
+        env_spacing = 3.0  # m, grid spacing of robots on a plane
+        episode_length_s = 20.0  # s
+        send_timeouts = True  # report time-outs to the runner for value bootstrapping
+
+    class terrain:
+        mesh_type = "plane"  # "plane" | "heightfield"
+        mode = "curriculum"  # "curriculum" | "random" | "selected" | "generated"
+        resolution = 0.1  # m, horizontal size of a heightfield cell
+        border_size = 5.0  # m, flat border around the tile grid
+        terrain_length = 8.0  # m, tile size along x
+        terrain_width = 8.0  # m, tile size along y
+        num_rows = 10  # difficulty levels
+        num_cols = 20  # terrain types
+        terrain_types = ["flat", "random_uniform"]
+        terrain_proportions = [0.5, 0.5]
+        selected_terrain = None  # atomic terrain name for mode "selected"
+        selected_params: dict = {}
+        generated_specs: list = []  # spec JSON paths for mode "generated"
+        max_init_terrain_level = 5
+        curriculum = True
+        static_friction = 1.0
+        seed = 0
+        # height scan (m, in the base's yaw frame); used when the terrain is not a plane
+        measure_heights = True
+        measured_points_x = [-0.8 + 0.1 * i for i in range(17)]
+        measured_points_y = [-0.5 + 0.1 * i for i in range(11)]
+
+    class commands:
+        resampling_time = 10.0  # s
+        heading_command = True  # yaw rate follows a heading error
+        heading_stiffness = 0.5  # 1/s, yaw rate per rad of heading error
+        still_fraction = 0.1  # fraction of resampled commands that ask the robot to stand still
+
+        class ranges:
+            lin_vel_x = [-1.0, 1.0]  # m/s
+            lin_vel_y = [-0.5, 0.5]  # m/s
+            ang_vel_yaw = [-1.0, 1.0]  # rad/s
+            heading = [-math.pi, math.pi]  # rad
+
+    class init_state:
+        pos = [0.0, 0.0, 1.0]  # m, base position above the spawn point
+        rot = [1.0, 0.0, 0.0, 0.0]  # (w, x, y, z)
+        lin_vel = [0.0, 0.0, 0.0]
+        ang_vel = [0.0, 0.0, 0.0]
+        default_joint_angles: dict = {}  # joint name or fnmatch pattern -> rad
+        joint_pos_noise = 0.1  # rad, uniform noise on reset
+
+    class control:
+        stiffness: dict = {}  # joint-name pattern -> N*m/rad
+        damping: dict = {}  # joint-name pattern -> N*m*s/rad
+        action_scale = 0.25  # rad per unit action
+        decimation = 4  # physics substeps per policy step
+
+    class asset:
+        file = ""  # MJCF path (relative paths are resolved against the project root)
+        base_body = ""  # the floating base (body with the free joint); "" = the free joint's body
+        foot_bodies: list = []  # names or fnmatch patterns
+        knee_bodies: list = []
+        penalize_contacts_on: list = []  # bodies whose contacts are penalised (and therefore collide)
+        terminate_after_contacts_on: list = []  # bodies whose contacts end the episode
+        hip_joints: list = []  # joints penalised for deviating from default (biped hip yaw/roll)
+        terminate_height = 0.0  # m above the ground under the base; 0 disables
+        terminate_tilt = 1.0  # rad of base tilt that ends the episode
+
+    class domain_rand:
+        randomize_friction = True
+        friction_range = [0.5, 1.25]
+        randomize_base_mass = False
+        added_mass_range = [-1.0, 3.0]  # kg
+        push_robots = True
+        push_interval_s = 15.0
+        max_push_vel_xy = 1.0  # m/s
+
+    class rewards:
+        class scales:
+            termination = -0.0
+            tracking_lin_vel = 1.0
+            tracking_ang_vel = 0.5
+            lin_vel_z = -2.0
+            ang_vel_xy = -0.05
+            orientation = -0.0
+            torques = -0.00001
+            dof_vel = -0.0
+            dof_acc = -2.5e-7
+            base_height = -0.0
+            feet_air_time = 1.0
+            collision = -1.0
+            feet_stumble = -0.0
+            action_rate = -0.01
+            stand_still = -0.0
+            dof_pos_limits = -0.0
+            feet_contact_forces = -0.0
+
+        only_positive_rewards = True  # clip the step's total reward at zero (helps early learning)
+        tracking_sigma = 0.25  # (m/s)^2, width of the exp(-err^2/sigma) tracking kernel
+        soft_dof_pos_limit = 0.9  # fraction of the joint range before dof_pos_limits starts penalising
+        base_height_target = 1.0  # m
+        max_contact_force = 500.0  # N, above this feet_contact_forces penalises
+        feet_air_time_target = 0.5  # s
+        gait_period = 0.8  # s, biped gait phase
+        stance_fraction = 0.55  # phase fraction a foot should be on the ground
+        swing_height_target = 0.08  # m, foot clearance in swing
+
+    class normalization:
+        class obs_scales:
+            lin_vel = 2.0
+            ang_vel = 0.25
+            dof_pos = 1.0
+            dof_vel = 0.05
+            height_measurements = 5.0
+
+        clip_observations = 100.0
+        clip_actions = 100.0
+
+    class noise:
+        add_noise = True
+        noise_level = 1.0
+
+        class noise_scales:
+            dof_pos = 0.01
+            dof_vel = 1.5
+            lin_vel = 0.1
+            ang_vel = 0.2
+            gravity = 0.05
+            height_measurements = 0.1
+
+    class sim:
+        dt = 0.005  # s, physics substep
+        gravity = [0.0, 0.0, -9.81]
+        integrator = "implicitfast"  # "euler" | "implicitfast"
+        solver = "newton"  # "newton" | "cg"
+        iterations = 10  # Newton usually converges in 2-4; the cap bounds the slowest world
+        ls_iterations = 20
+        cone = "pyramidal"
+        nconmax = 24  # contacts per world (contact arrays are shared: naconmax = nconmax * num_envs)
+        njmax = 96  # constraint rows per world
+        use_cuda_graph = True  # capture the substep loop once on GPU
+
+    class forces:
+        """Terrain force fields (water, soil, friction); read by legged_gente.external_forces."""
+
+        enabled = True  # off: no kernels are installed at all
+
+
+class LeggedRobotCfgPPO(BaseConfig):
+    seed = 1
+
+    class actor:
+        class_name = "MLPModel"
+        hidden_dims = [512, 256, 128]
+        activation = "elu"
+        obs_normalization = True
+
+        class distribution_cfg:
+            class_name = "GaussianDistribution"
+            init_std = 1.0
+            std_type = "scalar"
+
+    class critic:
+        class_name = "MLPModel"
+        hidden_dims = [512, 256, 128]
+        activation = "elu"
+        obs_normalization = True
+
+    class algorithm:
+        class_name = "PPO"
+        value_loss_coef = 1.0
+        use_clipped_value_loss = True
+        clip_param = 0.2
+        entropy_coef = 0.01
+        num_learning_epochs = 5
+        num_mini_batches = 4
+        learning_rate = 1.0e-3
+        schedule = "adaptive"
+        gamma = 0.99
+        lam = 0.95
+        desired_kl = 0.01
+        max_grad_norm = 1.0
+
+    class runner:
+        num_steps_per_env = 24
+        max_iterations = 1500
+        save_interval = 50
+        experiment_name = "legged_robot"
+        run_name = ""
+        logger = "tensorboard"
+        check_for_nan = False  # the env resets non-finite worlds itself; the check costs a sync per step
+        obs_groups = {"actor": ["policy"], "critic": ["critic"]}
+        resume = False
+        load_run = -1  # -1: the latest run
+        checkpoint = -1  # -1: the latest checkpoint
+
+
+def rsl_rl_train_cfg(cfg: LeggedRobotCfgPPO) -> dict:
+    """The train-cfg dict rsl-rl-lib 5.5's OnPolicyRunner expects, built from a config instance."""
+    runner = class_to_dict(cfg.runner)
+    return {
+        "seed": cfg.seed,
+        "num_steps_per_env": runner["num_steps_per_env"],
+        "save_interval": runner["save_interval"],
+        "experiment_name": runner["experiment_name"],
+        "run_name": runner["run_name"],
+        "logger": runner["logger"],
+        "check_for_nan": runner["check_for_nan"],
+        "obs_groups": runner["obs_groups"],
+        "actor": class_to_dict(cfg.actor),
+        "critic": class_to_dict(cfg.critic),
+        "algorithm": class_to_dict(cfg.algorithm),
+    }

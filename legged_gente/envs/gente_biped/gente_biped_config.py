@@ -1,0 +1,89 @@
+"""gente_biped: the 10-DoF biped of GenTe's H1 setup, written here from primitive geoms."""
+
+from __future__ import annotations
+
+from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO
+
+
+class GenteBipedCfg(LeggedRobotCfg):
+    class env(LeggedRobotCfg.env):
+        num_envs = 4096
+        episode_length_s = 20.0
+
+    class terrain(LeggedRobotCfg.terrain):
+        mesh_type = "plane"
+
+    class init_state(LeggedRobotCfg.init_state):
+        pos = [0.0, 0.0, 1.0]
+        default_joint_angles = {
+            "*_hip_yaw": 0.0,
+            "*_hip_roll": 0.0,
+            "*_hip_pitch": -0.25,
+            "*_knee": 0.55,
+            "*_ankle": -0.3,
+        }
+
+    class control(LeggedRobotCfg.control):
+        stiffness = {"hip": 150.0, "knee": 200.0, "ankle": 40.0}  # N*m/rad, matched by joint-name substring
+        damping = {"hip": 5.0, "knee": 5.0, "ankle": 2.0}  # N*m*s/rad
+        action_scale = 0.25
+        decimation = 4
+
+    class asset(LeggedRobotCfg.asset):
+        file = "resources/robots/gente_biped/gente_biped.xml"
+        foot_bodies = ["*_foot"]
+        knee_bodies = ["*_shank"]
+        penalize_contacts_on = ["*_thigh", "*_shank"]
+        terminate_after_contacts_on = ["pelvis", "torso"]
+        hip_joints = ["*_hip_yaw", "*_hip_roll"]
+        terminate_height = 0.5
+        terminate_tilt = 1.0
+
+    class commands(LeggedRobotCfg.commands):
+        class ranges(LeggedRobotCfg.commands.ranges):
+            lin_vel_x = [-1.0, 1.0]
+            lin_vel_y = [-0.5, 0.5]
+            ang_vel_yaw = [-1.0, 1.0]
+
+    class rewards(LeggedRobotCfg.rewards):
+        base_height_target = 0.98
+        only_positive_rewards = True
+        gait_period = 0.8
+        stance_fraction = 0.55
+        swing_height_target = 0.08
+
+        class scales(LeggedRobotCfg.rewards.scales):
+            tracking_lin_vel = 1.0
+            tracking_ang_vel = 0.5
+            lin_vel_z = -2.0
+            ang_vel_xy = -0.05
+            orientation = -1.0
+            base_height = -10.0
+            torques = -1.0e-5
+            dof_acc = -2.5e-7
+            action_rate = -0.01
+            feet_air_time = 0.0
+            collision = -1.0
+            dof_pos_limits = -5.0
+            alive = 0.15
+            gait_contact = 0.18
+            feet_swing_height = -20.0
+            hip_deviation = -1.0
+            no_fly = 0.0
+            feet_slip = -0.2
+            termination = -0.0
+
+
+class GenteBipedCfgPPO(LeggedRobotCfgPPO):
+    class runner(LeggedRobotCfgPPO.runner):
+        experiment_name = "gente_biped"
+        max_iterations = 1500
+
+
+class GenteBipedFlatCfg(GenteBipedCfg):
+    """The biped on flat ground: the quickest way to check a gait."""
+
+
+class GenteBipedFlatCfgPPO(GenteBipedCfgPPO):
+    class runner(GenteBipedCfgPPO.runner):
+        experiment_name = "gente_biped_flat"

@@ -1,0 +1,188 @@
+"""Assemble one MuJoCo model from a robot MJCF, a terrain and the task config, through MjSpec.
+
+Everything robot-specific is resolved by name here (bodies, joints, geoms), with errors that list the
+names the MJCF actually has.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import fnmatch
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
+TERRAIN_GEOM = "terrain"
+ROBOT_CONTYPE, TERRAIN_CONTYPE, TERRAIN_CONAFFINITY = 2, 1, 2
+
+
+def resolve_path(path: str) -> Path:
+    """An MJCF path as given, or relative to the project root; a clear error when it does not exist."""
+    candidate = Path(path).expanduser()
+    if not candidate.is_absolute() and not candidate.exists():
+        candidate = PROJECT_ROOT / candidate
+    if not candidate.is_file():
+        raise FileNotFoundError(f"robot file {path!r} not found (also looked in {PROJECT_ROOT}); set cfg.asset.file to an MJCF path.")
+    return candidate
+
+
+def match_names(patterns: list[str], names: list[str], what: str) -> list[str]:
+    """Names matching any fnmatch pattern, in model order; a pattern matching nothing raises with the valid names."""
+    matched: list[str] = []
+    for pattern in patterns:
+        hits = [n for n in names if fnmatch.fnmatchcase(n, pattern)]
+        if not hits:
+            raise ValueError(f"{what} {pattern!r} matches nothing in the robot; its {what}s are: {names}")
+        matched += [h for h in hits if h not in matched]
+    return [n for n in names if n in matched]
+
+
+def value_for(name: str, table: dict, what: str) -> float:
+    """The value of the first pattern in ``table`` matching ``name``; a clear error when none does."""
+    for pattern, value in table.items():
+        if fnmatch.fnmatchcase(name, pattern) or pattern in name:
+            return float(value)
+    raise ValueError(f"no {what} given for joint {name!r}; add a matching pattern to the config ({list(table)}).")
+
+
+@dataclasses.dataclass
+class RobotLayout:
+    """Indices the env needs, all resolved from names."""
+
+    base_body: int
+    joint_names: list[str]  # actuated joints, in actuator order
+    qpos_adr: np.ndarray  # per actuated joint
+    dof_adr: np.ndarray
+    foot_bodies: np.ndarray
+    knee_bodies: np.ndarray
+    penalized_bodies: np.ndarray
+    terminate_bodies: np.ndarray
+    hip_joint_ids: np.ndarray  # positions in joint_names
+    default_joint_pos: np.ndarray
+    joint_limits: np.ndarray  # (n, 2)
+    torque_limits: np.ndarray  # (n,)
+    terrain_geom: int
+
+
+def _body_names(spec_model: mujoco.MjModel) -> list[str]:
+    return [spec_model.body(i).name for i in range(spec_model.nbody)]
+
+
+def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
+    """Compile robot + terrain into one MjModel and resolve the robot's names into indices."""
+    spec = mujoco.MjSpec.from_file(str(resolve_path(cfg.asset.file)))
+    _configure_options(spec, cfg.sim)
+    _add_terrain(spec, cfg.terrain, terrain)
+    robot = mujoco.MjSpec.from_file(str(resolve_path(cfg.asset.file))).compile()  # names before edits
+    bodies = _body_names(robot)
+    collide = match_names(cfg.asset.penalize_contacts_on + cfg.asset.terminate_after_contacts_on, bodies, "body") if (
+        cfg.asset.penalize_contacts_on or cfg.asset.terminate_after_contacts_on) else []
+    # Robot geoms collide with the terrain only (contype 2 vs the terrain's conaffinity 2), never with each
+    # other: the geoms the MJCF makes collide (feet) plus those of bodies whose contacts the task watches.
+    for geom in spec.geoms:
+        if geom.name == TERRAIN_GEOM:
+            continue
+        collides = geom.contype or geom.conaffinity or geom.parent.name in collide
+        geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
+    _configure_actuators(spec, robot, cfg.control)
+    mjm = spec.compile()
+    return mjm, _layout(mjm, cfg)
+
+
+def _configure_options(spec: mujoco.MjSpec, sim) -> None:
+    integrators = {"euler": mujoco.mjtIntegrator.mjINT_EULER, "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
+    solvers = {"newton": mujoco.mjtSolver.mjSOL_NEWTON, "cg": mujoco.mjtSolver.mjSOL_CG}
+    cones = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+    for key, table in (("integrator", integrators), ("solver", solvers), ("cone", cones)):
+        if getattr(sim, key) not in table:
+            raise ValueError(f"cfg.sim.{key}={getattr(sim, key)!r} is not supported; use one of {list(table)}.")
+    spec.option.timestep = sim.dt
+    spec.option.gravity = sim.gravity
+    spec.option.integrator = integrators[sim.integrator]
+    spec.option.solver = solvers[sim.solver]
+    spec.option.cone = cones[sim.cone]
+    spec.option.iterations = sim.iterations
+    spec.option.ls_iterations = sim.ls_iterations
+
+
+def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
+    friction = [cfg_terrain.static_friction, 0.005, 0.0001]
+    if terrain is None:
+        spec.worldbody.add_geom(name=TERRAIN_GEOM, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
+                                friction=friction, contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY, rgba=[0.5, 0.55, 0.6, 1])
+        return
+    heights = np.asarray(terrain.height_field, dtype=np.float64)
+    nx, ny = heights.shape
+    h_min, h_max = float(heights.min()), float(heights.max())
+    span = max(h_max - h_min, 1e-3)
+    res = terrain.resolution
+    half_x, half_y = (nx - 1) * res / 2, (ny - 1) * res / 2
+    # MuJoCo hfield rows run along y and columns along x; elevation data are normalised to [0, 1].
+    hfield = spec.add_hfield(name="terrain_hfield", nrow=ny, ncol=nx, size=[half_x, half_y, span, 1.0])
+    hfield.userdata = ((heights.T - h_min) / span).ravel().tolist()
+    ox, oy = terrain.origin_xy
+    spec.worldbody.add_geom(name=TERRAIN_GEOM, type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="terrain_hfield",
+                            pos=[ox + half_x, oy + half_y, h_min], friction=friction, contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY,
+                            rgba=[0.5, 0.55, 0.6, 1])
+
+
+def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) -> None:
+    """PD position actuators on every actuated joint, gains from the config by joint-name pattern.
+
+    Joints that have no actuator in the MJCF get one; torque limits come from the joint's actuatorfrcrange.
+    """
+    existing = {a.target: a for a in spec.actuators}
+    for joint in spec.joints:
+        if joint.type == mujoco.mjtJoint.mjJNT_FREE:
+            continue
+        kp = value_for(joint.name, control.stiffness, "stiffness (cfg.control.stiffness)")
+        kd = value_for(joint.name, control.damping, "damping (cfg.control.damping)")
+        actuator = existing.get(joint.name) or spec.add_actuator(name=joint.name, target=joint.name,
+                                                                  trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        actuator.gainprm = [kp] + [0.0] * 9
+        actuator.biasprm = [0.0, -kp, -kd] + [0.0] * 7
+        actuator.ctrllimited = 0
+        frc = robot.jnt_actfrcrange[robot.joint(joint.name).id]
+        if robot.jnt_actfrclimited[robot.joint(joint.name).id]:
+            actuator.forcelimited = 1
+            actuator.forcerange = list(frc)
+
+
+def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
+    bodies = _body_names(mjm)
+    free = [j for j in range(mjm.njnt) if mjm.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+    if len(free) != 1:
+        raise ValueError(f"the robot needs exactly one free joint (floating base), found {len(free)}; "
+                         "add <freejoint/> to its root body.")
+    base = mjm.body(cfg.asset.base_body).id if cfg.asset.base_body else int(mjm.jnt_bodyid[free[0]])
+    joint_ids = [int(mjm.actuator_trnid[a, 0]) for a in range(mjm.nu)]
+    joint_names = [mjm.joint(j).name for j in joint_ids]
+    asset = cfg.asset
+
+    def body_ids(patterns: list[str]) -> np.ndarray:
+        return np.array([mjm.body(n).id for n in match_names(patterns, bodies, "body")], dtype=np.int64) \
+            if patterns else np.zeros(0, dtype=np.int64)
+
+    defaults = np.array([value_for(n, cfg.init_state.default_joint_angles, "default angle") if
+                         cfg.init_state.default_joint_angles else 0.0 for n in joint_names])
+    hips = match_names(asset.hip_joints, joint_names, "joint") if asset.hip_joints else []
+    return RobotLayout(
+        base_body=base,
+        joint_names=joint_names,
+        qpos_adr=np.array([mjm.jnt_qposadr[j] for j in joint_ids], dtype=np.int64),
+        dof_adr=np.array([mjm.jnt_dofadr[j] for j in joint_ids], dtype=np.int64),
+        foot_bodies=body_ids(asset.foot_bodies),
+        knee_bodies=body_ids(asset.knee_bodies),
+        penalized_bodies=body_ids(asset.penalize_contacts_on),
+        terminate_bodies=body_ids(asset.terminate_after_contacts_on),
+        hip_joint_ids=np.array([joint_names.index(h) for h in hips], dtype=np.int64),
+        default_joint_pos=defaults,
+        joint_limits=np.array([mjm.jnt_range[j] for j in joint_ids]),
+        torque_limits=np.array([mjm.actuator_forcerange[a, 1] if mjm.actuator_forcelimited[a] else np.inf
+                                for a in range(mjm.nu)]),
+        terrain_geom=mjm.geom(TERRAIN_GEOM).id,
+    )

@@ -1,0 +1,125 @@
+"""Thin MuJoCo-Warp backend: device model/data, zero-copy torch views, a captured substep loop.
+
+All worlds share one compiled model (robot + terrain); per-world model fields that domain randomisation
+touches are batched with ``put_model(batch_sizes=...)``. On a CUDA device the ``decimation`` substeps (and
+any force kernels installed as mujoco_warp callbacks) are captured once into a CUDA graph and replayed
+each policy step; on the CPU they are plain launches.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import mujoco
+import mujoco_warp as mjw
+import torch
+import warp as wp
+from mujoco_warp._src.support import contact_force_fn
+
+BATCHED_FIELDS = ("geom_friction", "body_mass", "body_inertia")
+
+
+@wp.kernel
+def _body_contact_forces(
+    opt_cone: int,
+    geom_bodyid: wp.array[int],
+    contact_frame: wp.array[wp.mat33],
+    contact_friction: wp.array[wp.types.vector(length=5, dtype=float)],
+    contact_dim: wp.array[int],
+    contact_efc_address: wp.array2d[int],
+    contact_worldid: wp.array[int],
+    contact_adhesion: wp.array[float],
+    contact_geom: wp.array[wp.vec2i],
+    efc_force: wp.array2d[float],
+    njmax: int,
+    nacon: wp.array[int],
+    body_force: wp.array2d[wp.vec3],
+):
+    """World-frame contact force on each body: +f on geom[1]'s body, -f on geom[0]'s (normal points 0 -> 1)."""
+    cid = wp.tid()
+    if cid >= nacon[0]:
+        return
+    world = contact_worldid[cid]
+    f6 = contact_force_fn(opt_cone, contact_frame, contact_friction, contact_dim, contact_efc_address,
+                          contact_adhesion, efc_force, njmax, nacon, world, cid, True)
+    f = wp.spatial_top(f6)
+    geoms = contact_geom[cid]
+    wp.atomic_add(body_force, world, geom_bodyid[geoms[1]], f)
+    wp.atomic_sub(body_force, world, geom_bodyid[geoms[0]], f)
+
+
+class Simulation:
+    """``nworld`` copies of one MjModel on a Warp device, stepped ``decimation`` substeps at a time."""
+
+    def __init__(self, mjm: mujoco.MjModel, num_worlds: int, device: str, sim_cfg, batch_model: bool = True):
+        self.mjm = mjm
+        self.num_worlds = num_worlds
+        self.device = device
+        self.wp_device = wp.get_device("cpu" if device == "cpu" else device)
+        self.use_graph = bool(sim_cfg.use_cuda_graph) and self.wp_device.is_cuda
+        with wp.ScopedDevice(self.wp_device):
+            batch = {name: num_worlds for name in BATCHED_FIELDS} if batch_model else {}
+            self.m = mjw.put_model(mjm, batch_sizes=batch)
+            # hitting the iteration cap in a few worlds is acceptable in RL; don't print it every substep
+            self.m.opt.warn_overflow &= ~mjw.OverflowType.ITERATIONS
+            self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
+            self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
+        self.after_substep: list[Callable[[], None]] = []
+        self._graph = None
+        self._make_views()
+
+    def _make_views(self) -> None:
+        t = wp.to_torch
+        d, m = self.d, self.m
+        self.qpos, self.qvel, self.qacc, self.ctrl = t(d.qpos), t(d.qvel), t(d.qacc), t(d.ctrl)
+        self.xpos, self.xquat, self.cvel = t(d.xpos), t(d.xquat), t(d.cvel)
+        self.subtree_com, self.actuator_force = t(d.subtree_com), t(d.actuator_force)
+        self.nefc, self.time = t(d.nefc), t(d.time)
+        self.body_contact_force = t(self.body_contact_force_wp)
+        self.geom_friction = t(m.geom_friction)
+        self.body_mass, self.body_inertia = t(m.body_mass), t(m.body_inertia)
+
+    # ---- stepping -------------------------------------------------------------------------------------
+    def _substeps(self, decimation: int) -> None:
+        for _ in range(decimation):
+            mjw.step(self.m, self.d)
+            for hook in self.after_substep:
+                hook()
+        self.body_contact_force_wp.zero_()
+        wp.launch(_body_contact_forces, dim=self.d.naconmax, inputs=[
+            self.m.opt.cone, self.m.geom_bodyid, self.d.contact.frame, self.d.contact.friction,
+            self.d.contact.dim, self.d.contact.efc_address, self.d.contact.worldid, self.d.contact.adhesion,
+            self.d.contact.geom, self.d.efc.force, self.d.njmax, self.d.nacon], outputs=[self.body_contact_force_wp])
+
+    def step(self, decimation: int) -> None:
+        """Advance all worlds by ``decimation`` substeps; contact forces per body are refreshed at the end."""
+        with wp.ScopedDevice(self.wp_device):
+            if not self.use_graph:
+                self._substeps(decimation)
+                return
+            torch_stream = wp.stream_from_torch(torch.cuda.current_stream(self.device))
+            if self._graph is None:
+                self._sim_stream = wp.Stream(self.wp_device)
+                self._sim_stream.wait_stream(torch_stream)
+                self._substeps(decimation)  # warm up: compiles every kernel before capture
+                with wp.ScopedStream(self._sim_stream):
+                    with wp.ScopedCapture() as capture:
+                        self._substeps(decimation)
+                self._graph = capture.graph
+                self._graph_decimation = decimation
+                wp.synchronize_device(self.wp_device)
+            if decimation != self._graph_decimation:
+                raise ValueError(f"the captured graph runs {self._graph_decimation} substeps, not {decimation}")
+            self._sim_stream.wait_stream(torch_stream)
+            wp.capture_launch(self._graph, stream=self._sim_stream)
+            torch_stream.wait_stream(self._sim_stream)
+
+    def reset_worlds(self, mask: torch.Tensor) -> None:
+        """Reset the masked worlds' Data to the model defaults (time, warm starts, applied forces, ...)."""
+        with wp.ScopedDevice(self.wp_device):
+            mjw.reset_data(self.m, self.d, reset=wp.from_torch(mask.to(torch.bool), dtype=wp.bool))
+
+    def forward(self) -> None:
+        """Recompute derived quantities (kinematics, contacts) from the current qpos/qvel."""
+        with wp.ScopedDevice(self.wp_device):
+            mjw.forward(self.m, self.d)

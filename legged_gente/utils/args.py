@@ -1,0 +1,63 @@
+"""Command-line flags of train.py / play.py (legged_gym's set) and how they override config fields."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def build_parser(description: str) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--task", default="gente_biped", help="registered task name")
+    parser.add_argument("--num_envs", type=int, help="number of parallel robots (worlds)")
+    parser.add_argument("--max_iterations", type=int, help="PPO iterations to run")
+    parser.add_argument("--headless", action="store_true", help="never open a viewer window")
+    parser.add_argument("--resume", action="store_true", help="continue from a checkpoint")
+    parser.add_argument("--load_run", help="run folder name under logs/<experiment>/ (default: the latest)")
+    parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
+    parser.add_argument("--experiment_name", help="logs/<experiment_name>/")
+    parser.add_argument("--run_name", help="suffix of the run folder")
+    parser.add_argument("--seed", type=int, help="random seed")
+    parser.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
+    parser.add_argument("--terrain", help="'plane', a generated terrain spec JSON, or an emitted terrain_cfg.py")
+    return parser
+
+
+def default_device() -> str:
+    import torch
+
+    return "cuda:0" if torch.cuda.is_available() else "cpu"
+
+
+def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace:
+    args = parser.parse_args(argv)
+    if args.device is None:
+        args.device = default_device()
+    elif args.device == "cuda":
+        args.device = "cuda:0"
+    if args.device != "cpu" and not args.device.startswith("cuda"):
+        parser.error(f"--device {args.device!r}: use cpu, cuda or cuda:N")
+    if args.num_envs is not None and args.num_envs < 1:
+        parser.error("--num_envs must be >= 1")
+    if args.max_iterations is not None and args.max_iterations < 0:
+        parser.error("--max_iterations must be >= 0")
+    return args
+
+
+def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
+    """Override config instances with the flags that were given (None means 'keep the config's value')."""
+    if env_cfg is not None:
+        if getattr(args, "num_envs", None) is not None:
+            env_cfg.env.num_envs = args.num_envs
+        if getattr(args, "terrain", None):
+            from legged_gente.utils.terrain_arg import apply_terrain_arg
+
+            apply_terrain_arg(args.terrain, env_cfg)
+    if train_cfg is not None:
+        if getattr(args, "seed", None) is not None:
+            train_cfg.seed = args.seed
+        for flag in ("max_iterations", "experiment_name", "run_name", "load_run", "checkpoint"):
+            value = getattr(args, flag, None)
+            if value is not None:
+                setattr(train_cfg.runner, flag, value)
+        if getattr(args, "resume", False):
+            train_cfg.runner.resume = True
