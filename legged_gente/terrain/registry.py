@@ -69,6 +69,16 @@ class AtomicTerrain:
     params: dict[str, Param]
     fn: Callable[..., Any]
     difficulty: Callable[[float], dict[str, Any]] | None = None
+    bounds: Callable[[dict[str, Any], float, float], tuple[float, float]] | None = None
+
+    def height_bounds(self, params: dict[str, Any], size_x: float, size_y: float) -> tuple[float, float]:
+        """Declared (min, max) height in metres of this terrain on a ``size_x`` x ``size_y`` m region.
+
+        ``params`` must be complete (the output of :meth:`check_params`). Physical terrains change no height.
+        """
+        if self.bounds is None:
+            return (0.0, 0.0)
+        return self.bounds(params, size_x, size_y)
 
     def check_params(self, params: dict[str, Any]) -> dict[str, Any]:
         """Validate ``params`` (unknown or out-of-range keys raise) and fill defaults."""
@@ -96,8 +106,12 @@ def atomic_terrain(
     description: str,
     params: dict[str, Param],
     difficulty: Callable[[float], dict[str, Any]] | None = None,
+    bounds: Callable[[dict[str, Any], float, float], tuple[float, float]] | None = None,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Register ``fn`` as the atomic terrain ``name``; the function's keyword arguments must equal ``params``."""
+    """Register ``fn`` as the atomic terrain ``name``; the function's keyword arguments must equal ``params``.
+
+    ``bounds(params, size_x, size_y) -> (min, max)`` declares the heights (m) a geometric terrain can produce.
+    """
 
     def register(fn: Callable[..., Any]) -> Callable[..., Any]:
         fixed = ("shape", "resolution", "rng") + (("heights",) if kind == "physical" else ())
@@ -106,7 +120,7 @@ def atomic_terrain(
             raise TypeError(f"atomic terrain {name!r}: function keywords {sig} differ from declared params {list(params)}")
         if name in ATOMIC_TERRAINS:
             raise ValueError(f"atomic terrain {name!r} is registered twice")
-        ATOMIC_TERRAINS[name] = AtomicTerrain(name, kind, description, dict(params), fn, difficulty)
+        ATOMIC_TERRAINS[name] = AtomicTerrain(name, kind, description, dict(params), fn, difficulty, bounds)
         return fn
 
     return register

@@ -1,0 +1,216 @@
+"""Tile composition: a tile is a list of parts (rectangles in metres), each a sequence of atomic operations.
+
+Parts are painted in order over flat ground at 0 m. Inside a part, its operations run on a working copy of
+the tile's current heights: ``set`` replaces them with the atomic's heights, ``add`` adds the atomic's heights
+(rocks on hills). The part then replaces the tile inside its rectangle, and fades out over a band of
+``SEAM_BAND`` metres outside it (the atomic is generated over the rectangle widened by that band, weighted by
+a smoothstep of the distance). Features farther than ``SEAM_BAND`` from a seam are kept exactly.
+
+Physical operations (water, soil, low friction) are applied after all heights are final, in part order, to
+their part's rectangle: water depth is measured from the lowest final ground of the rectangle.
+Every random draw comes from ``SeedSequence(seed, spawn_key=(part, op))``: a tile is a pure function of its
+spec, and changing one part does not reshuffle the others.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, Callable, Literal
+
+import numpy as np
+
+from .materials import MaterialMap
+from .registry import ATOMIC_TERRAINS, AtomicTerrain
+
+SEAM_BAND = 0.3
+"""Width (m) of the band outside a part over which it blends into what lies below."""
+
+MAX_ABS_HEIGHT = 10.0
+"""Largest |height| (m) a tile may have; beyond it a spec is rejected (the hfield and the robot's scan need it)."""
+
+
+@dataclasses.dataclass
+class Region:
+    """A rectangle in metres inside a tile: x in [x0, x1), y in [y0, y1), origin at the tile's corner."""
+
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+
+    def check(self, size_x: float, size_y: float) -> None:
+        if not (0.0 <= self.x0 < self.x1 <= size_x + 1e-9 and 0.0 <= self.y0 < self.y1 <= size_y + 1e-9):
+            raise ValueError(
+                f"region {self} is not inside the {size_x} x {size_y} m tile; need 0 <= x0 < x1 <= {size_x} "
+                f"and 0 <= y0 < y1 <= {size_y}."
+            )
+
+    def cells(self, resolution: float) -> tuple[int, int, int, int]:
+        """Cell index range [i0, i1) x [j0, j1) of the cells (at i * resolution) inside the rectangle."""
+        i0, j0 = math.ceil(self.x0 / resolution - 1e-6), math.ceil(self.y0 / resolution - 1e-6)
+        i1, j1 = math.ceil(self.x1 / resolution - 1e-6), math.ceil(self.y1 / resolution - 1e-6)
+        if i1 <= i0 or j1 <= j0:
+            raise ValueError(f"region {self} holds no cell at resolution {resolution} m; make it larger.")
+        return i0, j0, i1, j1
+
+
+QUADRANTS: dict[str, Callable[[float, float], Region]] = {
+    "front_left": lambda sx, sy: Region(sx / 2, sy / 2, sx, sy),
+    "front_right": lambda sx, sy: Region(sx / 2, 0.0, sx, sy / 2),
+    "back_left": lambda sx, sy: Region(0.0, sy / 2, sx / 2, sy),
+    "back_right": lambda sx, sy: Region(0.0, 0.0, sx / 2, sy / 2),
+}
+"""GenTe's four quadrants of a tile (+x is front, +y is left)."""
+
+
+def quadrant(name: str, size_x: float, size_y: float) -> Region:
+    if name not in QUADRANTS:
+        raise ValueError(f"unknown quadrant {name!r}; use one of {list(QUADRANTS)}.")
+    return QUADRANTS[name](size_x, size_y)
+
+
+@dataclasses.dataclass
+class Operation:
+    """One atomic terrain applied to a part: ``set`` replaces heights, ``add`` adds to them.
+
+    The mode of a physical terrain is ignored (materials are always painted).
+    """
+
+    terrain: str
+    params: dict[str, Any] = dataclasses.field(default_factory=dict)
+    mode: Literal["set", "add"] = "set"
+
+    def atomic(self) -> AtomicTerrain:
+        if self.terrain not in ATOMIC_TERRAINS:
+            raise ValueError(f"unknown atomic terrain {self.terrain!r}; use one of {sorted(ATOMIC_TERRAINS)}.")
+        if self.mode not in ("set", "add"):
+            raise ValueError(f"operation {self.terrain}: mode {self.mode!r} must be 'set' or 'add'.")
+        return ATOMIC_TERRAINS[self.terrain]
+
+
+@dataclasses.dataclass
+class Part:
+    region: Region
+    ops: list[Operation]
+
+
+@dataclasses.dataclass
+class TileSpec:
+    """A tile of ``size_x`` x ``size_y`` m at ``resolution`` m: parts painted in order, random draws from ``seed``."""
+
+    size_x: float
+    size_y: float
+    resolution: float
+    seed: int
+    parts: list[Part]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "size_x": float(self.size_x),
+            "size_y": float(self.size_y),
+            "resolution": float(self.resolution),
+            "seed": int(self.seed),
+            "parts": [
+                {
+                    "region": [float(p.region.x0), float(p.region.y0), float(p.region.x1), float(p.region.y1)],
+                    "ops": [{"terrain": o.terrain, "params": _json_params(o.params), "mode": o.mode} for o in p.ops],
+                }
+                for p in self.parts
+            ],
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "TileSpec":
+        try:
+            parts = [
+                Part(Region(*map(float, p["region"])), [Operation(o["terrain"], dict(o.get("params", {})), o.get("mode", "set")) for o in p["ops"]])
+                for p in d["parts"]
+            ]
+            return cls(float(d["size_x"]), float(d["size_y"]), float(d["resolution"]), int(d["seed"]), parts)
+        except (KeyError, TypeError) as exc:
+            raise ValueError(
+                f"tile spec dict is malformed ({exc!r}); expected keys size_x, size_y, resolution, seed and "
+                f"parts = [{{'region': [x0, y0, x1, y1], 'ops': [{{'terrain', 'params', 'mode'}}]}}]."
+            ) from None
+
+    def build(self, ground_friction: float = 1.0) -> tuple[np.ndarray, MaterialMap]:
+        return build_tile(self, ground_friction)
+
+
+def _json_params(params: dict[str, Any]) -> dict[str, Any]:
+    return {k: (v.item() if isinstance(v, np.generic) else v) for k, v in params.items()}
+
+
+def _shape(spec: TileSpec) -> tuple[int, int]:
+    if not spec.resolution > 0:
+        raise ValueError(f"resolution must be > 0 m, got {spec.resolution}.")
+    n = (spec.size_x / spec.resolution, spec.size_y / spec.resolution)
+    if min(n) < 1 or any(abs(v - round(v)) > 1e-6 for v in n):
+        raise ValueError(
+            f"tile {spec.size_x} x {spec.size_y} m is not a whole number (>= 1) of {spec.resolution} m cells; "
+            f"pick sizes that are multiples of the resolution."
+        )
+    return int(round(n[0])), int(round(n[1]))
+
+
+def _seam_weight(lo: int, hi: int, pad: int, resolution: float) -> np.ndarray:
+    """Per-axis distance (m) outside [lo, hi) of the padded cells lo - pad .. hi + pad - 1."""
+    idx = np.arange(lo - pad, hi + pad)
+    return np.maximum(np.maximum(lo - idx, idx - (hi - 1)), 0) * resolution
+
+
+def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray, MaterialMap]:
+    """Heights (float32 (nx, ny), m) and MaterialMap of ``spec``; rigid ground has ``ground_friction``."""
+    nx, ny = _shape(spec)
+    res = spec.resolution
+    heights = np.zeros((nx, ny), np.float64)
+    material = MaterialMap.rigid((nx, ny), friction=ground_friction)
+    pad = int(math.ceil(SEAM_BAND / res))
+    physical: list[tuple[int, int, int, int, Operation, AtomicTerrain, dict[str, Any], np.random.Generator]] = []
+
+    for k, part in enumerate(spec.parts):
+        part.region.check(spec.size_x, spec.size_y)
+        i0, j0, i1, j1 = part.region.cells(res)
+        geometric = []
+        for m, op in enumerate(part.ops):
+            atomic = op.atomic()
+            params = atomic.check_params(op.params)
+            rng = np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(k, m)))
+            if atomic.kind == "physical":
+                physical.append((i0, j0, i1, j1, op, atomic, params, rng))
+            else:
+                geometric.append((op, atomic, params, rng))
+        if not geometric:
+            continue
+        # Working copy over the padded rectangle; cells beyond the tile repeat the tile's edge.
+        ii = np.clip(np.arange(i0 - pad, i1 + pad), 0, nx - 1)
+        jj = np.clip(np.arange(j0 - pad, j1 + pad), 0, ny - 1)
+        work = heights[ii[:, None], jj[None, :]]
+        for op, atomic, params, rng in geometric:
+            out = atomic.fn(work.shape, res, rng, **params)
+            if out.shape != work.shape or not np.all(np.isfinite(out)):
+                raise RuntimeError(f"atomic terrain {op.terrain} returned a bad array (shape {out.shape}, or non-finite values).")
+            work = out.astype(np.float64) if op.mode == "set" else work + out
+        dx = _seam_weight(i0, i1, pad, res)[:, None]
+        dy = _seam_weight(j0, j1, pad, res)[None, :]
+        t = np.clip(1.0 - np.sqrt(dx * dx + dy * dy) / SEAM_BAND, 0.0, 1.0)
+        w = t * t * (3.0 - 2.0 * t)
+        # Crop the padding that falls outside the tile.
+        ci = slice(max(pad - i0, 0), work.shape[0] - max(i1 + pad - nx, 0))
+        cj = slice(max(pad - j0, 0), work.shape[1] - max(j1 + pad - ny, 0))
+        ti = slice(max(i0 - pad, 0), min(i1 + pad, nx))
+        tj = slice(max(j0 - pad, 0), min(j1 + pad, ny))
+        heights[ti, tj] = heights[ti, tj] * (1.0 - w[ci, cj]) + work[ci, cj] * w[ci, cj]
+        peak = float(np.abs(heights).max())
+        if peak > MAX_ABS_HEIGHT:
+            raise ValueError(
+                f"part {k} ({[o.terrain for o in part.ops]}) makes |height| reach {peak:.2f} m > {MAX_ABS_HEIGHT} m; "
+                f"lower its heights/slopes or use 'set' instead of stacking 'add' operations."
+            )
+
+    heights = heights.astype(np.float32)
+    for i0, j0, i1, j1, op, atomic, params, rng in physical:
+        patch = atomic.fn((i1 - i0, j1 - j0), res, rng, heights[i0:i1, j0:j1], **params)
+        material.paint(patch, i0, j0)
+    return heights, material

@@ -1,0 +1,95 @@
+"""Physical atomic terrains: water, deformable soil and low friction, as :class:`MaterialPatch` es.
+
+Every function takes ``(shape, resolution, rng, heights, **params)`` where ``heights`` are the region's ground
+heights, and returns what the region's cells carry. They change no height: combine them with a geometric
+terrain (water in a ``river``, ``soil`` on ``hills`` for dunes). Water painted over soil keeps the soil.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from legged_gente.external_forces.soil import SOIL_PRESETS
+
+from .materials import FLOW_KINDS, NO_WATER, MaterialPatch
+from .registry import Param, atomic_terrain
+
+
+def _lerp(a: float, b: float, d: float) -> float:
+    return a + (b - a) * d
+
+
+@atomic_terrain(
+    "water",
+    "physical",
+    "Wading water filling the region up to a depth above its lowest ground, still or flowing (current, tide).",
+    {
+        "depth": Param(0.3, "height of the water surface above the lowest ground of the region", "m", 0.0, 2.0),
+        "flow": Param("still", "still water, a steady current, or a tide oscillating along direction",
+                      choices=tuple(FLOW_KINDS)),
+        "speed": Param(0.0, "flow speed (current) or its amplitude (tide)", "m/s", 0.0, 3.0),
+        "direction": Param(0.0, "direction of the flow in the xy plane, from +x towards +y", "rad", -np.pi, np.pi),
+        "omega": Param(0.5, "angular frequency of the tide", "rad/s", 0.0, 2.0),
+        "phase": Param(0.0, "phase of the tide", "rad", -np.pi, np.pi),
+    },
+    difficulty=lambda d: {"depth": _lerp(0.05, 0.5, d)},
+)
+def water(shape, resolution, rng, heights, depth, flow, speed, direction, omega, phase):
+    surface = np.float32(heights.min() + depth)
+    return MaterialPatch(
+        shape=shape,
+        water_surface=np.where(heights < surface, surface, NO_WATER).astype(np.float32),
+        flow_kind=FLOW_KINDS[flow],
+        flow_speed=speed,
+        flow_direction=direction,
+        flow_omega=omega,
+        flow_phase=phase,
+    )
+
+
+SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
+"""Built-in presets of ``legged_gente.external_forces.soil`` plus "custom" (register it there first)."""
+
+
+@atomic_terrain(
+    "soil",
+    "physical",
+    "Deformable soil the feet sink into: sand, snow, mud or clay (Bekker pressure-sinkage, bulldozing, shear).",
+    {
+        "preset": Param(
+            "dry_sand",
+            "soil preset; 'custom' needs register_custom_soil('custom', ...) from legged_gente.external_forces.soil",
+            choices=SOIL_CHOICES,
+        )
+    },
+)
+def soil(shape, resolution, rng, heights, preset):
+    if preset not in SOIL_PRESETS:
+        raise ValueError(
+            f"soil: preset {preset!r} is not registered; call legged_gente.external_forces.soil."
+            f"register_custom_soil({preset!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
+            f"first or use one of {sorted(SOIL_PRESETS)}."
+        )
+    return MaterialPatch(shape=shape, soil=preset)
+
+
+# Friction ranges (rubber-like foot sole): ice 0.05-0.10 (Persson, "Sliding Friction", 2nd ed. 2000, ch. on ice;
+# tyre/rubber on wet ice), wet glazed tiles 0.30-0.40 (HSE/UK Slip Resistance Group pendulum guidance: wet
+# smooth ceramic tiles fall in the 0.3-0.4 dynamic friction band). One value per region is drawn uniformly.
+LOW_FRICTION_RANGES = {"ice": (0.05, 0.10), "wet_tiles": (0.30, 0.40)}
+
+
+@atomic_terrain(
+    "low_friction",
+    "physical",
+    "Slippery ground: ice, wet tiles, or a custom friction coefficient.",
+    {
+        "preset": Param("ice", "ice (mu 0.05-0.10), wet_tiles (mu 0.30-0.40), or custom (uses mu)",
+                        choices=tuple(LOW_FRICTION_RANGES) + ("custom",)),
+        "mu": Param(0.5, "Coulomb friction coefficient when preset is custom", "1", 0.01, 1.5),
+    },
+    difficulty=lambda d: {"preset": "custom", "mu": _lerp(1.0, 0.1, d)},
+)
+def low_friction(shape, resolution, rng, heights, preset, mu):
+    value = mu if preset == "custom" else rng.uniform(*LOW_FRICTION_RANGES[preset])
+    return MaterialPatch(shape=shape, friction=float(value))
