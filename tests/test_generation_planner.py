@@ -1,0 +1,145 @@
+"""The offline planner (text): deterministic, sensible calls; specs round-trip and rebuild identically."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from legged_gente.generation.backends.planner import CUES, MODIFIERS, Modifier, Step, _apply, plan_text
+from legged_gente.generation.spec import TerrainSpec, text_source
+from legged_gente.generation.tools import tool_schemas
+from legged_gente.generation.validation import ValidationError, validate_call
+from legged_gente.terrain.registry import ATOMIC_TERRAINS
+
+
+def test_every_atomic_has_a_valid_schema_and_default_call():
+    names = [t["function"]["name"] for t in tool_schemas()]
+    assert names == sorted(ATOMIC_TERRAINS) and len(names) >= 18
+    for name in names:
+        call = validate_call(name, {"region": "full"})
+        assert call.params == ATOMIC_TERRAINS[name].check_params({})
+
+
+def test_recipes_use_registered_tools_only():
+    for cue in CUES:
+        for step in cue.steps:
+            assert step.tool in ATOMIC_TERRAINS, (cue.name, step.tool)
+    for mod in MODIFIERS:
+        for tool in list(mod.set) + list(mod.scale) + [s.tool for s in mod.extra]:
+            assert tool in ATOMIC_TERRAINS, (mod.name, tool)
+
+
+def _tools(text):
+    return [(c.tool, c.params) for c in plan_text(text).calls]
+
+
+SCENES = {
+    "a sandy beach on the shore": {"water", "soil"},
+    "a river to cross": {"river", "water"},
+    "a small stream in a meadow": {"river", "water", "natural_ground", "pillars"},
+    "a calm lake": {"pit", "water"},
+    "desert dunes": {"hills", "soil"},
+    "a dense forest": {"pillars", "natural_ground"},
+    "a city street with stairs": {"flat", "stairs"},
+    "ruins and rubble": {"discrete_obstacles", "rocks"},
+    "a construction site": {"discrete_obstacles", "pit", "soil"},
+    "fresh snow": {"soil", "natural_ground"},
+    "an icy path": {"low_friction"},
+    "a muddy swamp": {"soil", "water"},
+    "rolling hills": {"hills"},
+    "a mountain trail": {"hills", "rocks"},
+    "a cave": {"rocks", "low_friction"},
+}
+
+
+@pytest.mark.parametrize("text, expected", SCENES.items())
+def test_scenes_give_sensible_tools(text, expected):
+    result = plan_text(text)
+    assert expected <= {c.tool for c in result.calls}
+    assert result.warnings == []
+    # geometry before materials
+    kinds = [ATOMIC_TERRAINS[c.tool].kind for c in result.calls]
+    assert kinds == sorted(kinds, key=lambda k: k == "physical")
+
+
+def test_modifiers_change_the_right_values():
+    def param(text, tool, name):
+        return [p[name] for t, p in _tools(text) if t == tool]
+
+    assert param("a knee-deep river", "water", "depth") == [0.3]
+    assert param("an ankle-deep river", "water", "depth")[0] < 0.3
+    assert param("a river with a strong current", "water", "speed") == [1.5]
+    assert param("a beach with big waves", "water", "flow") == ["tide"]
+    assert param("steep stairs", "stairs", "step_height")[0] > param("stairs", "stairs", "step_height")[0]
+    assert param("gentle hills", "hills", "amplitude")[0] < param("hills", "hills", "amplitude")[0]
+    assert "rocks" in [t for t, _ in _tools("a rocky meadow")]
+    assert "low_friction" in [t for t, _ in _tools("slippery stairs")]
+    assert "water" in [t for t, _ in _tools("a flooded city street")]
+    # negation and nearest-cue attachment
+    assert "forest" not in " ".join(plan_text("a meadow, no forest").notes)
+    assert "water" not in [t for t, _ in _tools("hills, no river")]
+    calls = plan_text("steep stairs next to a calm lake").calls
+    assert [c.params["step_height"] for c in calls if c.tool == "stairs"] == [pytest.approx(0.216)]
+
+
+def test_layout_by_order_of_mention():
+    result = plan_text("a forest, then a river, then stairs, then snow")
+    assert result.notes == ["forest on back_right", "river on back_left", "stairs on front_right", "snow on front_left"]
+    result = plan_text("beach, river, forest, stairs, snow")
+    assert any("dropped ['snow']" in w for w in result.warnings)
+
+
+def test_unknown_text_is_flat_with_a_warning():
+    result = plan_text("zzz qqq")
+    assert [c.tool for c in result.calls] == ["flat"] and "no scene cue" in result.warnings[0]
+
+
+def test_modifier_out_of_range_is_clamped_with_a_warning():
+    stairs = ATOMIC_TERRAINS["stairs"]
+    warnings: list[str] = []
+    steep = Modifier("steep", ("steep",), scale={"stairs": {"step_height": 3.0}})
+    params = _apply(Step("stairs", {"step_height": 0.2}), [steep], stairs, warnings)
+    assert params["step_height"] == stairs.params["step_height"].high
+    assert warnings == ["'steep' asks stairs.step_height=0.6 m, outside [0.0, 0.3]; clamped to 0.3."]
+
+
+def test_modifier_that_does_not_apply_warns():
+    assert plan_text("deep snow").warnings == ["modifier 'deep' does not apply to snow; ignored."]
+    assert plan_text("steep stairs").warnings == []  # 0.12 m * 1.8 = 0.216 m is in range
+
+
+def test_deterministic_and_round_trip(tmp_path):
+    text = "a forest trail along a knee-deep stream, slippery"
+    a, b = plan_text(text), plan_text(text)
+    assert a.calls == b.calls
+    spec = TerrainSpec(a.calls, name="forest_stream", seed=3, source=text_source(text))
+    path = spec.save(tmp_path / "spec.json")
+    loaded = TerrainSpec.load(path)
+    assert loaded == spec
+    h1, m1 = spec.build()
+    h2, m2 = loaded.build()
+    assert h1.shape == (200, 200) and h1.dtype == np.float32
+    assert np.array_equal(h1, h2) and np.array_equal(m1.water_surface, m2.water_surface)
+    assert np.array_equal(m1.friction, m2.friction) and m1.soil_presets == m2.soil_presets
+    assert m1.has_water().any()
+    other = TerrainSpec(a.calls, name="forest_stream", seed=4, source=text_source(text)).build()[0]
+    assert not np.array_equal(h1, other)
+
+
+def test_spec_load_errors_are_precise(tmp_path):
+    spec = TerrainSpec(plan_text("stairs").calls, name="s")
+    data = spec.to_dict()
+    data["calls"][0]["params"]["step_height"] = 0.9
+    data["version"] = 1
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValidationError, match=r"bad.json: spec: calls\[0\]: stairs: argument 'step_height'=0.9 is outside"):
+        TerrainSpec.load(path)
+    data["version"] = 99
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValidationError, match="field 'version'"):
+        TerrainSpec.load(path)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        TerrainSpec.load(tmp_path / "missing.json")
