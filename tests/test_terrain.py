@@ -1,0 +1,264 @@
+"""Atomic terrains, materials and tile composition (pure numpy, CPU, fast)."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from legged_gente.external_forces.soil import SOIL_PRESETS
+from legged_gente.terrain.composition import (
+    MAX_ABS_HEIGHT,
+    SEAM_BAND,
+    Operation,
+    Part,
+    Region,
+    TileSpec,
+    build_tile,
+    quadrant,
+)
+from legged_gente.terrain.materials import FLOW_CURRENT, NO_SOIL, MaterialMap, MaterialPatch
+from legged_gente.terrain.registry import ATOMIC_TERRAINS
+
+GEOMETRIC = sorted(n for n, a in ATOMIC_TERRAINS.items() if a.kind == "geometric")
+PHYSICAL = sorted(n for n, a in ATOMIC_TERRAINS.items() if a.kind == "physical")
+RES = 0.1
+EXPECTED = {
+    "flat", "pyramid_slope", "random_uniform", "natural_ground", "waves", "stairs", "pyramid_stairs",
+    "discrete_obstacles", "stepping_stones", "gap", "pit", "pillars", "rocks", "river", "hills",
+    "water", "soil", "low_friction",
+}
+
+
+def heights(name, params, shape=(80, 80), seed=0):
+    a = ATOMIC_TERRAINS[name]
+    return a.fn(shape, RES, np.random.default_rng(seed), **a.check_params(params))
+
+
+def test_registry_has_every_atomic_with_docs():
+    assert EXPECTED <= set(ATOMIC_TERRAINS)
+    for a in ATOMIC_TERRAINS.values():
+        assert a.description.endswith(".") and len(a.description) > 10
+        for p in a.params.values():
+            assert p.doc and (p.choices is not None or (p.low is not None and p.high is not None and p.unit))
+
+
+def test_terrain_package_imports_no_simulator():
+    code = (
+        "import sys, legged_gente.terrain.terrain, legged_gente.terrain.composition;"
+        "bad = [m for m in ('mujoco', 'mujoco_warp', 'warp', 'torch') if m in sys.modules];"
+        "assert not bad, bad"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("name", GEOMETRIC)
+@pytest.mark.parametrize("shape", [(80, 80), (23, 9)])
+def test_geometric_finite_bounded_deterministic(name, shape):
+    a = ATOMIC_TERRAINS[name]
+    for d in (0.0, 0.5, 1.0):
+        params = a.params_for_difficulty(d)
+        h = a.fn(shape, RES, np.random.default_rng(7), **params)
+        assert h.dtype == np.float32 and h.shape == shape
+        assert np.all(np.isfinite(h))
+        lo, hi = a.height_bounds(params, shape[0] * RES, shape[1] * RES)
+        assert lo - 1e-5 <= h.min() and h.max() <= hi + 1e-5, (name, d, h.min(), h.max(), lo, hi)
+        assert np.array_equal(h, a.fn(shape, RES, np.random.default_rng(7), **params))
+
+
+def _max_abs(h):
+    return float(np.abs(h).max())
+
+
+MONOTONE = {
+    # terrain -> measure that must not decrease with difficulty (same seed)
+    "pyramid_slope": _max_abs,
+    "random_uniform": _max_abs,
+    "natural_ground": _max_abs,
+    "hills": _max_abs,
+    "waves": _max_abs,
+    "stairs": _max_abs,
+    "pyramid_stairs": _max_abs,
+    "discrete_obstacles": _max_abs,
+    "pit": _max_abs,
+    "rocks": _max_abs,
+    "river": _max_abs,
+    "gap": lambda h: int((h < 0).sum()),
+    "pillars": lambda h: int((h > 0).sum()),
+}
+
+
+@pytest.mark.parametrize("name", sorted(MONOTONE))
+def test_monotone_in_difficulty(name):
+    a = ATOMIC_TERRAINS[name]
+    values = [MONOTONE[name](heights(name, a.params_for_difficulty(d), seed=3)) for d in np.linspace(0, 1, 6)]
+    assert all(b >= v for v, b in zip(values, values[1:])), values
+    assert values[-1] > values[0], values
+
+
+def test_stepping_stones_harder_means_more_gap():
+    a = ATOMIC_TERRAINS["stepping_stones"]
+    gaps = [(heights("stepping_stones", a.params_for_difficulty(d), (200, 200)) < -0.1).mean() for d in (0.0, 1.0)]
+    assert gaps[1] > gaps[0] + 0.2
+
+
+def test_spawn_platforms_are_flat():
+    for name in GEOMETRIC:
+        h = heights(name, {})
+        centre = h[35:45, 35:45]
+        assert np.ptp(centre) <= 1e-6 or name in ("flat",), name
+
+
+def test_stairs_have_steps_of_the_declared_height():
+    h = heights("stairs", {"step_height": 0.15, "step_width": 0.5, "direction": "up"})
+    profile = h[:, 0]
+    rises = np.diff(profile)[np.diff(profile) != 0]
+    assert np.allclose(rises, 0.15, atol=1e-6)
+    down = heights("stairs", {"step_height": 0.15, "step_width": 0.5, "direction": "down"})
+    assert np.allclose(down, -h)
+
+
+def test_param_validation_errors_are_clear():
+    a = ATOMIC_TERRAINS["stairs"]
+    with pytest.raises(ValueError, match=r"stairs: step_height=0.9 m is outside \[0.0, 0.3\]"):
+        a.check_params({"step_height": 0.9})
+    with pytest.raises(ValueError, match="unknown parameter.*'height'.*valid parameters"):
+        a.check_params({"height": 0.1})
+    with pytest.raises(ValueError, match="not one of"):
+        a.check_params({"direction": "sideways"})
+    with pytest.raises(ValueError, match="must be a number"):
+        a.check_params({"step_width": "wide"})
+    with pytest.raises(ValueError, match="min_radius=0.9 must not exceed max_radius=0.2"):
+        heights("pillars", {"min_radius": 0.9, "max_radius": 0.2})
+    with pytest.raises(ValueError, match="bank_width"):
+        heights("river", {"width": 1.0, "bank_width": 0.8})
+
+
+# ------------------------------------------------------------------------------------------------ physical
+def physical(name, params, ground):
+    a = ATOMIC_TERRAINS[name]
+    return a.fn(ground.shape, RES, np.random.default_rng(0), ground, **a.check_params(params))
+
+
+def test_water_fills_up_to_depth_above_lowest_ground():
+    ground = heights("river", {"depth": 0.5, "width": 3.0})
+    patch = physical("water", {"depth": 0.3, "flow": "current", "speed": 0.8}, ground)
+    wet = patch.water_surface > -1e8
+    assert np.allclose(patch.water_surface[wet], ground.min() + 0.3)
+    assert np.array_equal(wet, ground < ground.min() + 0.3)
+    assert wet.any() and not wet.all()
+    assert patch.flow_kind == FLOW_CURRENT and patch.flow_speed == 0.8
+
+
+def test_water_depth_monotone_in_difficulty():
+    a = ATOMIC_TERRAINS["water"]
+    ground = np.zeros((10, 10), np.float32)
+    depths = [float(physical("water", a.params_for_difficulty(d), ground).water_surface.max()) for d in (0, 0.5, 1)]
+    assert depths[0] < depths[1] < depths[2]
+
+
+def test_soil_presets_follow_the_forces_module():
+    assert set(SOIL_PRESETS) <= set(ATOMIC_TERRAINS["soil"].params["preset"].choices)
+    patch = physical("soil", {"preset": "snow"}, np.zeros((4, 4), np.float32))
+    assert patch.soil == "snow"
+    if "custom" not in SOIL_PRESETS:
+        with pytest.raises(ValueError, match="register_custom_soil"):
+            physical("soil", {"preset": "custom"}, np.zeros((4, 4), np.float32))
+
+
+def test_low_friction_presets_and_monotone_difficulty():
+    ground = np.zeros((4, 4), np.float32)
+    assert 0.05 <= physical("low_friction", {"preset": "ice"}, ground).friction <= 0.10
+    assert 0.30 <= physical("low_friction", {"preset": "wet_tiles"}, ground).friction <= 0.40
+    assert physical("low_friction", {"preset": "custom", "mu": 0.2}, ground).friction == 0.2
+    a = ATOMIC_TERRAINS["low_friction"]
+    mus = [physical("low_friction", a.params_for_difficulty(d), ground).friction for d in (0, 0.5, 1)]
+    assert mus[0] > mus[1] > mus[2]
+
+
+def test_material_map_paint_and_paste_keep_water_over_soil():
+    m = MaterialMap.rigid((6, 6))
+    m.paint(MaterialPatch((3, 3), soil="wet_sand"), 0, 0)
+    surface = np.full((3, 3), 0.2, np.float32)
+    m.paint(MaterialPatch((3, 3), water_surface=surface, flow_kind=FLOW_CURRENT, flow_speed=0.5), 1, 1)
+    assert m.has_water()[1, 1] and m.has_soil()[1, 1] and m.soil_presets[m.soil[1, 1]] == "wet_sand"
+    assert m.flow_speed[1, 1] == 0.5 and m.flow_speed[0, 0] == 0.0
+    big = MaterialMap.rigid((10, 10))
+    big.paint(MaterialPatch((2, 2), soil="snow"), 0, 0)
+    big.paste(m, 4, 4)
+    assert big.soil_presets == ["snow", "wet_sand"]
+    assert big.soil_presets[big.soil[4, 4]] == "wet_sand" and big.soil[9, 9] == NO_SOIL
+    with pytest.raises(ValueError, match="does not fit"):
+        m.paint(MaterialPatch((3, 3), friction=0.1), 5, 5)
+
+
+# --------------------------------------------------------------------------------------------- composition
+def test_seam_keeps_stairs_next_to_flat():
+    size = 8.0
+    stairs_op = Operation("stairs", {"step_height": 0.1, "step_width": 0.4})
+    spec = TileSpec(size, size, RES, 1, [
+        Part(Region(0, 0, 4, 8), [stairs_op]),
+        Part(Region(4, 0, 8, 8), [Operation("flat")]),
+    ])
+    h, _ = spec.build()
+    alone, _ = TileSpec(size, size, RES, 1, [Part(Region(0, 0, 4, 8), [stairs_op])]).build()
+    band = int(np.ceil(SEAM_BAND / RES))
+    # Away from the seam the steps are exactly those of the stairs alone, and the flat part is flat.
+    assert np.array_equal(h[: 40 - band], alone[: 40 - band])
+    assert np.allclose(h[40:], 0.0)
+    assert len(np.unique(h[: 40 - band, 0])) >= 8
+    # Within the band the heights go smoothly from the stairs' edge to the flat part.
+    seam = h[40 - band : 41, 0]
+    assert np.all(np.diff(seam) <= 1e-6) and seam[0] <= alone[40 - band, 0]
+
+
+def test_add_operation_stacks_on_earlier_parts():
+    spec = TileSpec(4, 4, RES, 2, [
+        Part(Region(0, 0, 4, 4), [Operation("pyramid_slope", {"slope": 0.3})]),
+        Part(Region(0, 0, 4, 4), [Operation("rocks", {"platform": 0.0}, "add")]),
+    ])
+    h, _ = spec.build()
+    base, _ = TileSpec(4, 4, RES, 2, spec.parts[:1]).build()
+    assert np.all(h >= base - 1e-6) and np.any(h > base + 0.05)
+
+
+def test_composition_deterministic_json_roundtrip_and_part_independence():
+    parts = [
+        Part(quadrant("front_left", 8, 8), [Operation("natural_ground", {"amplitude": 0.2})]),
+        Part(quadrant("back_right", 8, 8), [Operation("river"), Operation("water", {"depth": 0.2}, "set")]),
+        Part(quadrant("front_right", 8, 8), [Operation("soil", {"preset": "mud"})]),
+    ]
+    spec = TileSpec(8, 8, RES, 11, parts)
+    h1, m1 = spec.build()
+    spec2 = TileSpec.from_dict(json.loads(json.dumps(spec.to_dict())))
+    h2, m2 = spec2.build()
+    assert np.array_equal(h1, h2) and np.array_equal(m1.water_surface, m2.water_surface)
+    assert np.array_equal(m1.soil, m2.soil) and m1.soil_presets == ["mud"]
+    h3, _ = TileSpec(8, 8, RES, 12, parts).build()
+    assert not np.array_equal(h1, h3)
+    # Changing the river part leaves the natural ground part's heights untouched (own SeedSequence).
+    parts4 = [parts[0], Part(parts[1].region, [Operation("pit")]), parts[2]]
+    h4, _ = TileSpec(8, 8, RES, 11, parts4).build()
+    assert np.array_equal(h1[45:, 45:], h4[45:, 45:])
+    assert m1.has_water()[10:30, 10:30].any() and not m1.has_water()[40:, 40:].any()
+
+
+def test_composition_errors_are_clear():
+    with pytest.raises(ValueError, match="not inside the 8 x 8 m tile"):
+        TileSpec(8, 8, RES, 0, [Part(Region(6, 0, 9, 8), [Operation("flat")])]).build()
+    with pytest.raises(ValueError, match="holds no cell"):
+        TileSpec(8, 8, RES, 0, [Part(Region(1.01, 0, 1.05, 8), [Operation("flat")])]).build()
+    with pytest.raises(ValueError, match="unknown atomic terrain 'lava'"):
+        TileSpec(8, 8, RES, 0, [Part(Region(0, 0, 8, 8), [Operation("lava")])]).build()
+    with pytest.raises(ValueError, match="gap_width=5.0 m is outside"):
+        TileSpec(8, 8, RES, 0, [Part(Region(0, 0, 8, 8), [Operation("gap", {"gap_width": 5.0})])]).build()
+    with pytest.raises(ValueError, match="whole number"):
+        TileSpec(8.05, 8, RES, 0, []).build()
+    with pytest.raises(ValueError, match="unknown quadrant"):
+        quadrant("middle", 8, 8)
+    with pytest.raises(ValueError, match="malformed"):
+        TileSpec.from_dict({"size_x": 8})
+    stacked = [Part(Region(0, 0, 8, 8), [Operation("pyramid_stairs", {"step_height": 0.3, "step_width": 0.15}, "add")] * 2)]
+    with pytest.raises(ValueError, match=f"> {MAX_ABS_HEIGHT} m"):
+        build_tile(TileSpec(8, 8, RES, 0, stacked))
