@@ -1,0 +1,35 @@
+"""The --terrain flag: 'plane', a generated terrain spec (JSON) or an emitted terrain_cfg.py module."""
+
+from __future__ import annotations
+
+import importlib.util
+import inspect
+from pathlib import Path
+
+from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
+
+
+def apply_terrain_arg(value: str, env_cfg) -> None:
+    if value == "plane":
+        env_cfg.terrain.mesh_type = "plane"
+        return
+    path = Path(value)
+    if not path.is_file():
+        raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
+    if path.suffix == ".json":
+        env_cfg.terrain.mesh_type = "heightfield"
+        env_cfg.terrain.mode = "generated"
+        env_cfg.terrain.generated_specs = [str(path.resolve())]
+        env_cfg.terrain.curriculum = False
+        return
+    if path.suffix == ".py":
+        spec = importlib.util.spec_from_file_location(f"gente_terrain_{abs(hash(path.resolve()))}", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        classes = [c for _, c in inspect.getmembers(module, inspect.isclass)
+                   if c.__module__ == module.__name__ and issubclass(c, LeggedRobotCfg.terrain)]
+        if not classes:
+            raise ValueError(f"--terrain {value}: the module defines no subclass of LeggedRobotCfg.terrain")
+        env_cfg.terrain = classes[0]()
+        return
+    raise ValueError(f"--terrain {value!r}: expected 'plane', a .json spec or a .py terrain config module")

@@ -1,0 +1,127 @@
+"""LeggedRobot on the CPU: shapes, masked resets, reward terms, config subclassing."""
+
+import math
+
+import pytest
+import torch
+
+from legged_gente.envs.gente_biped.gente_biped import GenteBiped
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
+from legged_gente.envs.task_registry import task_registry
+
+NUM_ENVS = 4
+
+
+def small_cfg(cfg_class=GenteBipedCfg):
+    cfg = cfg_class()
+    cfg.env.num_envs = NUM_ENVS
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def env():
+    return GenteBiped(small_cfg(), device="cpu")
+
+
+def test_shapes(env):
+    obs = env.get_observations()
+    assert env.num_actions == 10
+    # 3 + 3 + 3 + 3 commands + 3 * 10 joints/actions + 2 gait clock
+    assert obs["policy"].shape == (NUM_ENVS, 44)
+    assert obs["critic"].shape[0] == NUM_ENVS and obs["critic"].shape[1] > 44
+    obs, rew, done, extras = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert rew.shape == (NUM_ENVS,) and done.shape == (NUM_ENVS,) and done.dtype == torch.bool
+    assert extras["time_outs"].shape == (NUM_ENVS,)
+    assert torch.isfinite(obs["policy"]).all() and torch.isfinite(obs["critic"]).all()
+
+
+def test_joint_order_from_names(env):
+    names = env.layout.joint_names
+    assert names[:5] == ["left_hip_yaw", "left_hip_roll", "left_hip_pitch", "left_knee", "left_ankle"]
+    knee = names.index("left_knee")
+    assert env.default_dof_pos[0, knee].item() == pytest.approx(0.55)
+    assert [env.mjm.body(int(b)).name for b in env.feet] == ["left_foot", "right_foot"]
+
+
+def test_masked_reset_only_touches_masked_worlds(env):
+    for _ in range(3):
+        env.step(0.3 * torch.randn(NUM_ENVS, env.num_actions))
+    before_q = env.sim.qpos.clone()
+    mask = torch.tensor([True, False, True, False])
+    env._reset_envs(mask)
+    after_q = env.sim.qpos
+    assert torch.equal(after_q[~mask], before_q[~mask])
+    assert not torch.equal(after_q[mask], before_q[mask])
+    assert (env.episode_length_buf[mask] == 0).all()
+    spawn = env.env_origins[mask] + env.init_base_state[:3]
+    assert torch.allclose(after_q[mask, :3], spawn)
+
+
+def test_episode_timeout_sets_time_outs(env):
+    env.episode_length_buf[:] = env.max_episode_length - 1
+    _, _, done, extras = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert done.all() and extras["time_outs"].all()
+    assert (env.episode_length_buf == 0).all()
+
+
+def test_every_reward_term_is_finite():
+    cfg = small_cfg()
+    names = [n[len("_reward_"):] for n in dir(GenteBiped) if n.startswith("_reward_")]
+    for name in names:
+        setattr(cfg.rewards.scales, name, 1.0)
+    env = GenteBiped(cfg, device="cpu")
+    assert set(env.reward_scales) == set(names)
+    for _ in range(3):
+        env.step(torch.randn(NUM_ENVS, env.num_actions))
+        for name, fn in env.reward_functions:
+            value = fn()
+            assert value.shape == (NUM_ENVS,), name
+            assert torch.isfinite(value).all(), name
+
+
+def test_unknown_reward_term_is_a_clear_error():
+    cfg = small_cfg()
+    cfg.rewards.scales.dance = 1.0
+    with pytest.raises(AttributeError, match="_reward_dance"):
+        GenteBiped(cfg, device="cpu")
+
+
+def test_config_subclass_changes_the_robot():
+    class HeavyHeadBiped(GenteBipedCfg):
+        class init_state(GenteBipedCfg.init_state):
+            pos = [0.0, 0.0, 1.1]
+
+        class control(GenteBipedCfg.control):
+            stiffness = {"hip": 100.0, "knee": 120.0, "ankle": 30.0}
+
+    env = GenteBiped(small_cfg(HeavyHeadBiped), device="cpu")
+    knee = env.mjm.actuator("left_knee").id
+    assert env.mjm.actuator_gainprm[knee, 0] == pytest.approx(120.0)
+    assert env.mjm.actuator_biasprm[knee, 1] == pytest.approx(-120.0)
+    assert env.sim.qpos[0, 2].item() == pytest.approx(1.1, abs=1e-5)
+
+
+def test_bad_names_give_clear_errors():
+    cfg = small_cfg()
+    cfg.asset.foot_bodies = ["*_flipper"]
+    with pytest.raises(ValueError, match="_flipper.*matches nothing"):
+        GenteBiped(cfg, device="cpu")
+    cfg = small_cfg()
+    cfg.control.stiffness = {"hip": 100.0}
+    with pytest.raises(ValueError, match=r"no stiffness .* given for joint 'left_knee'"):
+        GenteBiped(cfg, device="cpu")
+
+
+def test_nonfinite_world_is_reset_and_counted(env):
+    env.sim.qvel[1, 0] = math.nan
+    obs, _, done, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert done[1]
+    assert env.nonfinite_resets.item() >= 1
+    assert torch.isfinite(obs["policy"]).all()
+
+
+def test_task_registry_knows_the_biped():
+    env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
+    assert env_cfg.asset.file.endswith("gente_biped.xml")
+    with pytest.raises(KeyError, match="registered tasks"):
+        task_registry.get_cfgs("no_such_task")

@@ -1,0 +1,89 @@
+"""PPO through rsl-rl's OnPolicyRunner on the CPU: train, save, resume; play exports JIT + ONNX."""
+
+import numpy as np
+import onnxruntime
+import pytest
+import torch
+
+from legged_gente.envs.task_registry import task_registry
+from legged_gente.scripts import play as play_script
+from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.utils.checkpoints import find_checkpoint
+
+
+def tiny_args(tmp_path, *extra):
+    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", "--num_envs", "4", "--device", "cpu",
+                                             "--headless", *extra])
+    args.log_root = str(tmp_path)
+    return args
+
+
+def make_runner(tmp_path, args):
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    from legged_gente.utils.args import apply_args
+
+    apply_args(args, None, train_cfg)
+    train_cfg.runner.num_steps_per_env = 4
+    train_cfg.runner.save_interval = 1
+    train_cfg.algorithm.num_mini_batches = 2
+    train_cfg.algorithm.num_learning_epochs = 1
+    train_cfg.actor.hidden_dims = [32, 32]
+    train_cfg.critic.hidden_dims = [32, 32]
+    return task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=tmp_path)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    tmp_path = tmp_path_factory.mktemp("logs")
+    runner, train_cfg, log_dir = make_runner(tmp_path, tiny_args(tmp_path))
+    runner.learn(2)
+    return tmp_path, runner, train_cfg
+
+
+def test_train_saves_checkpoints(trained):
+    tmp_path, runner, train_cfg = trained
+    path = find_checkpoint(tmp_path / train_cfg.runner.experiment_name)
+    assert path.name == "model_1.pt"
+    assert runner.current_learning_iteration == 1
+
+
+def test_resume_continues_from_checkpoint(trained):
+    tmp_path, runner, _ = trained
+    resumed, _, _ = make_runner(tmp_path, tiny_args(tmp_path, "--resume"))
+    assert resumed.current_learning_iteration == 2
+    for a, b in zip(runner.alg.get_policy().state_dict().values(), resumed.alg.get_policy().state_dict().values()):
+        assert torch.equal(a, b)
+    resumed.learn(1)
+    assert resumed.current_learning_iteration == 2
+    assert (find_checkpoint(tmp_path / "gente_biped_flat")).name == "model_2.pt"
+
+
+def test_play_exports_jit_and_onnx_with_same_actions(trained, monkeypatch):
+    tmp_path, runner, train_cfg = trained
+    # play builds the task's default train cfg: give it the tiny network the checkpoint holds
+    original = task_registry.get_cfgs
+
+    def tiny_cfgs(name):
+        env_cfg, cfg = original(name)
+        cfg.actor.hidden_dims = [32, 32]
+        cfg.critic.hidden_dims = [32, 32]
+        return env_cfg, cfg
+
+    monkeypatch.setattr(task_registry, "get_cfgs", tiny_cfgs)
+    args = tiny_args(tmp_path)
+    args.steps, args.video = 10, False
+    out = play_script.play(args)
+    assert out["jit"].is_file() and out["onnx"].is_file() and out["plot"].is_file()
+    assert out["log"]["cmd"].shape == (10, 3)
+
+    policy = runner.get_inference_policy(device="cpu")
+    obs = runner.env.get_observations()
+    with torch.inference_mode():
+        expected = policy(obs).numpy()
+    session = onnxruntime.InferenceSession(str(out["onnx"]))
+    # the exported graph takes one robot's observation (batch 1), as on a real robot
+    got = np.concatenate([session.run(None, {"obs": row[None]})[0] for row in obs["policy"].numpy()])
+    np.testing.assert_allclose(got, expected, rtol=1e-4, atol=1e-5)
+    jit = torch.jit.load(str(out["jit"]))
+    np.testing.assert_allclose(jit(obs["policy"]).detach().numpy(), expected, rtol=1e-5, atol=1e-6)
