@@ -59,7 +59,7 @@ def _half_extent(size_x: float, size_y: float) -> float:
     return max(size_x, size_y) / 2.0
 
 
-PLATFORM = Param(1.0, "side of the flat square kept at the region centre for spawning", "m", 0.0, 8.0)
+PLATFORM = Param(1.2, "side of the flat square kept at the region centre for spawning", "m", 0.0, 8.0)
 
 
 # --------------------------------------------------------------------------------------------- simple shapes

@@ -52,14 +52,20 @@ def parse_terrain_type(entry: str) -> tuple[str, dict[str, Any]]:
     return name, fixed
 
 
-def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
-    """Type index of every column: contiguous blocks sized by ``proportions`` (largest-remainder rounding)."""
+def normalised_proportions(proportions: list[float]) -> np.ndarray:
+    """``proportions`` as probabilities; raises on negative/empty input, warns when they do not sum to 1."""
     p = np.asarray(proportions, np.float64)
     if p.ndim != 1 or p.size == 0 or np.any(~np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
         raise ValueError(f"terrain_proportions {proportions} must be non-negative numbers with a positive sum.")
     if abs(p.sum() - 1.0) > 1e-6:
         warnings.warn(f"terrain_proportions sum to {p.sum():.4f}, not 1; normalising them.", stacklevel=3)
-    quota = p / p.sum() * num_cols
+    return p / p.sum()
+
+
+def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
+    """Type index of every column: contiguous blocks sized by ``proportions`` (largest-remainder rounding)."""
+    p = normalised_proportions(proportions)
+    quota = p * num_cols
     counts = np.floor(quota).astype(int)
     counts[np.argsort(-(quota - counts), kind="stable")[: num_cols - counts.sum()]] += 1
     starved = np.flatnonzero((p > 0) & (counts == 0))
@@ -162,10 +168,9 @@ class Terrain:
                     params = atomic.check_params({**atomic.params_for_difficulty(difficulty), **fixed})
                     plan[r, c] = (cfg.terrain_types[column_type[c]], self._atomic_tile(r, c, name, params))
         elif self.mode == "random":
-            allocate_columns(cfg.terrain_proportions, 1)  # validates the proportions
-            p = np.asarray(cfg.terrain_proportions, np.float64)
+            p = normalised_proportions(cfg.terrain_proportions)
             rng = np.random.default_rng(int(cfg.seed))
-            kinds = rng.choice(len(types), size=(rows, cols), p=p / p.sum())
+            kinds = rng.choice(len(types), size=(rows, cols), p=p)
             difficulties = rng.uniform(0.0, 1.0, (rows, cols))
             for r in range(rows):
                 for c in range(cols):
@@ -213,7 +218,7 @@ class Terrain:
         z is the highest ground in the footprint. Tiles without a clear window get the flattest one, with a warning.
         """
         tnx, tny = self.tile_cells
-        f = max(1, int(round(SPAWN_FOOTPRINT / self.resolution)))
+        f = 2 * int(round(SPAWN_FOOTPRINT / (2 * self.resolution))) + 1  # odd: centred on a cell
         # Central half of every tile, but at least one footprint wide.
         ax = [(max(0, n // 4 - f // 2), min(n, n - n // 4 + f // 2)) for n in (tnx, tny)]
         b = self.border

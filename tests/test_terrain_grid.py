@@ -1,0 +1,210 @@
+"""The Terrain grid: modes, curriculum layout, spawn points, height sampling, material map, export, preview."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from legged_gente.terrain.materials import NO_SOIL
+from legged_gente.terrain.registry import ATOMIC_TERRAINS
+from legged_gente.terrain.terrain import SPAWN_FOOTPRINT, SPAWN_MAX_RANGE, Terrain, allocate_columns, parse_terrain_type
+
+
+class TerrainCfg:
+    """Mirror of LeggedRobotCfg.terrain's attributes (small sizes for tests)."""
+
+    mesh_type = "heightfield"
+    mode = "curriculum"
+    resolution = 0.1
+    border_size = 1.0
+    terrain_length = 4.0
+    terrain_width = 4.0
+    num_rows = 3
+    num_cols = 6
+    terrain_types = ["pyramid_slope", "stairs:direction=down", "pillars", "rocks", "water", "soil:preset=wet_sand"]
+    terrain_proportions = [0.2, 0.2, 0.2, 0.2, 0.1, 0.1]
+    selected_terrain = "pyramid_stairs"
+    selected_params = {"step_height": 0.12}
+    generated_specs = []
+    max_init_terrain_level = 1
+    curriculum = True
+    static_friction = 0.9
+    seed = 5
+
+
+def cfg(**overrides):
+    return type("Cfg", (TerrainCfg,), overrides)
+
+
+@pytest.fixture(scope="module")
+def curriculum():
+    return Terrain(TerrainCfg, num_robots=12)
+
+
+def test_allocate_columns_by_proportions():
+    assert allocate_columns([0.5, 0.25, 0.25], 8).tolist() == [0, 0, 0, 0, 1, 1, 2, 2]
+    assert np.bincount(allocate_columns([0.3, 0.3, 0.4], 10)).tolist() == [3, 3, 4]
+    with pytest.warns(UserWarning, match="normalising"):
+        allocate_columns([1.0, 1.0], 4)
+    with pytest.warns(UserWarning, match="no column"):
+        allocate_columns([0.9, 0.1], 3)
+    with pytest.raises(ValueError, match="non-negative"):
+        allocate_columns([-1.0, 2.0], 3)
+
+
+def test_parse_terrain_type():
+    assert parse_terrain_type("water:flow=current,speed=0.5") == ("water", {"flow": "current", "speed": 0.5})
+    with pytest.raises(ValueError, match="unknown atomic terrain 'lava'"):
+        parse_terrain_type("lava")
+    with pytest.raises(ValueError, match="not key=value"):
+        parse_terrain_type("stairs:down")
+    with pytest.raises(ValueError, match="step_height=2.0 m is outside"):
+        parse_terrain_type("stairs:step_height=2")
+
+
+def test_curriculum_layout(curriculum):
+    t = curriculum
+    assert t.height_field.shape == (3 * 40 + 20, 6 * 40 + 20) and t.height_field.dtype == np.float32
+    assert t.material.shape == t.height_field.shape
+    assert t.origin_xy == (-1.0, -1.0)
+    assert (t.num_rows, t.num_cols, t.tile_size) == (3, 6, (4.0, 4.0))
+    assert t.tile_type_names == TerrainCfg.terrain_types
+    assert t.terrain_types.tolist() == [0, 1, 2, 3, 4, 5]
+    assert t.terrain_origins.shape == (3, 6, 3)
+    # Rows get harder: the slope column's highest point grows with the row.
+    peaks = [t.height_field[10 + r * 40 : 50 + r * 40, 10:50].max() for r in range(3)]
+    assert peaks[0] < peaks[1] < peaks[2]
+    # Border is flat, rigid, at the configured friction.
+    assert np.all(t.height_field[:10] == 0) and np.all(t.material.friction[:10] == np.float32(0.9))
+
+
+def test_curriculum_materials(curriculum):
+    t = curriculum
+    water_tile = (slice(10 + 40, 50 + 40), slice(10 + 4 * 40, 50 + 4 * 40))
+    soil_tile = (slice(10, 50), slice(10 + 5 * 40, 50 + 5 * 40))
+    assert t.material.has_water()[water_tile].all()
+    assert t.material.water_surface[water_tile].max() > t.height_field[water_tile].max()
+    assert t.material.soil_presets == ["wet_sand"]
+    assert (t.material.soil[soil_tile] == 0).all()
+    assert (t.material.soil[water_tile] == NO_SOIL).all() and not t.material.has_water()[soil_tile].any()
+
+
+def footprint(t, origin):
+    i = int(round((origin[0] - t.origin_xy[0]) / t.resolution))
+    j = int(round((origin[1] - t.origin_xy[1]) / t.resolution))
+    half = int(round(SPAWN_FOOTPRINT / t.resolution / 2))
+    return t.height_field[i - half : i + half + 1, j - half : j + half + 1]
+
+
+def test_spawn_points_clear(curriculum):
+    t = curriculum
+    for r in range(t.num_rows):
+        for c in range(t.num_cols):
+            o = t.terrain_origins[r, c]
+            assert r * 4.0 < o[0] < (r + 1) * 4.0 and c * 4.0 < o[1] < (c + 1) * 4.0
+            patch = footprint(t, o)
+            assert np.ptp(patch) <= SPAWN_MAX_RANGE + 1e-6, (r, c)
+            assert abs(o[2] - patch.max()) <= SPAWN_MAX_RANGE + 1e-6
+
+
+def test_spawn_moves_off_obstacles_when_the_centre_is_blocked():
+    # Dense pillars with no central clearing: the spawn must still land on a clear patch.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        t = Terrain(cfg(mode="selected", selected_terrain="pillars",
+                        selected_params={"density": 0.3, "platform": 0.0, "max_radius": 0.2}), 4)
+    for o in t.terrain_origins.reshape(-1, 3):
+        assert np.ptp(footprint(t, o)) <= SPAWN_MAX_RANGE + 1e-6 and o[2] < 0.01
+    with pytest.warns(UserWarning, match="no flat"):
+        Terrain(cfg(mode="selected", selected_terrain="natural_ground",
+                    selected_params={"amplitude": 0.5, "wavelength": 0.5, "platform": 0.0}), 1)
+
+
+def test_height_at_bilinear(curriculum):
+    t = curriculum
+    rng = np.random.default_rng(0)
+    i = rng.integers(0, t.height_field.shape[0] - 1, 50)
+    j = rng.integers(0, t.height_field.shape[1] - 1, 50)
+    x = t.origin_xy[0] + i * t.resolution
+    y = t.origin_xy[1] + j * t.resolution
+    assert np.allclose(t.height_at(x, y), t.height_field[i, j], atol=1e-6)
+    mid = t.height_at(x + 0.5 * t.resolution, y + 0.5 * t.resolution)
+    expected = t.height_field[i, j] + t.height_field[i + 1, j] + t.height_field[i, j + 1] + t.height_field[i + 1, j + 1]
+    assert np.allclose(mid, expected / 4, atol=1e-6)
+    assert t.height_at(np.zeros((2, 3)), np.zeros((2, 3))).shape == (2, 3)
+
+
+def test_random_selected_plane_modes():
+    r1, r2 = Terrain(cfg(mode="random"), 1), Terrain(cfg(mode="random"), 1)
+    assert np.array_equal(r1.height_field, r2.height_field)
+    assert set(r1.tile_names.ravel()) <= set(TerrainCfg.terrain_types)
+    assert (r1.terrain_types == -1).all()
+    s = Terrain(cfg(mode="selected"), 1)
+    assert set(s.tile_type_names) == {"pyramid_stairs"}
+    tile = s.height_field[10:50, 10:50]
+    assert np.allclose(np.unique(np.round(tile, 6)) % 0.12, 0.0, atol=1e-5)
+    p = Terrain(cfg(mesh_type="plane"), 1)
+    assert not p.height_field.any() and p.tile_type_names == ["plane"] * 6
+    with pytest.raises(ValueError, match="selected_terrain 'lava'"):
+        Terrain(cfg(mode="selected", selected_terrain="lava"), 1)
+    with pytest.raises(ValueError, match="one proportion per type"):
+        Terrain(cfg(terrain_proportions=[1.0]), 1)
+    with pytest.raises(ValueError, match="terrain_length=4.05 m is not a whole number"):
+        Terrain(cfg(terrain_length=4.05), 1)
+    with pytest.raises(ValueError, match="mode 'lava'"):
+        Terrain(cfg(mode="lava"), 1)
+
+
+def test_generated_mode(tmp_path):
+    from legged_gente.generation.spec import TerrainSpec
+    from legged_gente.generation.validation import ToolCall
+
+    def call(tool, params, rect, mode):
+        return ToolCall(tool, ATOMIC_TERRAINS[tool].check_params(params), rect, mode)
+
+    paths = []
+    for k, (tool, params) in enumerate([("pyramid_slope", {"slope": 0.3}), ("rocks", {"max_height": 0.2})]):
+        calls = [call(tool, params, (0.0, 0.0, 4.0, 4.0), "set"), call("water", {"depth": 0.1}, (0.0, 0.0, 2.0, 2.0), None)]
+        spec = TerrainSpec(calls=calls, name=f"spec{k}", size_x=4.0, size_y=4.0, resolution=0.1, seed=k)
+        paths.append(str(spec.save(tmp_path / f"spec{k}.json")))
+    t = Terrain(cfg(mode="generated", num_rows=1, num_cols=2, generated_specs=paths), 2)
+    assert t.tile_type_names == ["spec0", "spec1"]
+    h0, _ = TerrainSpec.load(paths[0]).build()
+    assert np.array_equal(t.height_field[10:50, 10:50], h0)
+    assert t.material.has_water()[10:50, 10:50].any()
+    assert np.all(t.material.friction == np.float32(0.9))
+    with pytest.warns(UserWarning, match="2 generated specs fill 4 tiles"):
+        Terrain(cfg(mode="generated", num_rows=2, num_cols=2, generated_specs=paths), 2)
+    with pytest.raises(ValueError, match="needs cfg.generated_specs"):
+        Terrain(cfg(mode="generated"), 1)
+    with pytest.raises(ValueError, match="has \\(40, 40\\) cells, the grid needs \\(80, 80\\)"):
+        Terrain(cfg(mode="generated", num_rows=1, num_cols=1, generated_specs=paths[:1],
+                    terrain_length=8.0, terrain_width=8.0), 1)
+
+
+def test_export_mesh_roundtrip(tmp_path):
+    import trimesh
+
+    t = Terrain(cfg(num_rows=1, num_cols=2, terrain_length=2.0, terrain_width=2.0, border_size=0.5,
+                    terrain_types=["pyramid_stairs"], terrain_proportions=[1.0]), 1)
+    nx, ny = t.height_field.shape
+    for suffix in (".obj", ".glb"):
+        path = t.export_mesh(tmp_path / f"terrain{suffix}")
+        mesh = trimesh.load(path, force="mesh")
+        assert len(mesh.vertices) == nx * ny and len(mesh.faces) == 2 * (nx - 1) * (ny - 1)
+    mesh = trimesh.load(tmp_path / "terrain.obj", force="mesh")
+    assert np.isclose(mesh.vertices[:, 2].max(), t.height_field.max(), atol=1e-5)
+    assert np.allclose(mesh.bounds[0][:2], t.origin_xy, atol=1e-5)
+    assert mesh.face_normals[:, 2].min() > 0  # counter-clockwise seen from above
+    with pytest.raises(ValueError, match="unsupported suffix"):
+        t.export_mesh(tmp_path / "terrain.fbx")
+
+
+def test_save_preview(tmp_path, curriculum):
+    from PIL import Image
+
+    path = curriculum.save_preview(tmp_path / "preview.png", max_size=200)
+    image = Image.open(path)
+    assert max(image.size) <= 200 and image.mode == "RGB"
+    pixels = np.asarray(image).astype(int)
+    assert pixels.std() > 5  # not a blank image
