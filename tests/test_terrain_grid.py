@@ -7,7 +7,14 @@ import pytest
 
 from legged_gente.terrain.materials import NO_SOIL
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
-from legged_gente.terrain.terrain import SPAWN_FOOTPRINT, SPAWN_MAX_RANGE, Terrain, allocate_columns, parse_terrain_type
+from legged_gente.terrain.terrain import (
+    SPAWN_FOOTPRINT,
+    SPAWN_MAX_RANGE,
+    Terrain,
+    allocate_columns,
+    parse_terrain_type,
+    parse_tile_type,
+)
 
 
 class TerrainCfg:
@@ -21,7 +28,7 @@ class TerrainCfg:
     terrain_width = 4.0
     num_rows = 3
     num_cols = 6
-    terrain_types = ["pyramid_slope", "stairs:direction=down", "pillars", "rocks", "water", "soil:preset=wet_sand"]
+    terrain_types = ["pyramid_slope", "stairs:direction=down", "pillars", "rocks", "river+water", "soil:preset=wet_sand"]
     terrain_proportions = [0.2, 0.2, 0.2, 0.2, 0.1, 0.1]
     selected_terrain = "pyramid_stairs"
     selected_params = {"step_height": 0.12}
@@ -53,6 +60,7 @@ def test_allocate_columns_by_proportions():
 
 
 def test_parse_terrain_type():
+    assert parse_tile_type("river+water:depth=0.2") == [("river", {}), ("water", {"depth": 0.2})]
     assert parse_terrain_type("water:flow=current,speed=0.5") == ("water", {"flow": "current", "speed": 0.5})
     with pytest.raises(ValueError, match="unknown atomic terrain 'lava'"):
         parse_terrain_type("lava")
@@ -82,8 +90,10 @@ def test_curriculum_materials(curriculum):
     t = curriculum
     water_tile = (slice(10 + 40, 50 + 40), slice(10 + 4 * 40, 50 + 4 * 40))
     soil_tile = (slice(10, 50), slice(10 + 5 * 40, 50 + 5 * 40))
-    assert t.material.has_water()[water_tile].all()
-    assert t.material.water_surface[water_tile].max() > t.height_field[water_tile].max()
+    wet = t.material.has_water()[water_tile]
+    assert wet.any() and not wet.all()  # the river's channel holds the water, its banks are dry
+    ground = t.height_field[water_tile]
+    assert np.all(ground[wet] < t.material.water_surface[water_tile][wet])
     assert t.material.soil_presets == ["wet_sand"]
     assert (t.material.soil[soil_tile] == 0).all()
     assert (t.material.soil[water_tile] == NO_SOIL).all() and not t.material.has_water()[soil_tile].any()
@@ -208,3 +218,11 @@ def test_save_preview(tmp_path, curriculum):
     assert max(image.size) <= 200 and image.mode == "RGB"
     pixels = np.asarray(image).astype(int)
     assert pixels.std() > 5  # not a blank image
+
+
+def test_benchmark_grid_small():
+    from legged_gente.terrain.benchmark import BENCHMARK_TYPES, benchmark_grid
+
+    result = benchmark_grid(num_rows=2, num_cols=len(BENCHMARK_TYPES), tile_size=2.0, repeats=1)
+    assert result["types"] == BENCHMARK_TYPES and result["best_s"] > 0
+    assert result["cells"] == (2 * 20 + 100) * (len(BENCHMARK_TYPES) * 20 + 100)

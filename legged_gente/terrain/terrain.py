@@ -7,8 +7,10 @@ world ``origin_xy + (i, j) * resolution``; ``origin_xy == (-border_size, -border
 starts at world (0, 0).
 
 A ``terrain_types`` entry is an atomic terrain name, optionally with fixed parameters after a colon:
-``"stairs:direction=down"`` or ``"water:flow=current,speed=0.5"``; the curriculum sets the others.
-Physical terrains (water, soil, low_friction) fill a flat tile.
+``"stairs:direction=down"`` or ``"water:flow=current,speed=0.5"``; the curriculum sets the others. Several
+atomics joined by ``+`` are applied in order to the whole tile, each at the tile's difficulty:
+``"river+water"`` (a filled channel), ``"hills+soil:preset=dry_sand"`` (dunes). Physical terrains alone
+(water, soil, low_friction) lie on flat ground.
 """
 
 from __future__ import annotations
@@ -60,6 +62,11 @@ def normalised_proportions(proportions: list[float]) -> np.ndarray:
     if abs(p.sum() - 1.0) > 1e-6:
         warnings.warn(f"terrain_proportions sum to {p.sum():.4f}, not 1; normalising them.", stacklevel=3)
     return p / p.sum()
+
+
+def parse_tile_type(entry: str) -> list[tuple[str, dict[str, Any]]]:
+    """A ``terrain_types`` entry -> the (name, fixed params) of each atomic joined by ``+``."""
+    return [parse_terrain_type(part) for part in entry.split("+")]
 
 
 def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
@@ -140,10 +147,16 @@ class Terrain:
     def _tile_seed(self, r: int, c: int) -> int:
         return int(np.random.SeedSequence(int(self.cfg.seed), spawn_key=(r, c)).generate_state(1)[0])
 
-    def _atomic_tile(self, r: int, c: int, name: str, params: dict[str, Any]):
+    def _atomic_tile(self, r: int, c: int, ops: list[tuple[str, dict[str, Any]]], difficulty: float | None):
+        """Builder of a tile made of ``ops`` on the whole tile, at ``difficulty`` (None: the params as given)."""
+        operations = []
+        for name, fixed in ops:
+            atomic = ATOMIC_TERRAINS[name]
+            base = atomic.params_for_difficulty(difficulty) if difficulty is not None else {}
+            operations.append(Operation(name, atomic.check_params({**base, **fixed})))
         size_x, size_y = self.tile_size
         spec = TileSpec(size_x, size_y, self.resolution, self._tile_seed(r, c),
-                        [Part(Region(0.0, 0.0, size_x, size_y), [Operation(name, params)])])
+                        [Part(Region(0.0, 0.0, size_x, size_y), operations)])
         return lambda: build_tile(spec, float(self.cfg.static_friction))
 
     def _plan(self) -> dict[tuple[int, int], tuple[str, Any]]:
@@ -151,7 +164,7 @@ class Terrain:
         cfg, rows, cols = self.cfg, self.num_rows, self.num_cols
         plan = {}
         if self.mode in ("curriculum", "random"):
-            types = [parse_terrain_type(t) for t in cfg.terrain_types]
+            types = [parse_tile_type(t) for t in cfg.terrain_types]
             if len(types) != len(cfg.terrain_proportions):
                 raise ValueError(
                     f"terrain_types has {len(types)} entries but terrain_proportions {len(cfg.terrain_proportions)}; "
@@ -163,10 +176,8 @@ class Terrain:
             for r in range(rows):
                 difficulty = r / (rows - 1) if rows > 1 else 0.0
                 for c in range(cols):
-                    name, fixed = types[column_type[c]]
-                    atomic = ATOMIC_TERRAINS[name]
-                    params = atomic.check_params({**atomic.params_for_difficulty(difficulty), **fixed})
-                    plan[r, c] = (cfg.terrain_types[column_type[c]], self._atomic_tile(r, c, name, params))
+                    k = column_type[c]
+                    plan[r, c] = (cfg.terrain_types[k], self._atomic_tile(r, c, types[k], difficulty))
         elif self.mode == "random":
             p = normalised_proportions(cfg.terrain_proportions)
             rng = np.random.default_rng(int(cfg.seed))
@@ -174,18 +185,16 @@ class Terrain:
             difficulties = rng.uniform(0.0, 1.0, (rows, cols))
             for r in range(rows):
                 for c in range(cols):
-                    name, fixed = types[kinds[r, c]]
-                    atomic = ATOMIC_TERRAINS[name]
-                    params = atomic.check_params({**atomic.params_for_difficulty(float(difficulties[r, c])), **fixed})
-                    plan[r, c] = (cfg.terrain_types[kinds[r, c]], self._atomic_tile(r, c, name, params))
+                    k = kinds[r, c]
+                    plan[r, c] = (cfg.terrain_types[k], self._atomic_tile(r, c, types[k], float(difficulties[r, c])))
         elif self.mode == "selected":
             name = cfg.selected_terrain
             if name not in ATOMIC_TERRAINS:
                 raise ValueError(f"selected_terrain {name!r} is unknown; use one of {sorted(ATOMIC_TERRAINS)}.")
-            params = ATOMIC_TERRAINS[name].check_params(dict(cfg.selected_params or {}))
+            ops = [(name, dict(cfg.selected_params or {}))]
             for r in range(rows):
                 for c in range(cols):
-                    plan[r, c] = (name, self._atomic_tile(r, c, name, params))
+                    plan[r, c] = (name, self._atomic_tile(r, c, ops, None))
         else:  # generated
             paths = [Path(p) for p in cfg.generated_specs or []]
             if not paths:

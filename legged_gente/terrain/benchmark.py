@@ -1,0 +1,77 @@
+"""Terrain build benchmark: a curriculum grid of every terrain type, water and sand included.
+
+``python -m legged_gente.terrain.benchmark`` prints the wall-clock build time of the issue's reference grid
+(10 rows x 20 columns of 8 m tiles at 0.1 m); ``gente-benchmark`` calls :func:`benchmark_grid`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+from .registry import ATOMIC_TERRAINS
+from .terrain import Terrain, parse_tile_type
+
+BENCHMARK_TYPES = [
+    "flat", "pyramid_slope", "pyramid_slope:direction=down", "random_uniform", "natural_ground", "hills",
+    "waves", "stairs", "stairs:direction=down", "pyramid_stairs", "pyramid_stairs:direction=down",
+    "discrete_obstacles", "stepping_stones", "gap", "pit", "pillars", "rocks", "river+water",
+    "hills+soil:preset=dry_sand", "low_friction",
+]
+"""Twenty columns: every geometric atomic, both directions where they have one, water, sand and ice."""
+
+
+def benchmark_grid(
+    num_rows: int = 10, num_cols: int = 20, tile_size: float = 8.0, resolution: float = 0.1, repeats: int = 3
+) -> dict[str, Any]:
+    """Build the curriculum grid ``repeats`` times; return the best and mean build seconds and the grid facts."""
+    covered = {name for entry in BENCHMARK_TYPES for name, _ in parse_tile_type(entry)}
+    missing = sorted(set(ATOMIC_TERRAINS) - covered)
+    if missing:
+        raise RuntimeError(f"benchmark types miss the atomic terrains {missing}; add them to BENCHMARK_TYPES.")
+
+    class Cfg:
+        mesh_type = "heightfield"
+        mode = "curriculum"
+        border_size = 5.0
+        terrain_length = terrain_width = tile_size
+        terrain_types = BENCHMARK_TYPES
+        terrain_proportions = [1.0 / len(BENCHMARK_TYPES)] * len(BENCHMARK_TYPES)
+        selected_terrain, selected_params, generated_specs = "flat", {}, []
+        max_init_terrain_level, curriculum, static_friction, seed = 5, True, 1.0, 0
+
+    Cfg.resolution, Cfg.num_rows, Cfg.num_cols = resolution, num_rows, num_cols
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        terrain = Terrain(Cfg, num_robots=num_rows * num_cols)
+        times.append(time.perf_counter() - start)
+    return {
+        "best_s": min(times),
+        "mean_s": sum(times) / len(times),
+        "repeats": repeats,
+        "grid": f"{num_rows} x {num_cols} tiles of {tile_size} m at {resolution} m",
+        "cells": int(terrain.height_field.size),
+        "types": terrain.tile_type_names,
+    }
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rows", type=int, default=10)
+    parser.add_argument("--cols", type=int, default=20)
+    parser.add_argument("--tile-size", type=float, default=8.0)
+    parser.add_argument("--resolution", type=float, default=0.1)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    result = benchmark_grid(args.rows, args.cols, args.tile_size, args.resolution, args.repeats)
+    print(
+        f"terrain build: {result['grid']} ({result['cells']} cells incl. border): "
+        f"best {result['best_s']:.3f} s, mean {result['mean_s']:.3f} s over {result['repeats']} builds"
+    )
+    return result
+
+
+if __name__ == "__main__":
+    main()
