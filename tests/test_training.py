@@ -60,7 +60,7 @@ def test_resume_continues_from_checkpoint(trained):
 
 
 def test_play_exports_jit_and_onnx_with_same_actions(trained, monkeypatch):
-    tmp_path, runner, train_cfg = trained
+    tmp_path = trained[0]
     # play builds the task's default train cfg: give it the tiny network the checkpoint holds
     original = task_registry.get_cfgs
 
@@ -77,8 +77,7 @@ def test_play_exports_jit_and_onnx_with_same_actions(trained, monkeypatch):
     assert out["jit"].is_file() and out["onnx"].is_file() and out["plot"].is_file()
     assert out["log"]["cmd"].shape == (10, 3)
 
-    policy = runner.get_inference_policy(device="cpu")
-    obs = runner.env.get_observations()
+    policy, obs = out["policy"], out["env"].get_observations()
     with torch.inference_mode():
         expected = policy(obs).numpy()
     session = onnxruntime.InferenceSession(str(out["onnx"]))

@@ -114,7 +114,7 @@ def play(args) -> dict:
         video_path = export_dir / "rollout.mp4"
         recorder.save(video_path, fps=1.0 / env.dt)
         print(f"Wrote {video_path}")
-    return {"jit": jit_path, "onnx": onnx_path, "plot": plot_path, "log": log}
+    return {"jit": jit_path, "onnx": onnx_path, "plot": plot_path, "log": log, "policy": policy, "env": env}
 
 
 def _open_viewer(env):
