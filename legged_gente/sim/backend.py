@@ -61,7 +61,7 @@ class Simulation:
             batch = {name: num_worlds for name in BATCHED_FIELDS} if batch_model else {}
             self.m = mjw.put_model(mjm, batch_sizes=batch)
             # hitting the iteration cap in a few worlds is acceptable in RL; don't print it every substep
-            self.m.opt.warn_overflow &= ~mjw.OverflowType.ITERATIONS
+            self.m.opt.warn_overflow &= ~(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
             self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
             self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
         self.after_substep: list[Callable[[], None]] = []
@@ -101,8 +101,8 @@ class Simulation:
             if self._graph is None:
                 self._sim_stream = wp.Stream(self.wp_device)
                 self._sim_stream.wait_stream(torch_stream)
-                self._substeps(decimation)  # warm up: compiles every kernel before capture
                 with wp.ScopedStream(self._sim_stream):
+                    self._substeps(decimation)  # warm-up: loads every kernel module before capture
                     with wp.ScopedCapture() as capture:
                         self._substeps(decimation)
                 self._graph = capture.graph

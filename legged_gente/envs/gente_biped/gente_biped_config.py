@@ -24,8 +24,8 @@ class GenteBipedCfg(LeggedRobotCfg):
         }
 
     class control(LeggedRobotCfg.control):
-        stiffness = {"hip": 150.0, "knee": 200.0, "ankle": 40.0}  # N*m/rad, matched by joint-name substring
-        damping = {"hip": 5.0, "knee": 5.0, "ankle": 2.0}  # N*m*s/rad
+        stiffness = {"hip": 150.0, "knee": 200.0, "ankle": 80.0}  # N*m/rad, matched by joint-name substring
+        damping = {"hip": 5.0, "knee": 5.0, "ankle": 3.0}  # N*m*s/rad
         action_scale = 0.25
         decimation = 4
 

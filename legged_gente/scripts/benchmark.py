@@ -1,0 +1,127 @@
+"""Throughput benchmark: raw mjw.step, LeggedRobot.step and full PPO, at several num_envs, in one run.
+
+    gente-benchmark --task gente_biped_flat --num_envs 1024 4096 8192 [--device cuda]
+
+Raw physics is ``mjw.step`` of the very model the env compiles (captured in a CUDA graph on GPU), reported
+as substeps/s summed over worlds; env steps/s is policy steps/s summed over worlds; PPO is rsl-rl's
+collection + learning. ``env/raw`` compares env steps against the raw ceiling (raw substeps / decimation).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import torch
+import warp as wp
+
+from legged_gente.envs.task_registry import task_registry
+from legged_gente.utils.args import default_device
+
+
+def _sync(device: str) -> None:
+    if device.startswith("cuda"):
+        torch.cuda.synchronize(device)
+        wp.synchronize()
+
+
+def raw_physics(env, steps: int) -> float:
+    """Substeps/s (all worlds) of plain mjw.step on the env's model and data, no env logic, no force hooks."""
+    import mujoco_warp as mjw
+
+    sim = env.sim
+    with wp.ScopedDevice(sim.wp_device):
+        callbacks = (sim.m.callback.passive, sim.m.callback.contactfilter)
+        sim.m.callback.passive = sim.m.callback.contactfilter = None
+        try:
+            mjw.step(sim.m, sim.d)
+            graph = None
+            if sim.wp_device.is_cuda:
+                with wp.ScopedCapture() as capture:
+                    mjw.step(sim.m, sim.d)
+                graph = capture.graph
+            _sync(env.device)
+            start = time.perf_counter()
+            for _ in range(steps):
+                wp.capture_launch(graph) if graph is not None else mjw.step(sim.m, sim.d)
+            _sync(env.device)
+            elapsed = time.perf_counter() - start
+        finally:
+            sim.m.callback.passive, sim.m.callback.contactfilter = callbacks
+    return steps * env.num_envs / elapsed
+
+
+def env_steps(env, steps: int) -> float:
+    actions = torch.zeros(env.num_envs, env.num_actions, device=env.device)
+    env.step(actions)
+    _sync(env.device)
+    start = time.perf_counter()
+    for _ in range(steps):
+        actions.uniform_(-1.0, 1.0)
+        env.step(actions)
+    _sync(env.device)
+    return steps * env.num_envs / (time.perf_counter() - start)
+
+
+def ppo_steps(env, task: str, iterations: int) -> float:
+    _, train_cfg = task_registry.get_cfgs(task)
+    runner, train_cfg, _ = task_registry.make_alg_runner(env, task, train_cfg=train_cfg, log_root=None)
+    runner.learn(1)  # warm-up
+    _sync(env.device)
+    start = time.perf_counter()
+    runner.learn(iterations)
+    _sync(env.device)
+    return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / (time.perf_counter() - start)
+
+
+def run(task: str, sizes: list[int], device: str, steps: int, iterations: int) -> list[dict]:
+    rows = []
+    for num_envs in sizes:
+        env_cfg, _ = task_registry.get_cfgs(task)
+        env_cfg.env.num_envs = num_envs
+        env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
+        raw = raw_physics(env, steps * env.cfg.control.decimation)
+        stepped = env_steps(env, steps)
+        ppo = ppo_steps(env, task, iterations) if iterations > 0 else float("nan")
+        ceiling = raw / env.cfg.control.decimation
+        rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
+                     "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling})
+        del env
+        if device.startswith("cuda"):
+            torch.cuda.empty_cache()
+    return rows
+
+
+def print_table(rows: list[dict], device: str) -> None:
+    name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "CPU"
+    print(f"\ndevice: {name}")
+    header = f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} {'PPO/raw':>8}"
+    print(header)
+    print("-" * len(header))
+    for r in rows:
+        print(f"{r['num_envs']:>9d} {r['raw_substeps_per_s']:>15,.0f} {r['env_steps_per_s']:>12,.0f} "
+              f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f}")
+    print("(raw ceiling in env steps/s = raw substeps/s / decimation; ratios are against that ceiling)")
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description="legged_gente throughput benchmark")
+    parser.add_argument("--task", default="gente_biped_flat")
+    parser.add_argument("--num_envs", type=int, nargs="+", default=[1024, 4096, 8192])
+    parser.add_argument("--device", default=None)
+    parser.add_argument("--steps", type=int, default=100, help="policy steps timed per measurement")
+    parser.add_argument("--iterations", type=int, default=3, help="PPO iterations timed (0 skips PPO)")
+    parser.add_argument("--terrain_build", action="store_true", help="also time the terrain grid build")
+    args = parser.parse_args(argv)
+    device = args.device or default_device()
+    if any(n < 1 for n in args.num_envs):
+        parser.error("--num_envs values must be >= 1")
+    if args.terrain_build:
+        from legged_gente.terrain.benchmark import benchmark_grid
+
+        benchmark_grid()
+    print_table(run(args.task, args.num_envs, device, args.steps, args.iterations), device)
+
+
+if __name__ == "__main__":
+    main()
