@@ -262,3 +262,11 @@ def test_composition_errors_are_clear():
     stacked = [Part(Region(0, 0, 8, 8), [Operation("pyramid_stairs", {"step_height": 0.3, "step_width": 0.15}, "add")] * 2)]
     with pytest.raises(ValueError, match=f"> {MAX_ABS_HEIGHT} m"):
         build_tile(TileSpec(8, 8, RES, 0, stacked))
+
+
+def test_docs_table_lists_every_atomic_with_intact_columns():
+    from legged_gente.terrain.gallery import atomic_table_markdown
+
+    rows = atomic_table_markdown().splitlines()[2:]
+    assert [r.split("|")[1].strip(" `") for r in rows] == list(ATOMIC_TERRAINS)
+    assert all(r.replace("\\|", "").count("|") == 7 for r in rows)

@@ -35,14 +35,18 @@ def _smoothstep(t: np.ndarray) -> np.ndarray:
 
 
 def _flatten_centre(h: np.ndarray, resolution: float, platform: float, ramp: float) -> np.ndarray:
-    """Fade ``h`` to 0 on the central square of side ``platform``, over a ``ramp`` (m) wide smooth band.
+    """Flatten ``h`` to its mean over the central square of side ``platform``, easing back over ``ramp`` m.
 
-    Multiplying by a weight in [0, 1] never increases |h|, so declared bounds still hold.
+    Each result is a convex combination of ``h`` and that mean, so declared bounds still hold, and the result
+    stays proportional to the terrain's amplitude (monotone difficulty).
     """
     if platform <= 0.0:
         return h
     d = _chebyshev(h.shape, resolution)
-    return h * _smoothstep((d - platform / 2.0) / ramp)
+    inside = d <= platform / 2.0
+    level = h[inside].mean() if inside.any() else 0.0
+    w = _smoothstep((d - platform / 2.0) / ramp)
+    return w * h + (1.0 - w) * level
 
 
 def _clear_centre(h: np.ndarray, resolution: float, platform: float) -> np.ndarray:

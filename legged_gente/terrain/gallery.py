@@ -1,0 +1,108 @@
+"""Documentation assets from the registry: a preview PNG per atomic terrain, the curriculum grid, the docs table.
+
+``python -m legged_gente.terrain.gallery [--img docs/img] [--doc docs/terrain.md]`` rewrites the images and the
+table of atomic terrains between the ``<!-- atomics:start -->`` / ``<!-- atomics:end -->`` markers of the doc.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from .benchmark import BENCHMARK_TYPES
+from .composition import Operation, Part, Region, TileSpec
+from .registry import ATOMIC_TERRAINS, Param
+from .terrain import Terrain, preview_rgb
+
+GALLERY_DIFFICULTY = 0.7
+PHYSICAL_BASE = {"water": "river", "soil": "hills", "low_friction": "flat"}
+"""The geometric terrain each physical one is shown on."""
+START, END = "<!-- atomics:start -->", "<!-- atomics:end -->"
+
+
+def atomic_preview(name: str, size: float = 8.0, resolution: float = 0.1, pixels: int = 240) -> np.ndarray:
+    """(pixels, pixels, 3) uint8 preview of atomic ``name`` at GALLERY_DIFFICULTY on a ``size`` m tile."""
+    from PIL import Image
+
+    names = [PHYSICAL_BASE[name], name] if name in PHYSICAL_BASE else [name]
+    ops = [Operation(n, ATOMIC_TERRAINS[n].params_for_difficulty(GALLERY_DIFFICULTY)) for n in names]
+    heights, material = TileSpec(size, size, resolution, 0, [Part(Region(0, 0, size, size), ops)]).build()
+    rgb = (preview_rgb(heights, material, resolution) * 255).round().astype(np.uint8)
+    return np.asarray(Image.fromarray(rgb).resize((pixels, pixels), Image.BICUBIC))
+
+
+def curriculum_terrain() -> Terrain:
+    class Cfg:
+        mesh_type, mode, resolution, border_size = "heightfield", "curriculum", 0.1, 2.0
+        terrain_length = terrain_width = 8.0
+        num_rows, num_cols = 10, len(BENCHMARK_TYPES)
+        terrain_types = BENCHMARK_TYPES
+        terrain_proportions = [1.0 / len(BENCHMARK_TYPES)] * len(BENCHMARK_TYPES)
+        selected_terrain, selected_params, generated_specs = "flat", {}, []
+        max_init_terrain_level, curriculum, static_friction, seed = 5, True, 1.0, 0
+
+    return Terrain(Cfg, num_robots=1)
+
+
+def _format(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
+
+
+def _param_cell(name: str, p: Param) -> str:
+    if p.choices is not None:
+        rng = " \\| ".join(p.choices)
+    else:
+        rng = f"[{_format(p.low)}, {_format(p.high)}] {p.unit}"
+    return f"`{name}`={_format(p.default)} ({rng}): {p.doc.replace('|', '&#124;')}"
+
+
+def atomic_table_markdown() -> str:
+    """Markdown table of every atomic: kind, description, parameters, curriculum mapping (difficulty 0 -> 1)."""
+    lines = ["| terrain | kind | description | parameters: default (range): meaning | difficulty 0 → 1 | preview |",
+             "|---|---|---|---|---|---|"]
+    for name, a in ATOMIC_TERRAINS.items():
+        params = "<br>".join(_param_cell(k, p) for k, p in a.params.items())
+        if a.difficulty is None:
+            curriculum = "defaults"
+        else:
+            lo, hi = a.difficulty(0.0), a.difficulty(1.0)
+            curriculum = "<br>".join(f"`{k}` {_format(lo[k])} → {_format(hi[k])}" for k in lo)
+        lines.append(
+            f"| `{name}` | {a.kind} | {a.description} | {params} | {curriculum} | "
+            f"![{name}](img/terrain_{name}.png) |"
+        )
+    return "\n".join(lines)
+
+
+def write_gallery(img_dir: Path, doc: Path | None) -> list[Path]:
+    from PIL import Image
+
+    img_dir.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in ATOMIC_TERRAINS:
+        path = img_dir / f"terrain_{name}.png"
+        Image.fromarray(atomic_preview(name)).save(path, optimize=True)
+        written.append(path)
+    grid = curriculum_terrain().save_preview(img_dir / "terrain_curriculum.png", max_size=1000)
+    Image.open(grid).quantize(colors=128).save(grid, optimize=True)  # docs asset: keep it small
+    written.append(grid)
+    if doc is not None:
+        text = doc.read_text()
+        if START not in text or END not in text:
+            raise ValueError(f"{doc} lacks the markers {START} ... {END} where the atomic table goes; add them.")
+        head, rest = text.split(START, 1)
+        doc.write_text(head + START + "\n" + atomic_table_markdown() + "\n" + END + rest.split(END, 1)[1])
+    return written
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--img", type=Path, default=Path("docs/img"))
+    parser.add_argument("--doc", type=Path, default=Path("docs/terrain.md"))
+    args = parser.parse_args()
+    for path in write_gallery(args.img, args.doc):
+        print(f"{path}  {path.stat().st_size / 1024:.0f} KB")
