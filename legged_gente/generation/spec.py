@@ -42,7 +42,7 @@ def image_source(data: bytes, name: str | None = None) -> dict[str, Any]:
 
 def spec_name(text: str, default: str = "generated_terrain") -> str:
     """A snake_case identifier from the first words of ``text`` (used for spec and class names)."""
-    words = re.findall(r"[a-z0-9]+", text.lower())[:4]
+    words = [w for w in re.findall(r"[a-z0-9]+", text.lower()) if w not in ("a", "an", "the", "of", "with")][:4]
     name = "_".join(words)
     return name if name and name[0].isalpha() else default
 

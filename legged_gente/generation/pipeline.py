@@ -1,0 +1,72 @@
+"""Text and/or image -> backend -> validated :class:`TerrainSpec` (the one entry point the CLI uses)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from legged_gente.generation.backends import GenerationResult
+from legged_gente.generation.spec import TerrainSpec, image_source, spec_name, text_source
+
+BACKENDS = ("planner", "openai")
+
+
+def generate_spec(
+    text: str | None = None,
+    image: str | Path | bytes | None = None,
+    backend: str = "planner",
+    *,
+    seed: int = 0,
+    size_x: float = 20.0,
+    size_y: float = 20.0,
+    resolution: float = 0.1,
+    name: str | None = None,
+    base_url: str | None = None,
+    model: str | None = None,
+    two_phase: bool = False,
+    vision_model: str | None = None,
+    timeout: float = 60.0,
+    max_retries: int = 3,
+    api_key_env: str = "GENTE_API_KEY",
+) -> tuple[TerrainSpec, GenerationResult]:
+    """Run ``backend`` on the inputs and return the validated spec and the backend's result (warnings, notes)."""
+    if not text and image is None:
+        raise ValueError("give a text description, an image, or both.")
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; use one of {list(BACKENDS)}.")
+    image_bytes = None
+    if image is not None:
+        image_bytes = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
+    if backend == "planner":
+        if image_bytes is not None:
+            from legged_gente.generation.backends.image import plan_image
+
+            result = plan_image(image_bytes, size_x, size_y)
+            if text:
+                result.warnings.append("the planner reads the image only; the text just names the terrain "
+                                       "(use --backend openai to combine both).")
+        else:
+            from legged_gente.generation.backends.planner import plan_text
+
+            result = plan_text(text, size_x, size_y)
+    else:
+        if not base_url or not model:
+            raise ValueError("the openai backend needs --base-url (e.g. http://localhost:8000/v1) and --model.")
+        from legged_gente.generation.backends.openai_backend import OpenAIBackend
+
+        client = OpenAIBackend(
+            base_url, model, api_key_env=api_key_env, timeout=timeout, max_retries=max_retries,
+            two_phase=two_phase, vision_model=vision_model, size_x=size_x, size_y=size_y,
+        )
+        result = client.generate(text=text, image=image_bytes)
+    if image_bytes is not None:
+        source = image_source(image_bytes, Path(image).name if isinstance(image, (str, Path)) else None)
+        if text:
+            source["text"] = text
+    else:
+        source = text_source(text)
+    default_name = spec_name(text) if text else (spec_name(Path(image).stem) if isinstance(image, (str, Path)) else "generated_terrain")
+    spec = TerrainSpec(
+        calls=result.calls, name=name or default_name, size_x=size_x, size_y=size_y, resolution=resolution,
+        seed=seed, source=source, backend=backend, model=model if backend == "openai" else None,
+    )
+    return spec.validated(), result

@@ -1,0 +1,107 @@
+"""gente-generate: text or an image -> validated terrain spec -> terrain_cfg.py + spec.json + preview.png.
+
+Examples::
+
+    gente-generate --text "a forest trail along a knee-deep stream" --out terrains/forest
+    gente-generate --image sketch.png --out terrains/sketch
+    gente-generate --text "a rocky beach" --backend openai --base-url http://localhost:8000/v1 --model qwen --out terrains/beach
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from legged_gente.generation.backends import GenerationError
+from legged_gente.generation.emit import DEFAULT_BASE, emit
+from legged_gente.generation.pipeline import BACKENDS, generate_spec
+from legged_gente.generation.validation import ValidationError
+
+
+def _positive(kind):
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a {kind.__name__}") from None
+        if value <= 0:
+            raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+        return value
+
+    return parse
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2**32), got {text}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gente-generate", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    src = p.add_argument_group("input (at least one)")
+    src.add_argument("--text", help="scene description, e.g. 'a knee-deep river in a forest'")
+    src.add_argument("--image", type=Path, help="photo or colour-coded sketch map (PNG/JPEG); see docs/generation.md")
+    p.add_argument("--out", type=Path, required=True, help="output directory (terrain_cfg.py, spec.json, preview.png)")
+    p.add_argument("--backend", choices=BACKENDS, default="planner", help="planner (offline, default) or openai")
+    p.add_argument("--base-url", help="OpenAI-compatible server, e.g. http://localhost:8000/v1 (openai backend)")
+    p.add_argument("--model", help="model name on that server (openai backend)")
+    p.add_argument("--vision-model", help="model that describes the image in --two-phase (default: --model)")
+    p.add_argument("--two-phase", action="store_true", help="VLM describes the image, then the LLM calls the tools")
+    p.add_argument("--api-key-env", default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
+    p.add_argument("--timeout", type=_positive(float), default=60.0, help="request timeout in seconds (default 60)")
+    p.add_argument("--max-retries", type=int, default=3, help="correction rounds for invalid tool calls (default 3)")
+    p.add_argument("--seed", type=_seed, default=0, help="terrain seed (default 0)")
+    p.add_argument("--size", type=_positive(float), default=20.0, help="tile side in metres (default 20)")
+    p.add_argument("--resolution", type=_positive(float), default=0.1, help="cell size in metres (default 0.1)")
+    p.add_argument("--name", help="terrain name (snake_case); default from the text or image file name")
+    p.add_argument("--base", default=DEFAULT_BASE, help=f"terrain config class to subclass (default {DEFAULT_BASE})")
+    p.add_argument("--mesh", choices=("obj", "glb", "ply", "stl"), help="also write the terrain as a mesh")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not args.text and args.image is None:
+        parser.error("give --text, --image, or both.")
+    if args.image is not None and not args.image.is_file():
+        parser.error(f"--image {args.image} is not a file.")
+    if args.backend == "openai" and not (args.base_url and args.model):
+        parser.error("--backend openai needs --base-url and --model.")
+    if args.backend == "planner" and (args.base_url or args.model or args.two_phase):
+        parser.error("--base-url/--model/--two-phase are for --backend openai.")
+    if args.max_retries < 0:
+        parser.error("--max-retries must be >= 0.")
+    if args.name is not None and not (args.name.isidentifier() and args.name[0].isalpha()):
+        parser.error(f"--name {args.name!r} must be a snake_case identifier, e.g. forest_trail.")
+    try:
+        spec, result = generate_spec(
+            args.text, args.image, args.backend, seed=args.seed, size_x=args.size, size_y=args.size,
+            resolution=args.resolution, name=args.name, base_url=args.base_url, model=args.model,
+            two_phase=args.two_phase, vision_model=args.vision_model, timeout=args.timeout,
+            max_retries=args.max_retries, api_key_env=args.api_key_env,
+        )
+        for note in result.notes:
+            print(f"note: {note}")
+        print(f"{len(spec.calls)} tool call(s):")
+        for call in spec.calls:
+            print(f"  {call.tool}({json.dumps(call.arguments())})")
+        for warning in result.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+        out = emit(spec, args.out, base=args.base, mesh=args.mesh)
+    except (ValidationError, GenerationError, ValueError) as exc:
+        print(f"gente-generate: error: {exc}", file=sys.stderr)
+        return 1
+    print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
