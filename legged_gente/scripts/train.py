@@ -19,7 +19,13 @@ def train(args) -> Path | None:
             {"task": args.task, "env": class_to_dict(env_cfg), "train": class_to_dict(train_cfg)}, indent=1,
             default=str))
         print(f"Logging to {log_dir}")
-    runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
+    try:
+        runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
+    except KeyboardInterrupt:  # Ctrl-C (or `timeout -s INT`): keep what was learned
+        if log_dir is not None:
+            path = Path(log_dir) / f"model_{runner.current_learning_iteration}.pt"
+            runner.save(str(path))
+            print(f"\nInterrupted: saved {path}; continue with --resume")
     return Path(log_dir) if log_dir else None
 
 
