@@ -308,10 +308,10 @@ def wading_kernel(
 
 
 @wp.kernel
-def foot_clear_kernel(foot_sinkage: wp.array2d[float], foot_soil: wp.array2d[int]):
+def foot_untouch_kernel(foot_touch: wp.array2d[int], foot_cand: wp.array2d[float]):
     w, f = wp.tid()
-    foot_sinkage[w, f] = 0.0
-    foot_soil[w, f] = -1
+    foot_touch[w, f] = 0
+    foot_cand[w, f] = 0.0
 
 
 @wp.kernel
@@ -328,8 +328,10 @@ def contact_filter_kernel(
     use_soil: int,
     sole_area: float,
     sole_width: float,
+    sink_step: float,
     soil_params: wp.array3d[float],
     foot_fn: wp.array2d[float],
+    foot_sinkage: wp.array2d[float],
     # contacts (modified)
     contact_pos: wp.array[wp.vec3],
     contact_geom: wp.array[wp.vec2i],
@@ -337,13 +339,19 @@ def contact_filter_kernel(
     contact_dist: wp.array[float],
     contact_friction: wp.array[vec5],
     # out
-    foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
+    foot_touch: wp.array2d[int],
+    foot_cand: wp.array2d[float],
 ):
-    """Ground contacts take the cell's friction; a foot on soil sinks by Bekker's z (contact dist += z).
+    """Ground contacts take the cell's friction; a foot on soil sits in a rut of depth z.
 
-    Raising the reported distance by z makes the solver hold the foot z deeper in the ground, so the
-    sinkage shows as a lowered foot with the same contact stiffness.
+    The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration
+    (contact dist += z): the solver holds the foot z deeper with the contact's usual stiffness, so the
+    sinkage shows as a lowered foot. The rut deepens towards Bekker's z(F_N / sole area) but never
+    further than the foot's current penetration plus sink_step (sinkage_rate * dt), and never rises
+    during a stance: soil sinkage is plastic (Wong: unloading recovers little). Without these two
+    rules the loop F_N -> z -> contact chatters or ratchets: a rut deeper than the foot releases the
+    contact, the foot falls into it and the impact load digs it deeper still.
     """
     i = wp.tid()
     if i >= nacon[0]:
@@ -374,9 +382,24 @@ def contact_filter_kernel(
     z = bekker_sinkage_fn(
         foot_fn[w, f] / sole_area, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], sole_width
     )
-    contact_dist[i] = contact_dist[i] + z
-    foot_sinkage[w, f] = z
+    wp.atomic_max(foot_cand, w, f, wp.min(z, -contact_dist[i] + sink_step))
+    contact_dist[i] = contact_dist[i] + foot_sinkage[w, f]
     foot_soil[w, f] = s
+    foot_touch[w, f] = 1
+
+
+@wp.kernel
+def foot_rut_kernel(
+    foot_touch: wp.array2d[int], foot_cand: wp.array2d[float], foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
+):
+    """Deepen each foot's rut for the next substep; a foot without soil contact has left its rut."""
+    w, f = wp.tid()
+    if foot_touch[w, f] == 0:
+        foot_sinkage[w, f] = 0.0
+        foot_soil[w, f] = -1
+    else:
+        foot_sinkage[w, f] = wp.max(foot_sinkage[w, f], foot_cand[w, f])
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -473,6 +496,7 @@ def foot_normal_kernel(
 def foot_state_kernel(
     dt: float,
     contact_threshold: float,
+    load_alpha: float,
     foot_geom: wp.array[int],
     geom_xpos: wp.array2d[wp.vec3],
     heights: wp.array2d[float],
@@ -492,10 +516,16 @@ def foot_state_kernel(
     foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
     foot_slip: wp.array2d[wp.vec3],
+    foot_load: wp.array2d[float],
     obs: wp.array2d[float],
 ):
-    """Accumulate slip since touchdown (reset at lift-off) and write the privileged observations."""
+    """Accumulate slip since touchdown (reset at lift-off), low-pass the sinkage load, write the obs.
+
+    foot_load is F_N through a first-order low-pass (load_alpha = dt / tau): the sinkage follows the
+    sustained load, not the solver's single-substep impact spikes.
+    """
     w, f = wp.tid()
+    foot_load[w, f] = foot_load[w, f] + load_alpha * (foot_fn[w, f] - foot_load[w, f])
     if foot_fn[w, f] > contact_threshold:
         foot_slip[w, f] = foot_slip[w, f] + dt * foot_vel[w, f]
     else:

@@ -1,0 +1,323 @@
+"""``TerrainForces``: the terrain force fields installed on a mujoco_warp model.
+
+Usage by the env (per substep, all inside the captured graph)::
+
+    forces = TerrainForces(mjm, m, d, heights, origin_xy, resolution, material, cfg.forces, seed)
+    forces.install()                 # once: sets m.callback.contactfilter / m.callback.passive
+    ...
+    forces.new_policy_step()         # once per policy step, before the substeps (redraws the flow noise xi)
+    for _ in range(decimation):
+        mjw.step(m, d)               # runs the callbacks
+        forces.after_substep()       # foot normal forces and slip for the next substep, privileged obs
+    ...
+    forces.reset(mask)               # with the env's reset mask (wp.array of bool, nworld), after resetting d
+    critic_obs_part = forces.privileged_obs()   # torch (nworld, n_feet * 12), zero-copy
+
+TerrainForces owns ``d.xfrc_applied`` entirely: the passive callback zeroes it every substep and adds the
+terrain forces. Anything else that needs external pushes must change velocities instead.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import mujoco
+import numpy as np
+import warp as wp
+
+from legged_gente.external_forces import kernels as K
+from legged_gente.external_forces.soil import preset_table
+from legged_gente.terrain.materials import MaterialMap
+
+
+class ForcesConfig:
+    """Attributes TerrainForces reads (subclass or copy these onto your env config's ``forces`` class).
+
+    wading: bool          drag, buoyancy, added mass (and paper flow force) on leg segments in water
+    soil: bool            Bekker sinkage, bulldozing and pre-sliding friction on feet on soil cells
+    friction_from_map: bool  ground contacts' tangential friction scaled by the cell's MaterialMap.friction
+    friction_reference: float  friction of the MJCF ground geom (1): a cell of this friction changes nothing
+    water_density: float  rho, kg/m^3
+    drag_coefficient: float  cd of a cylinder across the flow (1), ~1.0-1.2 at leg Reynolds numbers (Hoerner)
+    added_mass_coefficient: float  cm (1), 1.0 for a circular cylinder
+    noise_std: float      std of the paper's eps (per episode, drag and vertical forces) and xi (per step, flow)
+    vertical_drag: bool   drag on the vertical relative velocity too (default: horizontal only)
+    paper_drag_area: bool  GenTe's A = 2 pi r h instead of the projected 2 r h
+    paper_added_mass: bool GenTe's effective weight (added mass only adds weight) instead of the reaction
+                           -m_a * relative acceleration
+    paper_flow_force: bool add GenTe's flow term as a force (N) on each submerged segment, on top of the
+                           flow entering the drag as a velocity
+    leg_geom_names: list[str]   capsule (or cylinder) geoms of the legs that feel water
+    foot_geom_names: list[str]  geoms of the feet that sink into soil
+    sole_length, sole_width: float | None  sole size (m); None: from the first foot geom (box: 2*size x, 2*size
+                           y; sphere/capsule/cylinder: the diameter for both)
+    contact_threshold: float  foot normal force (N) above which a foot counts as in contact (slip resets below)
+    bulldozing_speed_reg: float  speed (m/s) below which the bulldozing direction fades out linearly
+    sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
+    sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
+    """
+
+    wading = True
+    soil = True
+    friction_from_map = True
+    friction_reference = 1.0
+    water_density = 1000.0
+    drag_coefficient = 1.1
+    added_mass_coefficient = 1.0
+    noise_std = 0.1
+    vertical_drag = False
+    paper_drag_area = False
+    paper_added_mass = False
+    paper_flow_force = False
+    leg_geom_names: list[str] = []
+    foot_geom_names: list[str] = []
+    sole_length = None
+    sole_width = None
+    contact_threshold = 1.0
+    bulldozing_speed_reg = 0.05
+    sinkage_rate = 0.5
+    sinkage_load_tau = 0.05
+
+
+_ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]
+
+
+def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:
+    ids = []
+    for name in names:
+        gid = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, name)
+        if gid < 0:
+            known = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, i) for i in range(mjm.ngeom)]
+            raise ValueError(f"forces.{what}: no geom named {name!r} in the model; named geoms: "
+                             f"{[k for k in known if k]}.")
+        ids.append(gid)
+    return np.asarray(ids, np.int32)
+
+
+class TerrainForces:
+    """Terrain force fields for ``nworld`` robots on one terrain (see the module docstring for the calls).
+
+    Args:
+        mjm: host ``mujoco.MjModel`` (names, geom sizes, masses, timestep, gravity).
+        m, d: ``mjw.Model`` / ``mjw.Data`` made from ``mjm``.
+        heights: float (nx, ny) terrain heights (m); a plane is ``np.zeros((1, 1))`` with a (1, 1) map.
+        origin_xy: world (x, y) of cell (0, 0); resolution: cell size (m).
+        material: ``MaterialMap`` of shape (nx, ny).
+        cfg: object with the attributes of :class:`ForcesConfig`.
+        seed: seed of all per-env draws.
+    """
+
+    def __init__(self, mjm, m, d, heights, origin_xy, resolution, material: MaterialMap, cfg, seed: int = 0):
+        missing = [a for a in _ATTRS if not hasattr(cfg, a)]
+        if missing:
+            raise ValueError(f"forces config lacks {missing}; subclass legged_gente.external_forces.field."
+                             f"ForcesConfig to get the defaults.")
+        heights = np.asarray(heights, np.float32)
+        if heights.ndim != 2 or heights.shape != material.shape:
+            raise ValueError(f"heights {heights.shape} and material map {material.shape} must be the same 2-D "
+                             f"grid; build both from the same Terrain.")
+        if not resolution > 0:
+            raise ValueError(f"resolution must be > 0 m, got {resolution}.")
+        self.m, self.d, self.cfg = m, d, cfg
+        self.nworld = d.nworld
+        self.seed = int(seed)
+        self.dt = float(mjm.opt.timestep)
+        self.g = float(np.linalg.norm(mjm.opt.gravity))
+        self.origin = wp.vec2(float(origin_xy[0]), float(origin_xy[1]))
+        self.resolution = float(resolution)
+        dev = d.xfrc_applied.device
+        self.device = dev
+
+        def arr(x, dtype):
+            return wp.array(np.ascontiguousarray(x), dtype=dtype, device=dev)
+
+        self.heights = arr(heights, float)
+        self.water_surface = arr(material.water_surface.astype(np.float32), float)
+        self.flow_kind = arr(material.flow_kind.astype(np.int32), int)
+        self.flow_speed = arr(material.flow_speed.astype(np.float32), float)
+        self.flow_dir = arr(material.flow_direction.astype(np.float32), float)
+        self.flow_omega = arr(material.flow_omega.astype(np.float32), float)
+        self.flow_phase = arr(material.flow_phase.astype(np.float32), float)
+        self.soil = arr(material.soil.astype(np.int32), int)
+        self.friction = arr(material.friction.astype(np.float32), float)
+        if material.has_soil().any() and int(material.soil.max()) >= len(material.soil_presets):
+            raise ValueError(f"material.soil indexes preset {int(material.soil.max())} but soil_presets has "
+                             f"{len(material.soil_presets)} names; list every soil used in soil_presets.")
+        self.soil_table = arr(preset_table(list(material.soil_presets)), float)
+        npreset = self.soil_table.shape[0]
+
+        # legs
+        seg = _geom_ids(mjm, cfg.leg_geom_names, "leg_geom_names")
+        bad = [cfg.leg_geom_names[i] for i, g in enumerate(seg)
+               if mjm.geom_type[g] not in (int(mujoco.mjtGeom.mjGEOM_CAPSULE), int(mujoco.mjtGeom.mjGEOM_CYLINDER))]
+        if bad:
+            raise ValueError(f"forces.leg_geom_names {bad} are not capsules or cylinders; list only the legs' "
+                             f"capsule/cylinder geoms.")
+        self.nseg = len(seg)
+        self.seg_geom = arr(seg, int)
+        self.seg_body = arr(mjm.geom_bodyid[seg].astype(np.int32), int)
+        self.seg_radius = arr(mjm.geom_size[seg, 0].astype(np.float32), float)
+        halflen = np.where(mjm.geom_type[seg] == int(mujoco.mjtGeom.mjGEOM_CAPSULE), mjm.geom_size[seg, 1],
+                           mjm.geom_size[seg, 1] - mjm.geom_size[seg, 0])
+        self.seg_halflen = arr(halflen.astype(np.float32), float)
+        self._check_added_mass(mjm, seg, halflen)
+
+        # feet
+        feet = _geom_ids(mjm, cfg.foot_geom_names, "foot_geom_names")
+        self.nfoot = len(feet)
+        self.foot_geom = arr(feet, int)
+        self.foot_body = arr(mjm.geom_bodyid[feet].astype(np.int32), int)
+        geom_foot = np.full(mjm.ngeom, -1, np.int32)
+        geom_foot[feet] = np.arange(len(feet), dtype=np.int32)
+        self.geom_foot = arr(geom_foot, int)
+        self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
+        self.sole_length, self.sole_width = self._sole(mjm, feet)
+
+        n, nf, ns = self.nworld, max(self.nfoot, 1), max(self.nseg, 1)
+        z = lambda shape, dtype: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
+        self.counter = z(1, int)
+        self.eps = z(n, float)
+        self.xi = z(n, float)
+        self.soil_params = z((n, npreset, K.NSOILPARAM), float)
+        self.seg_vel = z((n, ns), wp.vec3)
+        self.seg_vel_valid = z((n, ns), int)
+        self.seg_force = z((n, ns), wp.vec3)
+        self.foot_fn = z((n, nf), float)
+        self.foot_vel = z((n, nf), wp.vec3)
+        self.foot_slip = z((n, nf), wp.vec3)
+        self.foot_sinkage = z((n, nf), float)
+        self.foot_soil = z((n, nf), int)
+        self.foot_soil.fill_(-1)
+        self.foot_touch = z((n, nf), int)
+        self.foot_cand = z((n, nf), float)
+        self.foot_load = z((n, nf), float)
+        self.foot_force = z((n, nf), wp.vec3)
+        self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
+        self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
+        self.reset(self._all)
+        self.new_policy_step()
+
+    # ------------------------------------------------------------------ setup helpers
+    def _check_added_mass(self, mjm, seg, halflen):
+        """The added mass is applied explicitly (from last substep's acceleration): stable only while it is
+        smaller than the mass it acts on. Warn where a fully submerged segment would break that."""
+        if not self.cfg.wading or self.cfg.paper_added_mass:
+            return
+        r = mjm.geom_size[seg, 0]
+        ma = self.cfg.added_mass_coefficient * self.cfg.water_density * np.pi * r**2 * 2 * (halflen + r)
+        body_mass = mjm.body_subtreemass[mjm.geom_bodyid[seg]]
+        heavy = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g, a, b in zip(seg, ma, body_mass)
+                 if a >= b]
+        if heavy:
+            warnings.warn(f"forces: the added mass of leg geoms {heavy} fully submerged reaches their bodies' "
+                          f"mass; the explicit added-mass force may oscillate. Use paper_added_mass=True or a "
+                          f"smaller added_mass_coefficient for such light legs.", stacklevel=3)
+
+    def _sole(self, mjm, feet):
+        cfg = self.cfg
+        if cfg.sole_length is not None and cfg.sole_width is not None:
+            length, width = float(cfg.sole_length), float(cfg.sole_width)
+        elif len(feet) == 0:
+            length = width = 1.0  # no feet: never used
+        else:
+            g = feet[0]
+            size = mjm.geom_size[g]
+            if mjm.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_BOX):
+                length, width = 2 * max(size[0], size[1]), 2 * min(size[0], size[1])
+            else:
+                length = width = 2 * size[0]
+        if not (length > 0 and width > 0):
+            raise ValueError(f"sole size must be > 0 m, got length={length}, width={width}; set "
+                             f"forces.sole_length / sole_width.")
+        return length, width
+
+    # ------------------------------------------------------------------ callbacks
+    def install(self):
+        """Set the mujoco_warp callbacks (contact filter for soil/friction, passive for the forces)."""
+        cfg = self.cfg
+        if cfg.soil or cfg.friction_from_map:
+            self.m.callback.contactfilter = self._contactfilter
+        if cfg.wading or cfg.soil:
+            self.m.callback.passive = self._passive
+
+    def _contactfilter(self, m, d):
+        dev = self.device
+        nf = max(self.nfoot, 1)
+        wp.launch(K.foot_untouch_kernel, dim=(self.nworld, nf), device=dev, inputs=[self.foot_touch, self.foot_cand])
+        c = d.contact
+        wp.launch(
+            K.contact_filter_kernel, dim=d.naconmax, device=dev,
+            inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
+                    self.friction, float(self.cfg.friction_reference), int(bool(self.cfg.friction_from_map)),
+                    int(bool(self.cfg.soil) and self.nfoot > 0), self.sole_length * self.sole_width,
+                    self.sole_width, float(self.cfg.sinkage_rate) * self.dt, self.soil_params, self.foot_load,
+                    self.foot_sinkage, c.pos, c.geom, c.worldid, c.dist, c.friction, self.foot_soil,
+                    self.foot_touch, self.foot_cand],
+        )
+        wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
+                  inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil])
+
+    def _passive(self, m, d):
+        cfg, dev = self.cfg, self.device
+        d.xfrc_applied.zero_()
+        if cfg.wading and self.nseg:
+            wp.launch(
+                K.wading_kernel, dim=(self.nworld, self.nseg), device=dev,
+                inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, m.body_rootid,
+                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time,
+                        self.origin, self.resolution, self.water_surface, self.flow_kind, self.flow_speed,
+                        self.flow_dir, self.flow_omega, self.flow_phase,
+                        float(cfg.water_density), float(cfg.drag_coefficient), float(cfg.added_mass_coefficient),
+                        self.g, self.dt, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
+                        int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
+                        self.seg_vel, self.seg_vel_valid, d.xfrc_applied, self.seg_force],
+            )
+        if cfg.soil and self.nfoot:
+            wp.launch(
+                K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
+                inputs=[self.foot_geom, self.foot_body, m.body_rootid, d.geom_xpos, d.xipos, d.cvel,
+                        d.subtree_com, self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params,
+                        self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_slip,
+                        self.foot_vel, self.foot_force, d.xfrc_applied],
+            )
+
+    # ------------------------------------------------------------------ env calls
+    def after_substep(self):
+        """After each ``mjw.step``: sum the feet's normal forces, update slip since touchdown, write obs."""
+        if not self.nfoot:
+            return
+        m, d, dev = self.m, self.d, self.device
+        self.foot_fn.zero_()
+        c = d.contact
+        wp.launch(
+            K.foot_normal_kernel, dim=d.naconmax, device=dev,
+            inputs=[int(m.opt.cone), d.nacon, self.geom_foot, c.frame, c.friction, c.dim, c.efc_address,
+                    c.adhesion, c.geom, c.worldid, d.efc.force, d.njmax, self.foot_fn],
+        )
+        wp.launch(
+            K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev,
+            inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
+                    self.foot_geom, d.geom_xpos, self.heights,
+                    self.origin, self.resolution, d.time, self.water_surface, self.flow_kind, self.flow_speed,
+                    self.flow_dir, self.flow_omega, self.flow_phase, self.xi, self.soil_params, self.foot_fn,
+                    self.foot_vel, self.foot_sinkage, self.foot_soil, self.foot_slip, self.foot_load, self.obs],
+        )
+
+    def reset(self, mask):
+        """Redraw eps ~ N(1, noise_std) and the soil parameters of the envs in ``mask`` (wp bool, nworld);
+        forget their segment velocities and foot slip. Device-only: safe inside a captured graph."""
+        wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
+                  inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
+                          self.soil_params, self.seg_vel_valid, self.foot_slip])
+        wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])
+
+    def new_policy_step(self):
+        """Redraw the flow noise xi ~ N(1, noise_std) of every env (device-side counter: graph-safe)."""
+        wp.launch(K.flow_noise_kernel, dim=self.nworld, device=self.device,
+                  inputs=[self.seed, self.counter, float(self.cfg.noise_std), self.xi])
+        wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])
+
+    def privileged_obs(self):
+        """Torch view (nworld, n_feet * 12), per foot: water depth (m), flow vx, vy (m/s), on-soil flag,
+        sinkage (m), normal force / 100 N, kc/1e4, kphi/1e6, n, bulldozing a/1e5, mu, K (cm)."""
+        return wp.to_torch(self.obs)

@@ -1,0 +1,252 @@
+"""TerrainForces in tiny MuJoCo-Warp worlds on the CPU: drag, energy, floating draft, tide, sinkage, friction."""
+
+import mujoco
+import mujoco_warp as mjw
+import numpy as np
+import pytest
+import warp as wp
+
+from legged_gente.external_forces import models
+from legged_gente.external_forces.field import ForcesConfig, TerrainForces
+from legged_gente.terrain.materials import FLOW_CURRENT, FLOW_TIDE, NO_SOIL, MaterialMap
+
+wp.config.quiet = True
+DEV = "cpu"
+RES, ORIGIN, SHAPE = 0.1, (-2.0, -2.0), (41, 41)
+R, H = 0.04, 0.15  # leg capsule radius and half-length
+
+
+def world(body: str, option: str = "", ground: str = '<geom name="ground" type="plane" size="3 3 .1"/>'):
+    xml = f"""<mujoco><option timestep="0.005" {option}/><worldbody>{ground}{body}</worldbody></mujoco>"""
+    return mujoco.MjModel.from_xml_string(xml)
+
+
+def leg(joints: str, z: float, density: float = 3000.0, damping: float = 0.0) -> str:
+    js = "".join(f'<joint name="{a}" type="slide" axis="{v}" damping="{damping}"/>'
+                 for a, v in zip(joints, ["1 0 0", "0 1 0", "0 0 1"]) if a != "-")
+    return (f'<body name="leg" pos="0 0 {z}">{js}<geom name="shin" type="capsule" size="{R} {H}" '
+            f'density="{density}" contype="0" conaffinity="0"/></body>')
+
+
+class Cfg(ForcesConfig):
+    noise_std = 0.0
+    drag_coefficient = 1.1
+    leg_geom_names = ["shin"]
+    foot_geom_names: list = []
+
+
+def water_map(surface=0.5, kind=0, speed=0.0, direction=0.0, omega=0.0, phase=0.0):
+    mat = MaterialMap.rigid(SHAPE)
+    mat.water_surface[:] = surface
+    mat.flow_kind[:] = kind
+    mat.flow_speed[:] = speed
+    mat.flow_direction[:] = direction
+    mat.flow_omega[:] = omega
+    mat.flow_phase[:] = phase
+    return mat
+
+
+def make(mjm, mat, cfg, nworld=2, install=True):
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=nworld, nconmax=16, njmax=64)
+    f = TerrainForces(mjm, m, d, np.zeros(SHAPE, np.float32), ORIGIN, RES, mat, cfg, seed=1)
+    if install:
+        f.install()
+    return m, d, f
+
+
+def set_qvel(d, qvel):
+    d.qvel.assign(wp.array(np.asarray(qvel, np.float32), dtype=float, device=DEV))
+
+
+def test_constant_speed_drag_matches_reference():
+    wp.set_device(DEV)
+    mjm = world(leg("x", z=0.3), option='gravity="0 0 0"')
+    m, d, f = make(mjm, water_map(surface=0.3), Cfg())
+    speeds = np.array([[0.5], [-1.2]])
+    for _ in range(3):
+        set_qvel(d, speeds)
+        mjw.step(m, d)
+    lsub = 0.3 - (0.3 - H - R)  # surface at the capsule centre: lower half (tip included) is submerged
+    ref = models.cylinder_drag(1000.0, Cfg.drag_coefficient, R, lsub, speeds[:, 0])
+    fx = f.seg_force.numpy()[:, 0, 0]
+    np.testing.assert_allclose(fx, -np.sign(speeds[:, 0]) * ref, rtol=1e-4)
+    # xfrc_applied of the leg body holds the force and its torque about the body's CoM
+    xfrc = d.xfrc_applied.numpy()[:, 1]
+    np.testing.assert_allclose(xfrc[:, 0], fx, rtol=1e-5)
+    buoy = models.buoyancy(1000.0, 0.0, R, lsub)  # gravity off -> no buoyancy
+    assert np.allclose(xfrc[:, 2], buoy, atol=1e-6)
+    dz = -0.5 * lsub  # the submerged centroid lies below the CoM: torque (0, 0, dz) x (fx, 0, 0)
+    np.testing.assert_allclose(xfrc[:, 4], dz * fx, rtol=1e-4)
+
+
+def test_drag_never_adds_energy_in_flow_frame():
+    wp.set_device(DEV)
+    mjm = world(leg("xyz", z=0.3), option='gravity="0 0 0"')
+    cfg = type("C", (Cfg,), {"vertical_drag": True, "paper_added_mass": True})
+    u = 0.7 * np.array([np.cos(0.6), np.sin(0.6), 0.0])
+    m, d, f = make(mjm, water_map(surface=0.35, kind=FLOW_CURRENT, speed=0.7, direction=0.6), cfg(), nworld=4)
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        v = rng.normal(0, 1.0, (4, 3))
+        set_qvel(d, v)
+        mjw.step(m, d)
+        drag = f.seg_force.numpy()[:, 0]  # g = 0: no buoyancy, the paper's m_eff adds no weight
+        power = np.sum(drag * (v - u), axis=1)
+        assert np.all(power <= 1e-9), power
+        assert np.all(np.abs(drag).sum(1) > 0)
+
+
+def test_floating_capsule_settles_at_analytic_draft():
+    wp.set_device(DEV)
+    rho_body = 500.0
+    mjm = world(leg("--z", z=0.45, density=rho_body, damping=20.0))
+    cfg = type("C", (Cfg,), {"vertical_drag": True})
+    # the capsule axis is z: make it vertical
+    with pytest.warns(UserWarning, match="added mass"):  # 500 kg/m^3: lighter than its added mass
+        m, d, f = make(mjm, water_map(surface=0.5), cfg(), nworld=2)
+    for _ in range(300):
+        mjw.step(m, d)
+    mass = mjm.body_mass[1]
+    draft = mass / (1000.0 * np.pi * R**2)  # submerged length where buoyancy = weight
+    bottom = 0.45 + d.qpos.numpy()[:, 0] - H - R
+    np.testing.assert_allclose(0.5 - bottom, draft, rtol=0.02)
+
+
+def test_tide_follows_cos_morison_and_paper_flow_term():
+    wp.set_device(DEV)
+    mjm = world(leg("x", z=0.3), option='gravity="0 0 0"')
+    amp, omega, phase = 0.8, 2.0, 0.4
+    cfg = type("C", (Cfg,), {"paper_flow_force": True})
+    m, d, f = make(mjm, water_map(surface=1.0, kind=FLOW_TIDE, speed=amp, omega=omega, phase=phase), cfg())
+    L = 2 * (H + R)
+    for step in range(20):
+        set_qvel(d, np.zeros((2, 1)))
+        t = d.time.numpy()[0]
+        mjw.step(m, d)
+        if step == 0:
+            continue  # no velocity history yet: no added mass on the first substep
+        u = models.flow_force("tide", t, amp, omega, phase)
+        du = -amp * omega * np.sin(omega * t + phase)
+        morison = (models.cylinder_drag(1000.0, cfg.drag_coefficient, R, L, u) * np.sign(u)
+                   + models.added_mass(1000.0, 1.0, R, L) * du)
+        np.testing.assert_allclose(f.seg_force.numpy()[:, 0, 0], morison + u, rtol=1e-3, atol=1e-4)
+    f.after_substep()  # no feet: nothing to do, must not fail
+
+
+def test_flags_off_exactly_zero_and_dry_is_zero():
+    wp.set_device(DEV)
+    mjm = world(leg("xz", z=0.3))
+    off = type("C", (Cfg,), {"wading": False, "soil": False, "friction_from_map": False})
+    m, d, f = make(mjm, water_map(surface=1.0, kind=FLOW_CURRENT, speed=1.0), off())
+    m2, d2, _ = make(mjm, water_map(surface=-1.0), Cfg())  # wading on, but the surface is below the leg
+    m3 = mjw.put_model(mjm)
+    d3 = mjw.make_data(mjm, nworld=2, nconmax=16, njmax=64)
+    for _ in range(5):
+        for mm, dd in ((m, d), (m2, d2), (m3, d3)):
+            set_qvel(dd, [[0.3, -0.2], [-0.5, 0.1]])
+            mjw.step(mm, dd)
+    assert not np.any(d.xfrc_applied.numpy()) and not np.any(d2.xfrc_applied.numpy())
+    np.testing.assert_array_equal(d.qpos.numpy(), d3.qpos.numpy())
+    np.testing.assert_array_equal(d2.qpos.numpy(), d3.qpos.numpy())
+
+
+def test_reset_draws_noise_per_env_and_keeps_it():
+    wp.set_device(DEV)
+    mjm = world(leg("x", z=0.3))
+    cfg = type("C", (Cfg,), {"noise_std": 0.1})
+    m, d, f = make(mjm, water_map(), cfg(), nworld=64)
+    eps0 = f.eps.numpy().copy()
+    assert abs(eps0.mean() - 1) < 0.05 and 0.05 < eps0.std() < 0.15
+    mask = np.zeros(64, bool)
+    mask[:10] = True
+    f.reset(wp.array(mask, dtype=bool, device=DEV))
+    eps1 = f.eps.numpy()
+    assert np.all(eps1[10:] == eps0[10:]) and np.all(eps1[:10] != eps0[:10])
+    xi0 = f.xi.numpy().copy()
+    f.new_policy_step()
+    assert np.all(f.xi.numpy() != xi0)
+
+
+def feet_world(masses=(5.0, 20.0), xs=(-0.5, 0.5)):
+    bodies = "".join(
+        f'<body name="b{i}" pos="{x} 0 0.02"><joint type="slide" axis="0 0 1" damping="200"/>'
+        f'<geom name="foot{i}" type="box" size=".05 .05 .02" mass="{mass}"/></body>'
+        for i, (mass, x) in enumerate(zip(masses, xs)))
+    return world(bodies)
+
+
+class SoilCfg(ForcesConfig):
+    noise_std = 0.0
+    wading = False
+    foot_geom_names = ["foot0", "foot1"]
+
+
+def settle(mat, nworld=2, steps=150):
+    mjm = feet_world()
+    m, d, f = make(mjm, mat, SoilCfg(), nworld=nworld)
+    for _ in range(steps):
+        mjw.step(m, d)
+        f.after_substep()
+    return mjm, d, f
+
+
+def test_sinkage_grows_with_load_as_bekker_in_sim():
+    wp.set_device(DEV)
+    sand = MaterialMap.rigid(SHAPE)
+    sand.soil[:] = 0
+    sand.soil_presets = ["dry_sand"]
+    mjm, d, f = settle(sand)
+    _, d_rigid, _ = settle(MaterialMap.rigid(SHAPE))
+    fn = f.foot_fn.numpy()
+    weight = mjm.body_mass[1:3] * 9.81
+    np.testing.assert_allclose(fn, np.broadcast_to(weight, fn.shape), rtol=0.02)
+    kc, kphi, n = (f.soil_params.numpy()[:, 0, q][:, None] for q in range(3))
+    z_ref = models.bekker_sinkage(weight / 0.01, kc, kphi, n, 0.1)  # sole 0.1 m x 0.1 m
+    z = f.foot_sinkage.numpy()
+    # the rut keeps the deepest sinkage of the stance: the landing transient may add a little (plastic soil)
+    assert np.all(z >= 0.995 * z_ref) and np.all(z <= 1.15 * z_ref), (z, z_ref)
+    assert np.all(z[:, 1] > z[:, 0]) and np.all(z[:, 0] > 0.003)  # the heavier foot sinks deeper
+    # the foot really sits lower than on rigid ground by the sinkage
+    lowered = d_rigid.qpos.numpy() - d.qpos.numpy()
+    np.testing.assert_allclose(lowered, z, rtol=0.05)
+    obs = f.privileged_obs().numpy().reshape(2, 2, -1)
+    assert np.all(obs[..., 3] == 1.0) and np.allclose(obs[..., 4], z)
+
+
+def test_bulldozing_and_presliding_oppose_motion():
+    wp.set_device(DEV)
+    mud = MaterialMap.rigid(SHAPE)
+    mud.soil[:] = 0
+    mud.soil_presets = ["mud"]
+    mjm, d, f = settle(mud, steps=60)
+    for _ in range(10):  # push both feet along +x through the mud (slide joints: they cannot move, slip grows)
+        f.foot_vel.assign(np.tile(np.array([0.3, 0.0, 0.0], np.float32), (2, 2, 1)))
+        f.after_substep()
+    mjw.step(f.m, d)
+    force = f.foot_force.numpy()
+    assert np.all(force[..., 0] < 0)  # slip and velocity along +x, resistance along -x
+
+
+def test_soil_off_and_rigid_cells_feel_no_soil_force():
+    wp.set_device(DEV)
+    mat = MaterialMap.rigid(SHAPE)
+    mat.soil[:] = NO_SOIL
+    mjm, d, f = settle(mat, steps=30)
+    assert not np.any(f.foot_sinkage.numpy()) and not np.any(d.xfrc_applied.numpy())
+
+
+def test_ice_cell_lowers_sliding_friction():
+    wp.set_device(DEV)
+    mjm = world('<body name="box" pos="0 0 0.05"><joint name="x" type="slide" axis="1 0 0"/>'
+                '<joint name="z" type="slide" axis="0 0 1"/><geom type="box" size=".05 .05 .05" mass="1"/></body>')
+    mat = MaterialMap.rigid(SHAPE)
+    mat.friction[20:, :] = 0.05  # x >= 0: ice
+    cfg = type("C", (SoilCfg,), {"soil": False, "foot_geom_names": []})
+    m, d, f = make(mjm, mat, cfg())
+    d.qpos.assign(np.array([[-1.0, 0.0], [0.2, 0.0]], np.float32))
+    set_qvel(d, [[1.0, 0.0], [1.0, 0.0]])
+    for _ in range(100):
+        mjw.step(m, d)
+    travel = d.qpos.numpy()[:, 0] - np.array([-1.0, 0.2])
+    assert travel[0] < 0.08 and travel[1] > 0.35  # mu=1: v^2/(2 mu g) = 5 cm; ice: still sliding after 0.5 s
