@@ -107,3 +107,12 @@ def test_image_planner_is_deterministic_and_rejects_garbage():
     assert a.calls == b.calls
     with pytest.raises(ValueError, match="could not be read"):
         plan_image(b"not an image")
+
+
+def test_docs_list_the_legend():
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[1] / "docs" / "generation.md").read_text()
+    for name, legend in LEGEND.items():
+        r, g, b = legend.rgb
+        assert f"| `{name}` | ({r}, {g}, {b}) | `#{r:02x}{g:02x}{b:02x}` |" in doc, name
