@@ -176,8 +176,8 @@ class LeggedRobot(VecEnv):
         if not self.cfg.terrain.curriculum:
             max_init = rows - 1
         self.terrain_levels = torch.randint(0, max_init + 1, (n,), device=dev)
-        self.terrain_types = torch.div(torch.arange(n, device=dev) * cols, n, rounding_mode="floor")
-        self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_types]
+        self.terrain_columns = torch.div(torch.arange(n, device=dev) * cols, n, rounding_mode="floor")
+        self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_columns]
 
     def _randomize_model(self) -> None:
         """Per-world friction and base mass, written into the batched model fields once at start."""
@@ -319,7 +319,7 @@ class LeggedRobot(VecEnv):
         random_level = torch.randint_like(level, 0, self.max_terrain_level)
         level = torch.where(level >= self.max_terrain_level, random_level, level.clamp(min=0))
         self.terrain_levels = torch.where(done, level, self.terrain_levels)
-        self.env_origins = torch.where(done[:, None], self.terrain_origins[self.terrain_levels, self.terrain_types],
+        self.env_origins = torch.where(done[:, None], self.terrain_origins[self.terrain_levels, self.terrain_columns],
                                        self.env_origins)
 
     def _episode_statistics(self) -> dict[str, torch.Tensor]:

@@ -11,7 +11,19 @@ class GenteBipedCfg(LeggedRobotCfg):
         episode_length_s = 20.0
 
     class terrain(LeggedRobotCfg.terrain):
-        mesh_type = "plane"
+        """A curriculum over the basic geometric and physical terrains (rows: difficulty, columns: type)."""
+
+        mesh_type = "heightfield"
+        mode = "curriculum"
+        num_rows = 10
+        num_cols = 20
+        terrain_types = [
+            "flat", "random_uniform", "natural_ground", "pyramid_slope", "pyramid_slope:direction=down",
+            "pyramid_stairs", "pyramid_stairs:direction=down", "discrete_obstacles", "rocks", "waves",
+            "river+water", "water:flow=current,speed=0.5", "hills+soil:preset=dry_sand", "soil:preset=mud", "low_friction",
+        ]
+        terrain_proportions = [0.15, 0.1, 0.05, 0.075, 0.075, 0.05, 0.05, 0.05, 0.05, 0.05,
+                               0.075, 0.05, 0.075, 0.05, 0.05]
 
     class init_state(LeggedRobotCfg.init_state):
         pos = [0.0, 0.0, 1.0]
@@ -82,6 +94,10 @@ class GenteBipedCfgPPO(LeggedRobotCfgPPO):
 
 class GenteBipedFlatCfg(GenteBipedCfg):
     """The biped on flat ground: the quickest way to check a gait."""
+
+    class terrain(GenteBipedCfg.terrain):
+        mesh_type = "plane"
+        measure_heights = False
 
 
 class GenteBipedFlatCfgPPO(GenteBipedCfgPPO):
