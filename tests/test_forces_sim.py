@@ -250,3 +250,13 @@ def test_ice_cell_lowers_sliding_friction():
         mjw.step(m, d)
     travel = d.qpos.numpy()[:, 0] - np.array([-1.0, 0.2])
     assert travel[0] < 0.08 and travel[1] > 0.35  # mu=1: v^2/(2 mu g) = 5 cm; ice: still sliding after 0.5 s
+
+
+def test_benchmark_reports_a_share():
+    from legged_gente.external_forces.benchmark import demo_scene, forces_share
+
+    m, d, forces = demo_scene(2, DEV)
+    r = forces_share(m, d, forces, steps=3, warmup=1)
+    assert 0.0 <= r["forces_share"] < 1.0 and r["step_with_forces_s"] > 0
+    assert m.callback.passive is not None  # left installed
+    assert np.any(d.xfrc_applied.numpy())  # the demo's legs stand in water / on sand: forces act
