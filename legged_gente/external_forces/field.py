@@ -26,57 +26,9 @@ import numpy as np
 import warp as wp
 
 from legged_gente.external_forces import kernels as K
+from legged_gente.external_forces.config import ForcesConfig
 from legged_gente.external_forces.soil import preset_table
 from legged_gente.terrain.materials import MaterialMap
-
-
-class ForcesConfig:
-    """Attributes TerrainForces reads (subclass or copy these onto your env config's ``forces`` class).
-
-    wading: bool          drag, buoyancy, added mass (and paper flow force) on leg segments in water
-    soil: bool            Bekker sinkage, bulldozing and pre-sliding friction on feet on soil cells
-    friction_from_map: bool  ground contacts' tangential friction scaled by the cell's MaterialMap.friction
-    friction_reference: float  friction of the MJCF ground geom (1): a cell of this friction changes nothing
-    water_density: float  rho, kg/m^3
-    drag_coefficient: float  cd of a cylinder across the flow (1), ~1.0-1.2 at leg Reynolds numbers (Hoerner)
-    added_mass_coefficient: float  cm (1), 1.0 for a circular cylinder
-    noise_std: float      std of the paper's eps (per episode, drag and vertical forces) and xi (per step, flow)
-    vertical_drag: bool   drag on the vertical relative velocity too (default: horizontal only)
-    paper_drag_area: bool  GenTe's A = 2 pi r h instead of the projected 2 r h
-    paper_added_mass: bool GenTe's effective weight (added mass only adds weight) instead of the reaction
-                           -m_a * relative acceleration
-    paper_flow_force: bool add GenTe's flow term as a force (N) on each submerged segment, on top of the
-                           flow entering the drag as a velocity
-    leg_geom_names: list[str]   capsule (or cylinder) geoms of the legs that feel water
-    foot_geom_names: list[str]  geoms of the feet that sink into soil
-    sole_length, sole_width: float | None  sole size (m); None: from the first foot geom (box: 2*size x, 2*size
-                           y; sphere/capsule/cylinder: the diameter for both)
-    contact_threshold: float  foot normal force (N) above which a foot counts as in contact (slip resets below)
-    bulldozing_speed_reg: float  speed (m/s) below which the bulldozing direction fades out linearly
-    sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
-    sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
-    """
-
-    wading = True
-    soil = True
-    friction_from_map = True
-    friction_reference = 1.0
-    water_density = 1000.0
-    drag_coefficient = 1.1
-    added_mass_coefficient = 1.0
-    noise_std = 0.1
-    vertical_drag = False
-    paper_drag_area = False
-    paper_added_mass = False
-    paper_flow_force = False
-    leg_geom_names: list[str] = []
-    foot_geom_names: list[str] = []
-    sole_length = None
-    sole_width = None
-    contact_threshold = 1.0
-    bulldozing_speed_reg = 0.05
-    sinkage_rate = 0.5
-    sinkage_load_tau = 0.05
 
 
 _ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]

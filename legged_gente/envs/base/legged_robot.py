@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import torch
+import warp as wp
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
@@ -75,10 +76,13 @@ class LeggedRobot(VecEnv):
         if not (material.has_water().any() or material.has_soil().any() or
                 (material.friction != self.cfg.terrain.static_friction).any()):
             return None
+        if self.cfg.forces.friction_reference != self.cfg.terrain.static_friction:
+            raise ValueError(f"cfg.forces.friction_reference={self.cfg.forces.friction_reference} differs from "
+                             f"cfg.terrain.static_friction={self.cfg.terrain.static_friction}; set them equal.")
         from legged_gente.external_forces.field import TerrainForces
 
-        forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain, self.cfg.forces,
-                               seed=int(self.cfg.terrain.seed))
+        forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain.height_field, self.terrain.origin_xy,
+                               self.terrain.resolution, material, self.cfg.forces, seed=int(self.cfg.terrain.seed))
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
         return forces
@@ -364,7 +368,7 @@ class LeggedRobot(VecEnv):
         for sums in self.episode_sums.values():
             sums[:] = torch.where(mask, torch.zeros_like(sums), sums)
         if self.forces is not None:
-            self.forces.reset(mask)
+            self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
 
     def _resample_commands(self, mask: torch.Tensor) -> None:
         n, dev, ranges = self.num_envs, self.device, self.cfg.commands.ranges

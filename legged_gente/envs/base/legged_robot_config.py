@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 from legged_gente.envs.base.base_config import BaseConfig, class_to_dict
+from legged_gente.external_forces.config import ForcesConfig
 
 
 class LeggedRobotCfg(BaseConfig):
@@ -152,10 +153,13 @@ class LeggedRobotCfg(BaseConfig):
         njmax = 96  # constraint rows per world
         use_cuda_graph = True  # capture the substep loop once on GPU
 
-    class forces:
-        """Terrain force fields (water, soil, friction); read by legged_gente.external_forces."""
+    class forces(ForcesConfig):
+        """Terrain force fields (water, soil, ground friction) where the material map has them.
 
-        enabled = True  # off: no kernels are installed at all
+        ``friction_reference`` must equal ``terrain.static_friction`` (the ground geom's friction); leg and foot
+        geoms are named by the robot's config."""
+
+        enabled = True  # off: no force kernels are installed at all
 
 
 class LeggedRobotCfgPPO(BaseConfig):

@@ -51,6 +51,10 @@ class GenteBipedCfg(LeggedRobotCfg):
         terminate_height = 0.5
         terminate_tilt = 1.0
 
+    class forces(LeggedRobotCfg.forces):
+        leg_geom_names = ["left_thigh_geom", "left_shank_geom", "right_thigh_geom", "right_shank_geom"]
+        foot_geom_names = ["left_foot_geom", "right_foot_geom"]
+
     class commands(LeggedRobotCfg.commands):
         class ranges(LeggedRobotCfg.commands.ranges):
             lin_vel_x = [-1.0, 1.0]

@@ -1,0 +1,119 @@
+"""The env on a heightfield: MuJoCo's hfield equals the numpy heights, curriculum levels move, forces act."""
+
+import mujoco
+import numpy as np
+import pytest
+import torch
+import warp as wp
+
+from legged_gente.envs.gente_biped.gente_biped import GenteBiped
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
+from legged_gente.sim.assembly import build_model
+from legged_gente.terrain.terrain import Terrain
+
+TYPES = ["random_uniform", "pyramid_stairs", "river+water", "hills+soil:preset=dry_sand", "low_friction"]
+
+
+class SmallCurriculum(GenteBipedCfg):
+    class env(GenteBipedCfg.env):
+        num_envs = 5
+
+    class domain_rand(GenteBipedCfg.domain_rand):
+        randomize_friction = False
+        push_robots = False
+
+    class terrain(GenteBipedCfg.terrain):
+        num_rows = 3
+        num_cols = 5
+        border_size = 2.0
+        terrain_types = TYPES
+        terrain_proportions = [0.2] * 5
+        max_init_terrain_level = 1
+
+
+@pytest.fixture(scope="module")
+def env():
+    return GenteBiped(SmallCurriculum(), device="cpu")
+
+
+def test_mujoco_hfield_matches_numpy_heights():
+    cfg = SmallCurriculum()
+    terrain = Terrain(cfg.terrain, 5)
+    mjm, _ = build_model(cfg, terrain)
+    data = mujoco.MjData(mjm)
+    mujoco.mj_forward(mjm, data)
+    rng = np.random.default_rng(0)
+    nx, ny = terrain.height_field.shape
+    ox, oy = terrain.origin_xy
+    # random vertices of the grid (MuJoCo triangulates each cell, numpy interpolates bilinearly: the two agree
+    # exactly at vertices, which is where the data is)
+    i = rng.integers(0, nx, 400)
+    j = rng.integers(0, ny, 400)
+    geomid = np.zeros(1, np.int32)
+    measured = []
+    for a, b in zip(ox + i * terrain.resolution, oy + j * terrain.resolution):
+        dist = mujoco.mj_ray(mjm, data, np.array([a, b, 20.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
+        assert geomid[0] == mjm.geom("terrain").id
+        measured.append(20.0 - dist)
+    assert np.ptp(terrain.height_field[i, j]) > 0.1  # the sample is not all flat ground
+    np.testing.assert_allclose(measured, terrain.height_field[i, j], atol=1e-3)
+
+
+def test_robots_start_on_their_tiles(env):
+    ground = env._ground_height(env.base_pos[:, :2])
+    clearance = env.base_pos[:, 2] - ground
+    assert (clearance > 0.8).all() and (clearance < 1.2).all()
+    assert env.terrain_levels.max() <= 1
+    assert env.terrain_columns.tolist() == [0, 1, 2, 3, 4]
+
+
+def test_curriculum_moves_levels_as_specified(env):
+    env.terrain_levels[:] = torch.tensor([1, 1, 1, 2, 1])
+    env.env_origins[:] = env.terrain_origins[env.terrain_levels, env.terrain_columns]
+    env.commands[:, :2] = torch.tensor([0.5, 0.0])
+    far = env.env_origins[:, :2] + torch.tensor([0.6 * env.cfg.terrain.terrain_length, 0.0])
+    near = env.env_origins[:, :2]
+    # robots 0 and 3 walked far (up; 3 was on the top level -> random level), 1 stayed (down), 2 is not done
+    env.sim.qpos[:, :2] = torch.stack([far[0], near[1], near[2], far[3], far[4]])
+    env._update_state()
+    done = torch.tensor([True, True, False, True, False])
+    torch.manual_seed(0)
+    env._update_terrain_curriculum(done)
+    assert env.terrain_levels[0] == 2
+    assert env.terrain_levels[1] == 0
+    assert env.terrain_levels[2] == 1 and env.terrain_levels[4] == 1
+    assert 0 <= env.terrain_levels[3] < env.max_terrain_level
+    assert torch.equal(env.env_origins, env.terrain_origins[env.terrain_levels, env.terrain_columns])
+
+
+def test_forces_act_in_water_and_soil_only(env):
+    assert env.forces is not None
+    assert env.get_observations()["critic"].shape[1] == env.get_observations()["policy"].shape[1] + 2 + 6 + 24
+    env.reset()
+    for _ in range(5):
+        env.step(torch.zeros(env.num_envs, env.num_actions))
+    obs = env.forces.privileged_obs().reshape(env.num_envs, 2, 12)
+    on_soil = obs[..., 3]
+    assert on_soil[3].all() and not on_soil[[0, 1, 2, 4]].any()
+    xfrc = wp.to_torch(env.sim.d.xfrc_applied).abs().sum(dim=(1, 2))
+    assert xfrc[0] == 0 and xfrc[1] == 0  # rigid, dry tiles feel nothing
+    assert xfrc[3] > 0  # soil resists the feet
+
+
+def test_low_friction_tiles_lower_contact_friction(env):
+    """The solver sees the cell's friction in the contacts of the robot on the low-friction tile."""
+    env.reset()
+    env.step(torch.zeros(env.num_envs, env.num_actions))
+    d = env.sim.d
+    n = int(d.nacon.numpy()[0])
+    world = d.contact.worldid.numpy()[:n]
+    mu = d.contact.friction.numpy()[:n, 0]
+    slippery = TYPES.index("low_friction")
+    x, y = env.base_pos[slippery, :2].tolist()
+    i = int(round((x - env.terrain.origin_xy[0]) / env.terrain.resolution))
+    j = int(round((y - env.terrain.origin_xy[1]) / env.terrain.resolution))
+    cell_mu = env.terrain.material.friction[i, j]
+    assert cell_mu < env.cfg.terrain.static_friction
+    assert (world == slippery).any() and (world == 0).any()
+    np.testing.assert_allclose(mu[world == slippery], cell_mu, rtol=1e-5)
+    np.testing.assert_allclose(mu[world == 0], env.cfg.terrain.static_friction, rtol=1e-5)
