@@ -6,13 +6,13 @@ import pytest
 import torch
 
 from legged_gente.envs.gente_biped.gente_biped import GenteBiped
-from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedFlatCfg
 from legged_gente.envs.task_registry import task_registry
 
 NUM_ENVS = 4
 
 
-def small_cfg(cfg_class=GenteBipedCfg):
+def small_cfg(cfg_class=GenteBipedFlatCfg):
     cfg = cfg_class()
     cfg.env.num_envs = NUM_ENVS
     return cfg
@@ -87,11 +87,11 @@ def test_unknown_reward_term_is_a_clear_error():
 
 
 def test_config_subclass_changes_the_robot():
-    class HeavyHeadBiped(GenteBipedCfg):
-        class init_state(GenteBipedCfg.init_state):
+    class HeavyHeadBiped(GenteBipedFlatCfg):
+        class init_state(GenteBipedFlatCfg.init_state):
             pos = [0.0, 0.0, 1.1]
 
-        class control(GenteBipedCfg.control):
+        class control(GenteBipedFlatCfg.control):
             stiffness = {"hip": 100.0, "knee": 120.0, "ankle": 30.0}
 
     env = GenteBiped(small_cfg(HeavyHeadBiped), device="cpu")
