@@ -25,25 +25,34 @@ def _sync(device: str) -> None:
         wp.synchronize()
 
 
-def raw_physics(env, steps: int) -> float:
-    """Substeps/s (all worlds) of plain mjw.step on the env's model and data, no env logic, no force hooks."""
+def raw_physics(env, steps: int, with_forces: bool = False) -> float:
+    """Substeps/s (all worlds) of mjw.step on the env's model and data, captured in a graph on GPU; no env
+    logic. ``with_forces`` keeps the terrain force callbacks and their after-substep kernel in the loop."""
     import mujoco_warp as mjw
 
     sim = env.sim
-    with wp.ScopedDevice(sim.wp_device):
-        callbacks = (sim.m.callback.passive, sim.m.callback.contactfilter)
+    callbacks = (sim.m.callback.passive, sim.m.callback.contactfilter)
+    if not with_forces:
         sim.m.callback.passive = sim.m.callback.contactfilter = None
+    hooks = sim.after_substep if with_forces else []
+
+    def substep():
+        mjw.step(sim.m, sim.d)
+        for hook in hooks:
+            hook()
+
+    with wp.ScopedDevice(sim.wp_device):
         try:
-            mjw.step(sim.m, sim.d)
+            substep()
             graph = None
             if sim.wp_device.is_cuda:
                 with wp.ScopedCapture() as capture:
-                    mjw.step(sim.m, sim.d)
+                    substep()
                 graph = capture.graph
             _sync(env.device)
             start = time.perf_counter()
             for _ in range(steps):
-                wp.capture_launch(graph) if graph is not None else mjw.step(sim.m, sim.d)
+                wp.capture_launch(graph) if graph is not None else substep()
             _sync(env.device)
             elapsed = time.perf_counter() - start
         finally:
@@ -79,13 +88,20 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int) -
     for num_envs in sizes:
         env_cfg, _ = task_registry.get_cfgs(task)
         env_cfg.env.num_envs = num_envs
+        free_before = torch.cuda.mem_get_info(device)[0] if device.startswith("cuda") else 0
         env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
         raw = raw_physics(env, steps * env.cfg.control.decimation)
+        forces_share = float("nan")
+        if env.forces is not None:
+            with_forces = raw_physics(env, steps * env.cfg.control.decimation, with_forces=True)
+            forces_share = max(0.0, 1.0 - with_forces / raw)
         stepped = env_steps(env, steps)
         ppo = ppo_steps(env, task, iterations) if iterations > 0 else float("nan")
         ceiling = raw / env.cfg.control.decimation
+        memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
-                     "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling})
+                     "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
+                     "forces_share": forces_share, "gpu_memory_gib": memory})
         del env
         if device.startswith("cuda"):
             torch.cuda.empty_cache()
@@ -95,13 +111,16 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int) -
 def print_table(rows: list[dict], device: str) -> None:
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "CPU"
     print(f"\ndevice: {name}")
-    header = f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} {'PPO/raw':>8}"
+    header = (f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} "
+              f"{'PPO/raw':>8} {'forces':>7} {'GPU GiB':>8}")
     print(header)
     print("-" * len(header))
     for r in rows:
         print(f"{r['num_envs']:>9d} {r['raw_substeps_per_s']:>15,.0f} {r['env_steps_per_s']:>12,.0f} "
-              f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f}")
-    print("(raw ceiling in env steps/s = raw substeps/s / decimation; ratios are against that ceiling)")
+              f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f} "
+              f"{r['forces_share']:>7.1%} {r['gpu_memory_gib']:>8.2f}")
+    print("raw: mjw.step substeps/s; raw ceiling in env steps/s = raw / decimation (the ratios' denominator);\n"
+          "forces: share of the substep time spent in the terrain force kernels (nan: terrain has none)")
 
 
 def main(argv=None) -> None:
