@@ -69,12 +69,17 @@ task_registry = TaskRegistry()
 
 
 def _register_builtin_tasks() -> None:
+    from legged_gente.envs.base.legged_robot import LeggedRobot
     from legged_gente.envs.gente_biped.gente_biped import GenteBiped
     from legged_gente.envs.gente_biped.gente_biped_config import (
         GenteBipedCfg, GenteBipedCfgPPO, GenteBipedFlatCfg, GenteBipedFlatCfgPPO)
+    from legged_gente.envs.gente_quadruped.gente_quadruped_config import (
+        GenteQuadrupedCfg, GenteQuadrupedCfgPPO, GenteQuadrupedFlatCfg, GenteQuadrupedFlatCfgPPO)
 
     task_registry.register("gente_biped", GenteBiped, GenteBipedCfg, GenteBipedCfgPPO)
     task_registry.register("gente_biped_flat", GenteBiped, GenteBipedFlatCfg, GenteBipedFlatCfgPPO)
+    task_registry.register("gente_quadruped", LeggedRobot, GenteQuadrupedCfg, GenteQuadrupedCfgPPO)
+    task_registry.register("gente_quadruped_flat", LeggedRobot, GenteQuadrupedFlatCfg, GenteQuadrupedFlatCfgPPO)
 
 
 _register_builtin_tasks()
