@@ -39,6 +39,13 @@ def match_names(patterns: list[str], names: list[str], what: str) -> list[str]:
     return [n for n in names if n in matched]
 
 
+def check_patterns(table: dict, names: list[str], what: str) -> None:
+    """Every key of a joint-name table must match some joint: a key that matches none is a typo."""
+    unused = [p for p in table if not any(fnmatch.fnmatchcase(n, p) or p in n for n in names)]
+    if unused:
+        raise ValueError(f"{what}: {unused} match no joint of the robot; its joints are: {names}")
+
+
 def value_for(name: str, table: dict, what: str) -> float:
     """The value of the first pattern in ``table`` matching ``name``; a clear error when none does."""
     for pattern, value in table.items():
@@ -76,6 +83,7 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     _configure_options(spec, cfg.sim)
     _add_terrain(spec, cfg.terrain, terrain)
     robot = mujoco.MjSpec.from_file(str(resolve_path(cfg.asset.file))).compile()  # names before edits
+    _check_robot(robot, cfg)
     bodies = _body_names(robot)
     collide = match_names(cfg.asset.penalize_contacts_on + cfg.asset.terminate_after_contacts_on, bodies, "body") if (
         cfg.asset.penalize_contacts_on or cfg.asset.terminate_after_contacts_on) else []
@@ -89,6 +97,28 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     _configure_actuators(spec, robot, cfg.control)
     mjm = spec.compile()
     return mjm, _layout(mjm, cfg)
+
+
+def _check_robot(robot: mujoco.MjModel, cfg) -> None:
+    """Errors a robot file from elsewhere (e.g. MuJoCo Menagerie) commonly has, each with its fix."""
+    free = [j for j in range(robot.njnt) if robot.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+    if len(free) != 1:
+        raise ValueError(f"the robot in {cfg.asset.file!r} needs exactly one free joint (floating base), found "
+                         f"{len(free)}; add <freejoint/> to its root body.")
+    if robot.jnt_qposadr[free[0]] != 0:
+        raise ValueError(f"the free joint of {cfg.asset.file!r} must come first in qpos; put the robot's root body "
+                         f"first in the worldbody.")
+    ground = [robot.geom(g).name or f"geom {g}" for g in range(robot.ngeom) if robot.geom_bodyid[g] == 0]
+    if ground:
+        raise ValueError(f"{cfg.asset.file!r} has geoms on the worldbody {ground} (a floor?); the env adds the "
+                         f"terrain: point cfg.asset.file at the robot's own MJCF, not at a scene file.")
+    if cfg.asset.base_body and mujoco.mj_name2id(robot, mujoco.mjtObj.mjOBJ_BODY, cfg.asset.base_body) < 0:
+        raise ValueError(f"cfg.asset.base_body={cfg.asset.base_body!r} is not a body of the robot; its bodies are: "
+                         f"{_body_names(robot)}")
+    joints = [robot.joint(j).name for j in range(robot.njnt) if robot.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE]
+    check_patterns(cfg.control.stiffness, joints, "cfg.control.stiffness")
+    check_patterns(cfg.control.damping, joints, "cfg.control.damping")
+    check_patterns(cfg.init_state.default_joint_angles, joints, "cfg.init_state.default_joint_angles")
 
 
 def _configure_options(spec: mujoco.MjSpec, sim) -> None:
@@ -141,6 +171,7 @@ def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) ->
         kd = value_for(joint.name, control.damping, "damping (cfg.control.damping)")
         actuator = existing.get(joint.name) or spec.add_actuator(name=joint.name, target=joint.name,
                                                                   trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        actuator.gear = [1.0] + [0.0] * 5  # ctrl is the joint angle target itself
         actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
         actuator.gainprm = [kp] + [0.0] * 9
@@ -155,9 +186,6 @@ def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) ->
 def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
     bodies = _body_names(mjm)
     free = [j for j in range(mjm.njnt) if mjm.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
-    if len(free) != 1:
-        raise ValueError(f"the robot needs exactly one free joint (floating base), found {len(free)}; "
-                         "add <freejoint/> to its root body.")
     base = mjm.body(cfg.asset.base_body).id if cfg.asset.base_body else int(mjm.jnt_bodyid[free[0]])
     joint_ids = [int(mjm.actuator_trnid[a, 0]) for a in range(mjm.nu)]
     joint_names = [mjm.joint(j).name for j in joint_ids]
