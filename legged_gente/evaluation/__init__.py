@@ -1,0 +1,1 @@
+"""Evaluation: the gente100 benchmark (items, checker), rollouts with metrics, tasks and figures (docs/evaluation.md)."""

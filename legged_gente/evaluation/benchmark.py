@@ -1,0 +1,69 @@
+"""A benchmark folder: ``manifest.json`` listing items (text prompt or image) and their ``spec.json`` files.
+
+Manifest format (written by ``benchmarks/gente100/build.py``)::
+
+    {"name": "gente100", "tile_size": [20.0, 20.0], "resolution": 0.1,
+     "items": [{"id": "text_00_beach", "kind": "text", "prompt": "...", "spec": "specs/text_00_beach.json"},
+               {"id": "image_00_pond", "kind": "image", "image": "images/image_00_pond.png",
+                "names": ["water", "grass"], "spec": "specs/image_00_pond.json"}]}
+
+``names`` of an image item are the planner LEGEND classes its picture was made to show (what the image
+"names"); the checker requires each of them in the spec.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+from legged_gente.generation.spec import TerrainSpec
+
+KINDS = ("text", "image")
+
+
+@dataclasses.dataclass(frozen=True)
+class Item:
+    id: str
+    kind: str
+    spec_path: Path
+    prompt: str | None = None
+    image: Path | None = None
+    names: tuple[str, ...] = ()
+
+    def spec(self) -> TerrainSpec:
+        return TerrainSpec.load(self.spec_path)
+
+
+def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]:
+    """The items of the benchmark at ``root`` (all, or those in ``ids``, in manifest order)."""
+    root = Path(root)
+    manifest = root / "manifest.json"
+    if not manifest.is_file():
+        raise FileNotFoundError(f"{manifest} not found; pass a benchmark folder (e.g. benchmarks/gente100) or "
+                                f"build one with `python benchmarks/gente100/build.py`.")
+    data = json.loads(manifest.read_text())
+    items = []
+    for entry in data["items"]:
+        if entry["kind"] not in KINDS:
+            raise ValueError(f"{manifest}: item {entry['id']!r} has kind {entry['kind']!r}; use one of {KINDS}.")
+        items.append(Item(entry["id"], entry["kind"], root / entry["spec"], entry.get("prompt"),
+                          root / entry["image"] if entry.get("image") else None, tuple(entry.get("names", ()))))
+    if ids is not None:
+        known = {i.id: i for i in items}
+        missing = [i for i in ids if i not in known]
+        if missing:
+            raise KeyError(f"items {missing} are not in {manifest}; known ids start {sorted(known)[:5]}...")
+        items = [known[i] for i in ids]
+    if not items:
+        raise ValueError(f"{manifest} lists no items.")
+    return items
+
+
+def tile_geometry(specs: list[TerrainSpec]) -> tuple[float, float, float]:
+    """(size_x, size_y, resolution) shared by all ``specs``; tiles of one terrain must be equal."""
+    geometry = {(s.size_x, s.size_y, s.resolution) for s in specs}
+    if len(geometry) != 1:
+        raise ValueError(f"the specs have different tile sizes/resolutions {sorted(geometry)}; tiles of one terrain "
+                         f"must be equal: regenerate them with one --size and --resolution.")
+    return geometry.pop()
