@@ -88,11 +88,14 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     collide = match_names(cfg.asset.penalize_contacts_on + cfg.asset.terminate_after_contacts_on, bodies, "body") if (
         cfg.asset.penalize_contacts_on or cfg.asset.terminate_after_contacts_on) else []
     # Robot geoms collide with the terrain only (contype 2 vs the terrain's conaffinity 2), never with each
-    # other: the geoms the MJCF makes collide (feet) plus those of bodies whose contacts the task watches.
+    # other: the geoms the MJCF makes collide (feet) plus those of bodies whose contacts the task watches
+    # but that have no colliding geom (a body with collision geoms keeps its visual meshes non-colliding).
+    has_collider = {g.parent.name for g in spec.geoms if g.name != TERRAIN_GEOM and (g.contype or g.conaffinity)}
     for geom in spec.geoms:
         if geom.name == TERRAIN_GEOM:
             continue
-        collides = geom.contype or geom.conaffinity or geom.parent.name in collide
+        collides = geom.contype or geom.conaffinity or (geom.parent.name in collide and
+                                                        geom.parent.name not in has_collider)
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
     _configure_actuators(spec, robot, cfg.control)
     mjm = spec.compile()
@@ -161,16 +164,21 @@ def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
 def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) -> None:
     """PD position actuators on every actuated joint, gains from the config by joint-name pattern.
 
-    Joints that have no actuator in the MJCF get one; torque limits come from the joint's actuatorfrcrange.
+    Joints that have no actuator in the MJCF get one. Torque limits: the joint's actuatorfrcrange, else the
+    actuator's own forcerange, else (a torque motor, as in MuJoCo Menagerie models) its ctrlrange times gear.
     """
-    existing = {a.target: a for a in spec.actuators}
+    existing = {a.target: (i, a) for i, a in enumerate(spec.actuators)}
     for joint in spec.joints:
         if joint.type == mujoco.mjtJoint.mjJNT_FREE:
             continue
         kp = value_for(joint.name, control.stiffness, "stiffness (cfg.control.stiffness)")
         kd = value_for(joint.name, control.damping, "damping (cfg.control.damping)")
-        actuator = existing.get(joint.name) or spec.add_actuator(name=joint.name, target=joint.name,
-                                                                  trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        index, actuator = existing.get(joint.name) or (None, spec.add_actuator(
+            name=joint.name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT))
+        if index is not None and robot.actuator_biastype[index] == mujoco.mjtBias.mjBIAS_NONE and \
+                robot.actuator_ctrllimited[index] and not robot.actuator_forcelimited[index]:
+            actuator.forcelimited = 1  # a motor's torque range becomes the PD actuator's force limit
+            actuator.forcerange = list(robot.actuator_ctrlrange[index] * robot.actuator_gear[index, 0])
         actuator.gear = [1.0] + [0.0] * 5  # ctrl is the joint angle target itself
         actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
