@@ -1,0 +1,214 @@
+"""Roll a policy out on benchmark terrains laid out as tiles of one terrain and measure every robot.
+
+The task's env is built in terrain mode "generated" with one spec per tile (all tiles of equal size),
+``robots_per_terrain`` robots assigned to each tile, noise, pushes and domain randomisation off. A thin
+subclass of the task's env class adds two hooks: after the termination check (state fresh, before the
+masked reset) it records each robot's metrics and advances the task; command resampling asks the task.
+Every robot is measured over its first episode only: ``max_episode_length`` policy steps, or fewer if it
+terminates. All accumulation stays on the device; nothing syncs with the host inside the loop.
+
+Metric definitions (per robot; docs/evaluation.md repeats them):
+
+* ``fell``: the episode ended by a termination (terminating contact, tilt, height, non-finite state), not by
+  the time-out.
+* ``tracking_error`` (m/s): mean over the robot's steps after ``settle_s`` of |v_cmd_xy - v_xy|, the
+  horizontal base velocity in the base frame against the commanded (vx, vy).
+* ``success``: velocity task: not fell and tracking_error < ``tracking_threshold``; waypoint task: the last
+  waypoint was reached before any termination.
+* ``distance`` (m): xy path length of the base, summed over policy steps; ``displacement`` (m): straight
+  xy distance from the spawn to the last position.
+* ``collisions``: onsets of contact (|F| > 1 N) on any penalised body (thighs, shanks: the task's
+  ``penalize_contacts_on``), counted once per contact episode.
+* ``energy`` (J): sum over policy steps of sum_j |tau_j * qdot_j| * dt (mechanical power of the joints,
+  positive and negative work both counted, sampled at the policy rate); ``energy_per_m`` = energy / distance.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import torch
+
+from legged_gente.evaluation.benchmark import Item, tile_geometry
+from legged_gente.evaluation.tasks import VelocityTask, WaypointTask, zigzag_waypoints
+
+CONTACT_THRESHOLD = 1.0
+"""N; a penalised body with a larger contact force is touching something."""
+
+
+def grid_shape(n: int) -> tuple[int, int]:
+    """(rows, cols) with rows * cols == n and the grid as square as possible (one tile per spec)."""
+    rows = max(r for r in range(1, int(math.isqrt(n)) + 1) if n % r == 0)
+    return rows, n // rows
+
+
+def _eval_env_class(base: type) -> type:
+    class EvaluationEnv(base):
+        """``base`` with the evaluation's hooks (see the module docstring)."""
+
+        eval_task = None
+        eval_recorder = None
+
+        def _resample_commands(self, mask):
+            if self.eval_task is None:
+                return super()._resample_commands(mask)
+            # robots being reset stand at their spawn once this returns: steer from there
+            spawn = self.env_origins[:, :2] + self.init_base_state[:2]
+            new = self.eval_task.commands(torch.where(mask[:, None], spawn, self.base_pos[:, :2]), self.commands)
+            self.commands = torch.where(mask[:, None], new, self.commands)
+
+        def _check_termination(self, nonfinite):
+            super()._check_termination(nonfinite)
+            if self.eval_recorder is not None:
+                active = self.eval_recorder.active.clone()
+                self.eval_recorder.record(self)
+                self.eval_task.update(self.base_pos[:, :2], active & self.eval_recorder.active)
+                self.commands = self.eval_task.commands(self.base_pos[:, :2], self.commands)
+
+    EvaluationEnv.__name__ = f"Evaluation{base.__name__}"
+    return EvaluationEnv
+
+
+class Recorder:
+    """Per-robot accumulators on the env's device, updated once per policy step."""
+
+    def __init__(self, env, settle_s: float, trace_robots: torch.Tensor):
+        n, dev = env.num_envs, env.device
+        z = lambda dtype=torch.float32: torch.zeros(n, dtype=dtype, device=dev)  # noqa: E731
+        self.dt, self.settle_steps = env.dt, int(round(settle_s / env.dt))
+        self.active = torch.ones(n, dtype=torch.bool, device=dev)
+        self.fell = z(torch.bool)
+        self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
+        self.collisions = z()
+        self.in_contact = z(torch.bool)
+        self.start_xy = env.base_pos[:, :2].clone()
+        self.last_xy = self.start_xy.clone()
+        self.step = 0
+        self.trace_robots = trace_robots
+        self.trace: dict[str, list[torch.Tensor]] = {"cmd": [], "vel": [], "pos": [], "active": []}
+
+    def record(self, env) -> None:
+        a = self.active
+        af = a.float()
+        self.step += 1
+        xy = env.base_pos[:, :2]
+        err = torch.norm(env.commands[:, :2] - env.base_lin_vel[:, :2], dim=1)
+        counted = af * float(self.step > self.settle_steps)
+        self.err_sum += err * counted
+        self.err_steps += counted
+        self.distance += torch.norm(xy - self.last_xy, dim=1) * af
+        self.last_xy = torch.where(a[:, None], xy, self.last_xy)
+        self.energy += torch.sum(torch.abs(env.torques * env.dof_vel), dim=1) * self.dt * af
+        if env.penalized_bodies.numel():
+            contact = torch.norm(env.contact_forces[:, env.penalized_bodies], dim=-1).gt(CONTACT_THRESHOLD).any(1)
+        else:
+            contact = torch.zeros_like(a)
+        self.collisions += (contact & ~self.in_contact).float() * af
+        self.in_contact = contact
+        self.alive_steps += af
+        self.fell |= a & env.reset_buf & ~env.time_out_buf
+        self.active = a & ~env.reset_buf
+        r = self.trace_robots
+        self.trace["cmd"].append(env.commands[r, :3].clone())
+        self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
+        self.trace["pos"].append(xy[r].clone())
+        self.trace["active"].append(a[r].clone())
+
+
+@dataclasses.dataclass
+class RunResult:
+    """Per-robot metrics (numpy, one entry per robot) and traces of the first robot of every tile."""
+
+    tile: np.ndarray
+    metrics: dict[str, np.ndarray]
+    traces: dict[str, np.ndarray]
+    task: str
+    params: dict
+
+
+class Evaluation:
+    """The task's env over ``items`` as tiles, ``robots_per_terrain`` robots each; :meth:`run` rolls a policy."""
+
+    def __init__(self, task: str, items: list[Item], robots_per_terrain: int = 16, device: str = "cpu",
+                 episode_length_s: float = 10.0, mode: str = "velocity", seed: int = 0):
+        from legged_gente.envs.task_registry import task_registry
+
+        if robots_per_terrain < 1:
+            raise ValueError(f"robots_per_terrain must be >= 1, got {robots_per_terrain}.")
+        if mode not in ("velocity", "waypoints"):
+            raise ValueError(f"mode {mode!r}: use 'velocity' or 'waypoints'.")
+        self.items, self.mode, self.seed = list(items), mode, seed
+        specs = [item.spec() for item in self.items]
+        size_x, size_y, resolution = tile_geometry(specs)
+        rows, cols = grid_shape(len(self.items))
+        env_cfg, self.train_cfg = task_registry.get_cfgs(task)
+        t = env_cfg.terrain
+        t.mesh_type, t.mode, t.curriculum = "heightfield", "generated", False
+        t.generated_specs = [str(item.spec_path) for item in self.items]
+        t.num_rows, t.num_cols = rows, cols
+        t.terrain_length, t.terrain_width, t.resolution = size_x, size_y, resolution
+        env_cfg.env.num_envs = len(self.items) * robots_per_terrain
+        env_cfg.env.episode_length_s = episode_length_s
+        env_cfg.noise.add_noise = False
+        rand = env_cfg.domain_rand
+        rand.push_robots = rand.randomize_friction = rand.randomize_base_mass = False
+        env_cfg.commands.resampling_time = episode_length_s + 1.0  # one command (or task) per episode
+        if mode == "waypoints":
+            env_cfg.commands.heading_command = True  # waypoints steer through the heading
+        self.env_cfg = env_cfg
+        env_class = _eval_env_class(task_registry.tasks[task][0])
+        self.env = env_class(env_cfg, device=device, train_cfg_steps_per_env=self.train_cfg.runner.num_steps_per_env)
+        self.task_name = task
+        self.robots_per_terrain = robots_per_terrain
+        tile = torch.arange(self.env.num_envs, device=device) // robots_per_terrain
+        self.tile = tile
+        self.env.terrain_levels = tile // cols
+        self.env.terrain_columns = tile % cols
+        self.env.env_origins = self.env.terrain_origins[self.env.terrain_levels, self.env.terrain_columns]
+
+    def make_task(self, reach_distance: float = 1.0, speed: float = 0.6, num_waypoints: int = 4,
+                  spacing: float = 1.8, lateral: float = 1.5):
+        env = self.env
+        if self.mode == "velocity":
+            return VelocityTask(env.num_envs, self.env_cfg.commands.ranges, self.env_cfg.commands.heading_command,
+                                env.device, seed=self.seed)
+        points = zigzag_waypoints(env.env_origins[:, :2], num_waypoints, spacing, lateral, seed=self.seed)
+        return WaypointTask(points, reach_distance, speed)
+
+    def run(self, policy, task=None, settle_s: float = 1.0, progress: bool = True) -> RunResult:
+        """Roll ``policy`` (obs TensorDict -> actions) for one episode of every robot; returns per-robot metrics."""
+        from tqdm import tqdm
+
+        env = self.env
+        task = task or self.make_task()
+        env.eval_task, env.eval_recorder = task, None
+        torch.manual_seed(self.seed)
+        obs = env.reset()  # every robot to its tile's spawn, commands from the task
+        first = torch.arange(0, env.num_envs, self.robots_per_terrain, device=env.device)
+        recorder = Recorder(env, settle_s, first)
+        env.eval_recorder = recorder
+        try:
+            with torch.inference_mode():
+                for _ in tqdm(range(env.max_episode_length), desc=f"{self.mode} rollout", disable=not progress,
+                              unit="step"):
+                    obs, _, _, _ = env.step(policy(obs))
+        finally:
+            env.eval_recorder = None
+        r = recorder
+        steps = r.err_steps.clamp(min=1.0)
+        tracking = torch.where(r.err_steps > 0, r.err_sum / steps, torch.full_like(steps, float("nan")))
+        metrics = {
+            "fell": r.fell, "tracking_error": tracking, "distance": r.distance,
+            "displacement": torch.norm(r.last_xy - r.start_xy, dim=1), "collisions": r.collisions,
+            "energy": r.energy, "time_s": r.alive_steps * env.dt, "finished": task.finished,
+        }
+        out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
+        traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}
+        traces["tile_origin"] = env.env_origins[first].cpu().numpy()
+        params = {"settle_s": settle_s, "dt": env.dt, "episode_length_s": env.max_episode_length * env.dt}
+        if isinstance(task, WaypointTask):
+            traces["waypoints"] = task.waypoints[first].cpu().numpy()
+            params |= {"reach_distance": task.reach_distance, "speed": task.speed}
+        return RunResult(self.tile.cpu().numpy(), out, traces, self.mode, params)

@@ -1,0 +1,128 @@
+"""Per-robot metrics -> per-terrain, per-category and overall summaries; JSON and CSV reports.
+
+Categories of a terrain come from its spec's calls (a terrain can be in several): each registered atomic
+terrain maps to one of the paper's four groups, or to none (plain base ground). Items are also grouped by
+their source kind (text / image).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from legged_gente.evaluation.benchmark import Item
+
+CATEGORY_OF_TOOL = {
+    "water": "water", "river": "water",
+    "soil": "soil", "low_friction": "soil",  # the ground's material: deformable or slippery
+    "pillars": "obstacles", "discrete_obstacles": "obstacles", "rocks": "obstacles", "stepping_stones": "obstacles",
+    "gap": "obstacles", "pit": "obstacles",
+    "hills": "slopes_and_stairs", "pyramid_slope": "slopes_and_stairs", "stairs": "slopes_and_stairs",
+    "pyramid_stairs": "slopes_and_stairs",
+}
+"""Atomic terrain -> category. Base-ground atomics (flat, natural_ground, random_uniform, waves) have none,
+except a ``flat`` call at a non-zero height: a raised block (a sketch's black obstacle) or a sunken floor."""
+BASE_GROUND = ("flat", "natural_ground", "random_uniform", "waves")
+CATEGORIES = ("water", "soil", "obstacles", "slopes_and_stairs")
+
+METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "distance", "displacement", "collisions",
+                  "falls", "fall_rate", "energy_per_m")
+
+
+def categories_of(spec) -> list[str]:
+    """The categories of a spec's calls, in CATEGORIES order; raises for an atomic with no category decision."""
+    found = set()
+    for call in spec.calls:
+        if call.tool == "flat" and float(call.params["height"]) != 0.0:
+            found.add("obstacles")
+        elif call.tool in CATEGORY_OF_TOOL:
+            found.add(CATEGORY_OF_TOOL[call.tool])
+        elif call.tool not in BASE_GROUND:
+            raise KeyError(f"atomic terrain {call.tool!r} has no evaluation category; add it to CATEGORY_OF_TOOL or "
+                           f"BASE_GROUND in legged_gente/evaluation/report.py.")
+    return [c for c in CATEGORIES if c in found]
+
+
+def success(metrics: dict[str, np.ndarray], task: str, tracking_threshold: float) -> np.ndarray:
+    """Per-robot success (see the evaluator's docstring for the definitions)."""
+    if task == "waypoints":
+        return metrics["finished"].astype(bool)
+    with np.errstate(invalid="ignore"):
+        return ~metrics["fell"].astype(bool) & (metrics["tracking_error"] < tracking_threshold)
+
+
+def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str, float]:
+    """Aggregate a group of robots: rates and means over robots; energy per metre as total energy / total distance."""
+    n = int(ok.size)
+    distance = float(metrics["distance"].sum())
+    falls = int(metrics["fell"].sum())
+    finite = np.isfinite(metrics["tracking_error"])
+    return {
+        "robots": n,
+        "success_rate": float(ok.mean()) if n else math.nan,
+        "tracking_error": float(metrics["tracking_error"][finite].mean()) if finite.any() else math.nan,
+        "distance": float(metrics["distance"].mean()) if n else math.nan,
+        "displacement": float(metrics["displacement"].mean()) if n else math.nan,
+        "collisions": float(metrics["collisions"].mean()) if n else math.nan,
+        "falls": falls,
+        "fall_rate": falls / n if n else math.nan,
+        "energy_per_m": float(metrics["energy"].sum()) / distance if distance > 0 else math.nan,
+    }
+
+
+def build_report(result, items: list[Item], tracking_threshold: float = 0.5, meta: dict | None = None) -> dict:
+    """JSON-ready report: ``terrains`` (one entry per item), ``groups`` (kinds and categories) and ``overall``."""
+    ok = success(result.metrics, result.task, tracking_threshold)
+
+    def select(mask):
+        return {k: v[mask] for k, v in result.metrics.items()}, ok[mask]
+
+    terrains, group_masks = [], {}
+    for k, item in enumerate(items):
+        cats = categories_of(item.spec())
+        mask = result.tile == k
+        terrains.append({"id": item.id, "kind": item.kind, "categories": cats, **summarize_robots(*select(mask))})
+        for group in [item.kind] + cats:
+            group_masks[group] = group_masks.get(group, np.zeros_like(mask)) | mask
+    order = ["text", "image", *CATEGORIES]
+    groups = {g: {"terrains": sum(1 for t in terrains if g in (t["kind"], *t["categories"])),
+                  **summarize_robots(*select(group_masks[g]))} for g in order if g in group_masks}
+    everything = np.ones_like(ok)
+    return {
+        "meta": {"task_mode": result.task, "tracking_threshold": tracking_threshold, **result.params, **(meta or {})},
+        "overall": {"terrains": len(items), **summarize_robots(*select(everything))},
+        "groups": groups,
+        "terrains": terrains,
+    }
+
+
+def _json_safe(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def write_reports(report: dict, out_dir: str | Path) -> tuple[Path, Path]:
+    """``report.json`` (NaN written as null) and ``report.csv`` (one row per terrain, group and overall)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    json_path, csv_path = out / "report.json", out / "report.csv"
+    json_path.write_text(json.dumps(_json_safe(report), indent=1) + "\n")
+    with open(csv_path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["row", "name", "kind", "categories", *METRIC_COLUMNS])
+        fmt = lambda v: "" if isinstance(v, float) and not math.isfinite(v) else (f"{v:.4g}" if isinstance(v, float) else v)  # noqa: E731
+        for t in report["terrains"]:
+            writer.writerow(["terrain", t["id"], t["kind"], "+".join(t["categories"]), *(fmt(t[c]) for c in METRIC_COLUMNS)])
+        for name, g in report["groups"].items():
+            writer.writerow(["group", name, "", "", *(fmt(g[c]) for c in METRIC_COLUMNS)])
+        writer.writerow(["overall", "all", "", "", *(fmt(report["overall"][c]) for c in METRIC_COLUMNS)])
+    return json_path, csv_path

@@ -1,0 +1,86 @@
+"""Evaluation tasks: what each robot is commanded to do. Pure tensor logic, no simulator.
+
+* :class:`VelocityTask`: one random command per robot for the whole episode, drawn from the task's command
+  ranges (vx, vy and a heading, or a yaw rate when the task has no heading mode).
+* :class:`WaypointTask`: walk at ``speed`` towards the next waypoint, steering through the heading command;
+  a waypoint counts as reached when the base is within ``reach_distance`` (d) of it in the xy plane, and
+  the task is finished after the last one (the robot is then commanded to stand).
+"""
+
+from __future__ import annotations
+
+import torch
+
+
+def _uniform(lo: float, hi: float, n: int, generator: torch.Generator) -> torch.Tensor:
+    return lo + (hi - lo) * torch.rand(n, generator=generator)
+
+
+class VelocityTask:
+    name = "velocity"
+
+    def __init__(self, num_robots: int, ranges, heading_command: bool, device: str, seed: int = 0):
+        g = torch.Generator().manual_seed(seed)
+        n = num_robots
+        yaw = _uniform(*ranges.ang_vel_yaw, n, g) if not heading_command else torch.zeros(n)
+        heading = _uniform(*ranges.heading, n, g) if heading_command else torch.zeros(n)
+        self._commands = torch.stack([_uniform(*ranges.lin_vel_x, n, g), _uniform(*ranges.lin_vel_y, n, g), yaw,
+                                      heading], 1).to(device)
+        self.heading_command = heading_command
+        self.finished = torch.zeros(n, dtype=torch.bool, device=device)
+
+    def commands(self, pos_xy: torch.Tensor, current: torch.Tensor) -> torch.Tensor:
+        """(n, 4) commands (vx, vy, yaw rate, heading); with a heading the env overwrites the yaw rate."""
+        if not self.heading_command:
+            return self._commands
+        return torch.cat([self._commands[:, :2], current[:, 2:3], self._commands[:, 3:]], 1)
+
+    def update(self, pos_xy: torch.Tensor, active: torch.Tensor) -> None:
+        """Nothing to advance: the command is fixed for the episode."""
+
+
+class WaypointTask:
+    name = "waypoints"
+
+    def __init__(self, waypoints: torch.Tensor, reach_distance: float, speed: float):
+        if waypoints.ndim != 3 or waypoints.shape[-1] != 2 or waypoints.shape[1] < 1:
+            raise ValueError(f"waypoints must be (num_robots, K >= 1, 2) world xy, got {tuple(waypoints.shape)}.")
+        if not reach_distance > 0:
+            raise ValueError(f"reach_distance must be > 0 m, got {reach_distance}.")
+        self.waypoints = waypoints
+        self.reach_distance = float(reach_distance)
+        self.speed = float(speed)
+        n = waypoints.shape[0]
+        self.index = torch.zeros(n, dtype=torch.long, device=waypoints.device)
+        """Per robot: the waypoint it walks to now (== K once finished)."""
+        self.finished = torch.zeros(n, dtype=torch.bool, device=waypoints.device)
+
+    def target(self) -> torch.Tensor:
+        k = self.index.clamp(max=self.waypoints.shape[1] - 1)
+        return self.waypoints[torch.arange(len(k), device=k.device), k]
+
+    def update(self, pos_xy: torch.Tensor, active: torch.Tensor) -> None:
+        """Advance every active robot past each waypoint within reach (several per step when d is large)."""
+        for _ in range(self.waypoints.shape[1]):  # bounded: at most K waypoints can be passed in one step
+            reached = active & ~self.finished & (torch.norm(self.target() - pos_xy, dim=1) < self.reach_distance)
+            self.index += reached.long()
+            self.finished |= self.index >= self.waypoints.shape[1]
+
+    def commands(self, pos_xy: torch.Tensor, current: torch.Tensor) -> torch.Tensor:
+        """Forward speed towards the current waypoint, heading = its bearing; once finished: stand, keep the heading."""
+        delta = self.target() - pos_xy
+        heading = torch.where(self.finished, current[:, 3], torch.atan2(delta[:, 1], delta[:, 0]))
+        go = (~self.finished).float()
+        return torch.stack([self.speed * go, torch.zeros_like(go), current[:, 2] * go, heading], 1)
+
+
+def zigzag_waypoints(starts_xy: torch.Tensor, count: int, spacing: float, lateral: float, seed: int = 0) -> torch.Tensor:
+    """(n, count, 2) waypoints ahead (+x) of each start: ``spacing`` m apart, alternating ``lateral`` m left/right
+    with a random first side per robot, so every path needs turns."""
+    n = starts_xy.shape[0]
+    g = torch.Generator().manual_seed(seed)
+    side = torch.where(torch.rand(n, generator=g) < 0.5, -1.0, 1.0).to(starts_xy.device)
+    k = torch.arange(1, count + 1, device=starts_xy.device, dtype=starts_xy.dtype)
+    sign = side[:, None] * torch.where(k % 2 == 1, 1.0, -1.0)[None, :]
+    return torch.stack([starts_xy[:, None, 0] + spacing * k[None, :], starts_xy[:, None, 1] + lateral * sign], -1)
+
