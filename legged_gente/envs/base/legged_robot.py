@@ -388,7 +388,8 @@ class LeggedRobot(VecEnv):
         """Terrain height under world points ``xy`` (..., 2), bilinear between heightfield vertices."""
         if self.terrain is None:
             return torch.zeros(xy.shape[:-1], device=self.device)
-        grid = (xy - self.terrain_origin_xy) / self.terrain.resolution
+        # a diverged world's bodies can be non-finite until its reset: never index with them
+        grid = torch.nan_to_num((xy - self.terrain_origin_xy) / self.terrain.resolution, nan=0.0, posinf=0.0, neginf=0.0)
         nx, ny = self.height_samples.shape
         gx = grid[..., 0].clamp(0, nx - 1.001)
         gy = grid[..., 1].clamp(0, ny - 1.001)
