@@ -89,3 +89,23 @@ def test_evaluate_writes_reports(tmp_path, mode):
     assert list(traces["ids"]) == ITEMS
     if mode == "waypoints":
         assert traces["waypoints"].shape == (2, 4, 2)
+
+
+def test_figures(tmp_path):
+    from legged_gente.evaluation import figures
+
+    for seed, offset in enumerate((0.0, 1.0, 2.0)):
+        rows = "\n".join(f"{i},{i * 0.1 + offset}" for i in range(20))
+        (tmp_path / f"s{seed}.csv").write_text("iteration,mean_reward\n" + rows + "\n")
+    its, values = figures.read_curve(tmp_path / "s1.csv")
+    assert its[-1] == 19 and values[0] == pytest.approx(1.0)
+    assert figures.plot_reward_seeds(sorted(tmp_path.glob("s*.csv")), tmp_path / "a.png").stat().st_size > 0
+    steps = 30
+    np.savez(tmp_path / "traces.npz", ids=np.array(["t0", "t1"]), dt=np.array(0.02),
+             cmd=np.zeros((2, steps, 3)), vel=np.ones((2, steps, 3)), active=np.ones((2, steps), bool))
+    assert figures.plot_tracking(tmp_path / "traces.npz", tmp_path / "b.png").stat().st_size > 0
+    with pytest.raises(KeyError, match="nope"):
+        figures.plot_tracking(tmp_path / "traces.npz", tmp_path / "b.png", ids=["nope"])
+    run = {"pos": np.array([[10.0, 10.0], [12.0, 11.0]]), "waypoints": np.array([[12.0, 11.5]]), "finished": True}
+    path = figures.plot_trajectories(np.zeros((200, 200)), 0.1, {0.1: run, 1.0: run}, tmp_path / "c.png")
+    assert path.stat().st_size > 0

@@ -206,7 +206,8 @@ class Evaluation:
         }
         out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
         traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}
-        traces["tile_origin"] = env.env_origins[first].cpu().numpy()
+        traces["spawn"] = env.env_origins[first].cpu().numpy()
+        traces["dt"] = np.array(env.dt)
         params = {"settle_s": settle_s, "dt": env.dt, "episode_length_s": env.max_episode_length * env.dt}
         if isinstance(task, WaypointTask):
             traces["waypoints"] = task.waypoints[first].cpu().numpy()
