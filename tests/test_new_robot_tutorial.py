@@ -1,0 +1,198 @@
+"""docs/new_robot.md followed literally on the CPU, plus the clear errors an external MJCF can run into.
+
+The tutorial's files are the doc's code blocks that start with ``file: <path>``; they are written to a
+temporary folder, the robot is built and stepped in this process, then the doc's train and play commands
+run as subprocesses (with CPU-sized flags added).
+"""
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+from legged_gente.envs.base.legged_robot import LeggedRobot
+from legged_gente.envs.task_registry import task_registry
+from legged_gente.utils.checkpoints import find_checkpoint
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "new_robot.md"
+NUM_ENVS = 4
+
+
+def doc_files() -> dict[str, str]:
+    blocks = re.findall(r"```\w+\n(.*?)```", DOC.read_text(), re.S)
+    files = {}
+    for body in blocks:
+        m = re.match(r"(?:#|<!--) file: (\S+)", body)
+        if m:
+            files[m.group(1)] = body
+    return files
+
+
+def doc_commands() -> list[str]:
+    return [c.strip() for c in re.findall(r"```bash\n(.*?)```", DOC.read_text(), re.S)]
+
+
+@pytest.fixture(scope="module")
+def tutorial(tmp_path_factory):
+    """The tutorial's folder, written from the doc, with its tasks registered in this process."""
+    root = tmp_path_factory.mktemp("tutorial")
+    for path, text in doc_files().items():
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text(text)
+    sys.path.insert(0, str(root / "my_robot"))
+    try:
+        import my_robot_config  # noqa: F401
+        import my_robot_tasks  # noqa: F401
+    finally:
+        sys.path.remove(str(root / "my_robot"))
+    yield root
+    for name in ("my_robot", "my_robot_rough"):
+        task_registry.tasks.pop(name, None)
+    for module in ("my_robot_tasks", "my_robot_config"):
+        sys.modules.pop(module, None)
+
+
+def test_doc_has_every_step():
+    assert set(doc_files()) == {"my_robot/my_robot.xml", "my_robot/my_robot_config.py", "my_robot/my_robot_tasks.py",
+                                "my_robot/train.py", "my_robot/play.py"}
+    commands = doc_commands()
+    assert any(c.startswith("python my_robot/train.py --task=my_robot") for c in commands)
+    assert any(c.startswith("python my_robot/play.py --task=my_robot") for c in commands)
+
+
+def test_env_builds_with_actuators_added_and_steps(tutorial):
+    assert "<actuator" not in (tutorial / "my_robot/my_robot.xml").read_text()
+    cfg, _ = task_registry.get_cfgs("my_robot")
+    cfg.env.num_envs = NUM_ENVS
+    cfg.domain_rand.push_robots = False
+    env, _ = task_registry.make_env("my_robot", env_cfg=cfg)
+    assert env.num_actions == 8 and env.mjm.nu == 8
+    assert env.layout.joint_names[:2] == ["FL_hip", "FL_knee"]
+    assert env.mjm.actuator_gainprm[env.mjm.actuator("RR_knee").id, 0] == pytest.approx(15.0)
+    assert env.torque_limits.tolist() == [8.0] * 8  # from the joints' actuatorfrcrange
+    assert env.get_observations()["policy"].shape == (NUM_ENVS, 12 + 3 * 8)
+    for _ in range(20):
+        obs, rew, _, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert torch.isfinite(obs["policy"]).all() and torch.isfinite(rew).all()
+    # it stands on its feet with zero actions, near the tutorial's base_height_target
+    assert env.base_pos[:, 2] == pytest.approx(torch.full((NUM_ENVS,), cfg.rewards.base_height_target), abs=0.03)
+
+
+def test_rough_variant_resolves_force_geoms(tutorial):
+    cfg, _ = task_registry.get_cfgs("my_robot_rough")
+    cfg.env.num_envs = NUM_ENVS
+    cfg.terrain.num_rows, cfg.terrain.num_cols = 1, 5
+    cfg.terrain.terrain_length = cfg.terrain.terrain_width = 3.0
+    cfg.terrain.border_size = 1.0
+    env, _ = task_registry.make_env("my_robot_rough", env_cfg=cfg)
+    assert env.forces is not None and env.forces.nseg == 8 and env.forces.nfoot == 4
+    obs, _, _, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert torch.isfinite(obs["critic"]).all()
+
+
+def run_doc_command(tutorial, prefix: str, *extra: str) -> subprocess.CompletedProcess:
+    command = next(c for c in doc_commands() if c.startswith(prefix)).split()
+    env = dict(os.environ, GENTE_LOG_ROOT=str(tutorial / "logs"),
+               PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+    result = subprocess.run([sys.executable, *command[1:], *extra], cwd=tutorial, env=env, capture_output=True,
+                            text=True, timeout=600)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    return result
+
+
+def test_train_then_play(tutorial):
+    run_doc_command(tutorial, "python my_robot/train.py", "--device=cpu", "--num_envs=4", "--max_iterations=1")
+    checkpoint = find_checkpoint(tutorial / "logs" / "my_robot")
+    assert checkpoint.is_file() and checkpoint.name == "model_0.pt"
+    run_doc_command(tutorial, "python my_robot/play.py", "--device=cpu", "--steps=5")
+    exported = tutorial / "logs" / "my_robot" / "exported"
+    assert (exported / "policy.pt").is_file() and (exported / "policy.onnx").is_file()
+
+
+# ----------------------------------------------------------------------------------------------------------
+# an external MJCF's mistakes: each is a clear error naming the fix
+# ----------------------------------------------------------------------------------------------------------
+def variant(tutorial, tmp_path, old: str, new: str, count: int = 1) -> str:
+    text = (tutorial / "my_robot/my_robot.xml").read_text()
+    assert text.count(old) >= count, old
+    path = tmp_path / "robot.xml"
+    path.write_text(text.replace(old, new, count))
+    return str(path)
+
+
+def tutorial_cfg(file: str | None = None):
+    cfg, _ = task_registry.get_cfgs("my_robot")
+    cfg.env.num_envs = 2
+    if file is not None:
+        cfg.asset.file = file
+    return cfg
+
+
+def test_missing_file(tutorial):
+    with pytest.raises(FileNotFoundError, match="no_such_robot.xml.*cfg.asset.file"):
+        LeggedRobot(tutorial_cfg("no_such_robot.xml"))
+
+
+def test_robot_without_free_joint(tutorial, tmp_path):
+    with pytest.raises(ValueError, match="exactly one free joint.*found 0.*<freejoint/>"):
+        LeggedRobot(tutorial_cfg(variant(tutorial, tmp_path, '<freejoint name="root"/>', "")))
+
+
+def test_scene_file_with_a_floor(tutorial, tmp_path):
+    floor = '<worldbody>\n    <geom name="floor" type="plane" size="5 5 0.1"/>'
+    with pytest.raises(ValueError, match=r"geoms on the worldbody \['floor'\].*not at a scene file"):
+        LeggedRobot(tutorial_cfg(variant(tutorial, tmp_path, "<worldbody>", floor)))
+
+
+def test_unknown_body_and_joint_names(tutorial):
+    cfg = tutorial_cfg()
+    cfg.asset.penalize_contacts_on = ["*_calf"]
+    with pytest.raises(ValueError, match=r"body '\*_calf' matches nothing.*FL_shin"):
+        LeggedRobot(cfg)
+    cfg = tutorial_cfg()
+    cfg.asset.base_body = "trunk"
+    with pytest.raises(ValueError, match="base_body='trunk' is not a body.*'base'"):
+        LeggedRobot(cfg)
+    cfg = tutorial_cfg()
+    cfg.control.stiffness = {"hip": 15.0, "kne": 15.0, "ankle": 5.0}
+    with pytest.raises(ValueError, match=r"cfg.control.stiffness: \['ankle'\] match no joint.*FL_knee"):
+        LeggedRobot(cfg)
+    cfg = tutorial_cfg()
+    cfg.init_state.default_joint_angles = {"hip": 0.6}
+    with pytest.raises(ValueError, match="no default angle given for joint 'FL_knee'"):
+        LeggedRobot(cfg)
+
+
+def test_menagerie_style_motors_and_visual_meshes(tutorial, tmp_path):
+    """Torque motors become PD actuators limited by the motor's ctrlrange; a visual mesh on a body that has
+    its own collision geom stays visual, and the env builds and steps with it."""
+    (tmp_path / "assets").mkdir()
+    (tmp_path / "assets" / "shell.obj").write_text(
+        "v -0.1 -0.05 -0.02\nv 0.1 -0.05 -0.02\nv 0.1 0.05 -0.02\nv -0.1 0.05 -0.02\nv 0 0 0.05\n"
+        "f 1 3 2\nf 1 4 3\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n")
+    text = (tutorial / "my_robot/my_robot.xml").read_text()
+    text = text.replace('<compiler angle="radian" autolimits="true"/>',
+                        '<compiler angle="radian" autolimits="true" meshdir="assets"/>\n'
+                        '  <asset><mesh name="shell" file="shell.obj"/></asset>')
+    text = text.replace('actuatorfrcrange="-8 8"', "")
+    text = text.replace('<geom name="FL_thigh_geom" class="thigh"/>',
+                        '<geom name="FL_thigh_geom" class="thigh" contype="1" conaffinity="1"/>\n'
+                        '        <geom name="FL_thigh_shell" type="mesh" mesh="shell" mass="0"/>')
+    motors = "".join(f'<motor joint="{leg}_{j}" gear="2" ctrlrange="-3 3"/>' for leg in ("FL", "FR", "RL", "RR")
+                     for j in ("hip", "knee"))
+    text = text.replace("</mujoco>", f"<actuator>{motors}</actuator>\n</mujoco>")
+    (tmp_path / "robot.xml").write_text(text)
+    env = LeggedRobot(tutorial_cfg(str(tmp_path / "robot.xml")))
+    assert env.mjm.nu == 8
+    assert env.torque_limits.tolist() == [6.0] * 8  # ctrlrange 3 x gear 2
+    assert env.mjm.actuator_gear[:, 0].tolist() == [1.0] * 8
+    assert env.mjm.geom_contype[env.mjm.geom("FL_thigh_shell").id] == 0  # visual mesh stays visual
+    assert env.mjm.geom_contype[env.mjm.geom("FL_thigh_geom").id] != 0
+    assert env.mjm.geom_contype[env.mjm.geom("FR_thigh_geom").id] != 0  # penalised body switched on
+    obs, _, _, _ = env.step(torch.zeros(2, env.num_actions))
+    assert torch.isfinite(obs["policy"]).all()
