@@ -15,6 +15,7 @@ class GenteBipedCfg(LeggedRobotCfg):
 
         mesh_type = "heightfield"
         mode = "curriculum"
+        max_init_terrain_level = 0  # a biped learning from scratch starts on the easiest row and climbs
         num_rows = 10
         num_cols = 20
         terrain_types = [
