@@ -1,0 +1,139 @@
+"""Multi-GPU PPO under ``torchrun``: one process (rank) per GPU, each with its own envs.
+
+    NCCL_NVLS_ENABLE=0 torchrun --standalone --nproc_per_node=2 legged_gente/scripts/train.py --task=gente_biped_flat
+
+torchrun starts ``nproc_per_node`` copies of train.py and gives each RANK, LOCAL_RANK and WORLD_SIZE (plus
+MASTER_ADDR/MASTER_PORT for the rendezvous). Each rank builds ``num_envs`` envs on ``cuda:{LOCAL_RANK}``
+(``--device cpu``: on the CPU with the gloo backend, for tests), seeds torch with ``seed + RANK`` so the ranks
+explore differently, collects its own rollouts, and rsl-rl's PPO averages the gradients over the ranks
+(all-reduce) after rank 0's parameters were broadcast at the start. Only rank 0 logs and saves checkpoints.
+
+rsl-rl 5.5's own ``OnPolicyRunner._configure_multi_gpu`` only goes distributed when WORLD_SIZE > 1, always
+uses NCCL and needs ``cuda:{LOCAL_RANK}``; ``GenteOnPolicyRunner`` also takes a one-process torchrun launch
+as distributed (so the code path runs in CI), picks gloo on the CPU, and says clearly what is wrong.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import warnings
+from dataclasses import dataclass
+
+import torch
+import torch.distributed as dist
+from rsl_rl.runners import OnPolicyRunner
+
+TORCHRUN_VARS = ("RANK", "LOCAL_RANK", "WORLD_SIZE")
+
+# NVLink multicast (NVLS / NVLink SHARP) stays off: on the lent multi-GPU hosts a program that uses it can put
+# the host's shared GPUs out of service for a day or more (/work/.library/device/KINDS.md), and NCCL turns it on
+# by itself on NVSwitch systems. Set before the process group (and so NCCL) is initialised.
+MULTICAST_OFF = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1"}
+
+
+@dataclass(frozen=True)
+class Launch:
+    """This process's place in a torchrun launch."""
+
+    rank: int  # global rank, 0 .. world_size - 1
+    local_rank: int  # rank on this host: the CUDA device index
+    world_size: int
+
+
+def torchrun_launch(environ=None) -> Launch | None:
+    """The torchrun ranks from the environment, or None when the process was not started by torchrun."""
+    environ = os.environ if environ is None else environ
+    present = [name for name in TORCHRUN_VARS if name in environ]
+    if not present:
+        return None
+    missing = [name for name in TORCHRUN_VARS if name not in environ]
+    if missing:
+        raise ValueError(f"torchrun environment incomplete: {present} set but {missing} missing; launch with "
+                         f"`torchrun --nproc_per_node=N ...`, or unset {present} for a single-process run")
+    values = {name: environ[name] for name in TORCHRUN_VARS}
+    try:
+        rank, local_rank, world_size = (int(value) for value in values.values())
+    except ValueError:
+        raise ValueError(f"torchrun variables must be integers, got {values}") from None
+    if world_size < 1 or not 0 <= rank < world_size or not 0 <= local_rank < world_size:
+        raise ValueError(f"inconsistent torchrun ranks RANK={rank} LOCAL_RANK={local_rank} WORLD_SIZE={world_size}:"
+                         f" need 0 <= RANK, LOCAL_RANK < WORLD_SIZE")
+    return Launch(rank, local_rank, world_size)
+
+
+def rank_device(device: str | None, launch: Launch) -> str:
+    """The device of this rank: ``None`` or ``cuda`` become ``cuda:{LOCAL_RANK}`` (``cpu`` without CUDA);
+    an explicit device must be ``cpu`` or ``cuda:{LOCAL_RANK}`` (see ``check_rank_device``)."""
+    if device is None:
+        device = "cuda" if torch.cuda.is_available() else "cpu"
+    if device == "cuda":
+        device = f"cuda:{launch.local_rank}"
+    check_rank_device(device, launch.local_rank)
+    return device
+
+
+def check_rank_device(device: str, local_rank: int) -> None:
+    """Each rank must own exactly one device: ``cuda:{LOCAL_RANK}``, or the CPU."""
+    if device != "cpu" and device != f"cuda:{local_rank}":
+        raise ValueError(f"device {device!r} does not belong to torchrun LOCAL_RANK {local_rank}: under torchrun "
+                         f"each rank trains on cuda:{local_rank}; pass --device cuda (or leave --device out), "
+                         f"or --device cpu for a CPU (gloo) run")
+
+
+def backend_for(device: str) -> str:
+    """torch.distributed backend for the device the ranks train on: NCCL between GPUs, gloo on the CPU."""
+    if device.startswith("cuda"):
+        return "nccl"
+    if device == "cpu":
+        return "gloo"
+    raise ValueError(f"no distributed backend for device {device!r}: use cuda:N (NCCL) or cpu (gloo)")
+
+
+def init_process_group(launch: Launch, device: str) -> str:
+    """Join the torchrun process group once (env:// rendezvous from torchrun's MASTER_ADDR/PORT); the backend."""
+    backend = backend_for(device)
+    if dist.is_initialized():
+        if dist.get_backend() != backend or dist.get_world_size() != launch.world_size:
+            raise RuntimeError(f"a {dist.get_backend()} process group of {dist.get_world_size()} ranks already "
+                               f"exists, but this run needs {backend} with {launch.world_size}")
+        return backend
+    if backend == "nccl":
+        for name, value in MULTICAST_OFF.items():
+            os.environ.setdefault(name, value)
+            if os.environ[name] != value:
+                warnings.warn(f"{name}={os.environ[name]} turns NVLink multicast on, which can put the lent GPU "
+                              f"hosts out of service; set {name}={value}", stacklevel=2)
+        torch.cuda.set_device(device)
+        dist.init_process_group("nccl", rank=launch.rank, world_size=launch.world_size,
+                                device_id=torch.device(device))
+    else:
+        dist.init_process_group("gloo", rank=launch.rank, world_size=launch.world_size)
+    atexit.register(dist.destroy_process_group)
+    return backend
+
+
+class GenteOnPolicyRunner(OnPolicyRunner):
+    """rsl-rl's OnPolicyRunner, made distributed by any torchrun launch, with per-rank torch seeds."""
+
+    def _configure_multi_gpu(self) -> None:
+        launch = torchrun_launch()
+        if launch is None:  # plain `python train.py`: rsl-rl's single-process settings
+            self.gpu_world_size, self.gpu_local_rank, self.gpu_global_rank = 1, 0, 0
+            self.is_distributed = False
+            self.cfg["multi_gpu"] = None
+        else:
+            check_rank_device(str(self.device), launch.local_rank)
+            self.gpu_world_size, self.gpu_local_rank, self.gpu_global_rank = (
+                launch.world_size, launch.local_rank, launch.rank)
+            self.is_distributed = True
+            # the keys rsl-rl's PPO reads (all-reduce of gradients and KL, broadcast of the learning rate)
+            self.cfg["multi_gpu"] = {"global_rank": launch.rank, "local_rank": launch.local_rank,
+                                     "world_size": launch.world_size}
+            backend = init_process_group(launch, str(self.device))
+        # rsl-rl seeds nothing itself: one seed per rank, or every rank would draw the same actions
+        self.cfg["seed"] = int(self.cfg["seed"]) + self.gpu_global_rank
+        torch.manual_seed(self.cfg["seed"])  # CPU and every CUDA device
+        if launch is not None:
+            print(f"[distributed] rank {launch.rank}/{launch.world_size} (local {launch.local_rank}) on "
+                  f"{self.device}, backend {backend}, seed {self.cfg['seed']}", flush=True)
