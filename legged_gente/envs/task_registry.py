@@ -40,10 +40,9 @@ class TaskRegistry:
     def make_alg_runner(self, env, name: str, args=None, train_cfg: LeggedRobotCfgPPO | None = None,
                         log_root: Path | str | None = LOG_ROOT):
         """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default)."""
-        from rsl_rl.runners import OnPolicyRunner
-
         from legged_gente.utils.args import apply_args
         from legged_gente.utils.checkpoints import find_checkpoint
+        from legged_gente.utils.distributed import GenteOnPolicyRunner
 
         if train_cfg is None:
             _, train_cfg = self.get_cfgs(name)
@@ -55,7 +54,9 @@ class TaskRegistry:
         if experiment_root is not None:
             stamp = datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
             log_dir = str(experiment_root / (stamp + (f"_{runner_cfg.run_name}" if runner_cfg.run_name else "")))
-        runner = OnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=log_dir, device=env.device)
+        runner = GenteOnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=log_dir, device=env.device)
+        if runner.gpu_global_rank != 0:
+            log_dir = None  # under torchrun only rank 0 writes the run folder (rsl-rl logs from rank 0 only)
         if runner_cfg.resume:
             path = find_checkpoint(experiment_root, runner_cfg.load_run, runner_cfg.checkpoint)
             print(f"Loading model from {path}")
