@@ -30,6 +30,14 @@ def default_device() -> str:
 
 def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace:
     args = parser.parse_args(argv)
+    from legged_gente.utils.distributed import rank_device, torchrun_launch
+
+    launch = torchrun_launch()
+    if launch is not None:  # under torchrun each rank trains on cuda:{LOCAL_RANK} (or the CPU)
+        try:
+            args.device = rank_device(args.device, launch)
+        except ValueError as error:
+            parser.error(str(error))
     if args.device is None:
         args.device = default_device()
     elif args.device == "cuda":
