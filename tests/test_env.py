@@ -112,11 +112,19 @@ def test_bad_names_give_clear_errors():
         GenteBiped(cfg, device="cpu")
 
 
+def test_exploding_world_is_reset_and_counted(env):
+    before = env.diverged_resets.item()
+    env.sim.qvel[2, 6] = 1.0e4  # finite but absurd: a diverged world
+    _, _, done, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert done[2] and env.diverged_resets.item() == before + 1
+    assert env.sim.qvel.abs().max() < env.cfg.sim.max_qvel
+
+
 def test_nonfinite_world_is_reset_and_counted(env):
     env.sim.qvel[1, 0] = math.nan
     obs, _, done, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
     assert done[1]
-    assert env.nonfinite_resets.item() >= 1
+    assert env.diverged_resets.item() >= 1
     assert torch.isfinite(obs["policy"]).all()
 
 

@@ -60,7 +60,7 @@ def test_every_reward_is_finite_and_steps_stay_bounded(env):
             value = fn()
             assert value.shape == (NUM_ENVS,) and torch.isfinite(value).all(), name
         assert torch.isfinite(rew).all() and torch.isfinite(obs["policy"]).all()
-    assert env.nonfinite_resets.item() == 0
+    assert env.diverged_resets.item() == 0
     # standing on its feet at about the stand height, not flung away or through the floor
     assert ((env.base_pos[:, 2] > 0.15) & (env.base_pos[:, 2] < 0.45)).all()
     assert env.sim.qvel.abs().max().item() < 50.0
@@ -97,7 +97,7 @@ def test_forces_resolve_against_the_quadruped_geoms():
     for _ in range(10):
         obs, rew, _, _ = env.step(0.5 * torch.randn(NUM_ENVS, env.num_actions))
     assert torch.isfinite(obs["critic"]).all() and torch.isfinite(rew).all()
-    assert env.nonfinite_resets.item() == 0
+    assert env.diverged_resets.item() == 0
     # the terrain forces push on the legs: some leg or foot body carries a non-zero external force
     xfrc = env.sim.d.xfrc_applied.numpy()
     bodies = np.unique(np.concatenate([forces.seg_body.numpy(), mjm.geom_bodyid[forces.foot_geom.numpy()]]))

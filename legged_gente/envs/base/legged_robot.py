@@ -134,7 +134,7 @@ class LeggedRobot(VecEnv):
         # episode statistics, reduced on device and reported once per rollout (no per-step host sync)
         self._stat_sums: dict[str, torch.Tensor] = {}
         self._stat_count = torch.zeros((), device=dev)
-        self.nonfinite_resets = torch.zeros((), device=dev)
+        self.diverged_resets = torch.zeros((), device=dev)
         self._update_state()
 
     def _init_height_points(self) -> torch.Tensor | None:
@@ -226,9 +226,9 @@ class LeggedRobot(VecEnv):
     def _post_physics_step(self):
         self.episode_length_buf += 1
         self.common_step_counter += 1
-        nonfinite = self._sanitize_nonfinite()
+        diverged = self._sanitize_diverged()
         self._update_state()
-        self._check_termination(nonfinite)
+        self._check_termination(diverged)
         self._compute_reward()
         self._log_and_update_curriculum(self.reset_buf)
         self._reset_envs(self.reset_buf)
@@ -244,13 +244,15 @@ class LeggedRobot(VecEnv):
             extras["episode"] = self._episode_statistics()
         return self.obs_buf, self.rew_buf, self.reset_buf.clone(), extras
 
-    def _sanitize_nonfinite(self) -> torch.Tensor:
-        """Worlds whose state went non-finite or whose constraint rows overflowed: zero them, flag for reset."""
+    def _sanitize_diverged(self) -> torch.Tensor:
+        """Diverged worlds: state non-finite or absurdly fast, or constraint rows overflowed. Zero them and flag
+        them for reset, so that one exploding world never reaches the observation normalisers or the logs."""
         bad = ~(torch.isfinite(self.sim.qpos).all(1) & torch.isfinite(self.sim.qvel).all(1))
+        bad |= self.sim.qvel.abs().amax(1) > self.cfg.sim.max_qvel
         bad |= self.sim.nefc >= self.cfg.sim.njmax
         self.sim.qpos[:] = torch.where(bad[:, None], torch.zeros_like(self.sim.qpos), self.sim.qpos)
         self.sim.qvel[:] = torch.where(bad[:, None], torch.zeros_like(self.sim.qvel), self.sim.qvel)
-        self.nonfinite_resets += bad.sum()
+        self.diverged_resets += bad.sum()
         return bad
 
     def _update_state(self) -> None:
@@ -274,12 +276,12 @@ class LeggedRobot(VecEnv):
         offset = self.sim.xpos[:, bodies] - self.sim.subtree_com[:, self.root_body][:, None, :]
         return cvel[..., 3:6] + torch.cross(cvel[..., 0:3], offset, dim=-1)
 
-    def _check_termination(self, nonfinite: torch.Tensor) -> None:
+    def _check_termination(self, diverged: torch.Tensor) -> None:
         asset = self.cfg.asset
         contact = torch.norm(self.contact_forces[:, self.terminate_bodies], dim=-1).gt(1.0).any(1) \
-            if self.terminate_bodies.numel() else torch.zeros_like(nonfinite)
+            if self.terminate_bodies.numel() else torch.zeros_like(diverged)
         tilted = self.projected_gravity[:, 2] > -math.cos(asset.terminate_tilt)
-        self.reset_buf = contact | tilted | nonfinite
+        self.reset_buf = contact | tilted | diverged
         if asset.terminate_height > 0:
             self.reset_buf |= (self.base_pos[:, 2] - self._ground_height(self.base_pos[:, :2])) < asset.terminate_height
         self.time_out_buf = self.episode_length_buf >= self.max_episode_length
@@ -329,7 +331,7 @@ class LeggedRobot(VecEnv):
     def _episode_statistics(self) -> dict[str, torch.Tensor]:
         count = self._stat_count.clamp(min=1.0)
         stats = {key: value / count for key, value in self._stat_sums.items()}
-        stats["nonfinite_resets"] = self.nonfinite_resets.clone()
+        stats["diverged_resets"] = self.diverged_resets.clone()
         self._stat_sums = {}
         self._stat_count = torch.zeros((), device=self.device)
         return stats
@@ -429,8 +431,9 @@ class LeggedRobot(VecEnv):
         if self.forces is not None:
             privileged.append(self.forces.privileged_obs())
         clip = self.cfg.normalization.clip_observations
+        critic = torch.nan_to_num(torch.cat(privileged, dim=-1), nan=0.0)
         self.obs_buf = TensorDict(
-            {"policy": policy.clamp(-clip, clip), "critic": torch.cat(privileged, dim=-1).clamp(-clip, clip)},
+            {"policy": torch.nan_to_num(policy, nan=0.0).clamp(-clip, clip), "critic": critic.clamp(-clip, clip)},
             batch_size=[self.num_envs], device=self.device)
 
     def _noise(self, clean: torch.Tensor) -> torch.Tensor:

@@ -152,6 +152,7 @@ class LeggedRobotCfg(BaseConfig):
         nconmax = 24  # contacts per world (contact arrays are shared: naconmax = nconmax * num_envs)
         njmax = 96  # constraint rows per world
         use_cuda_graph = True  # capture the substep loop once on GPU
+        max_qvel = 100.0  # m/s or rad/s; a world moving faster has diverged and is reset (and counted)
 
     class forces(ForcesConfig):
         """Terrain force fields (water, soil, ground friction) where the material map has them.
