@@ -149,10 +149,11 @@ class LeggedRobotCfg(BaseConfig):
         iterations = 10  # Newton usually converges in 2-4; the cap bounds the slowest world
         ls_iterations = 20
         cone = "pyramidal"
-        nconmax = 24  # contacts per world (contact arrays are shared: naconmax = nconmax * num_envs)
-        njmax = 96  # constraint rows per world
+        nconmax = 32  # contacts per world (contact arrays are shared: naconmax = nconmax * num_envs)
+        njmax = 160  # constraint rows per world: 4 per pyramidal condim-3 contact + joint limits; a fallen robot
+        # on rough ground can touch with many bodies at once, and an overflowing world is reset as diverged
         use_cuda_graph = True  # capture the substep loop once on GPU
-        max_qvel = 100.0  # m/s or rad/s; a world moving faster has diverged and is reset (and counted)
+        max_qvel = 1000.0  # m/s or rad/s; a world moving faster has diverged (real ones reach 1e6+) and is reset
 
     class forces(ForcesConfig):
         """Terrain force fields (water, soil, ground friction) where the material map has them.
