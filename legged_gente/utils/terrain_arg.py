@@ -17,10 +17,15 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
     if not path.is_file():
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
     if path.suffix == ".json":
-        env_cfg.terrain.mesh_type = "heightfield"
-        env_cfg.terrain.mode = "generated"
-        env_cfg.terrain.generated_specs = [str(path.resolve())]
-        env_cfg.terrain.curriculum = False
+        from legged_gente.generation.spec import TerrainSpec
+
+        spec = TerrainSpec.load(path)  # validates; the terrain takes the spec's own tile size and resolution
+        terrain = env_cfg.terrain
+        terrain.mesh_type, terrain.mode, terrain.curriculum = "heightfield", "generated", False
+        terrain.generated_specs = [str(path.resolve())]
+        terrain.terrain_length, terrain.terrain_width = float(spec.size_x), float(spec.size_y)
+        terrain.resolution = float(spec.resolution)
+        terrain.num_rows = terrain.num_cols = 1
         return
     if path.suffix == ".py":
         spec = importlib.util.spec_from_file_location(f"gente_terrain_{abs(hash(path.resolve()))}", path)

@@ -1,0 +1,41 @@
+"""--terrain: plane, a generated spec JSON (any tile size), an emitted terrain_cfg.py, and bad input."""
+
+import pytest
+
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
+from legged_gente.generation.emit import emit
+from legged_gente.generation.pipeline import generate_spec
+from legged_gente.terrain.terrain import Terrain
+from legged_gente.utils.terrain_arg import apply_terrain_arg
+
+
+@pytest.fixture(scope="module")
+def emitted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("gen")
+    spec, _ = generate_spec(text="a rocky beach with knee-deep water", image=None, backend="planner", seed=3,
+                            size_x=20.0, size_y=12.0)
+    emit(spec, out)
+    return out
+
+
+def test_spec_json_sets_its_own_tile_size(emitted):
+    cfg = GenteBipedCfg()
+    apply_terrain_arg(str(emitted / "spec.json"), cfg)
+    assert (cfg.terrain.terrain_length, cfg.terrain.terrain_width) == (20.0, 12.0)
+    terrain = Terrain(cfg.terrain, 4)
+    assert terrain.material.has_water().any()
+
+
+def test_emitted_module_replaces_the_terrain_cfg(emitted):
+    cfg = GenteBipedCfg()
+    apply_terrain_arg(str(emitted / "terrain_cfg.py"), cfg)
+    assert cfg.terrain.mode == "generated" and cfg.terrain.num_rows == 1
+    assert Terrain(cfg.terrain, 2).height_field.shape[0] > 200
+
+
+def test_plane_and_bad_input():
+    cfg = GenteBipedCfg()
+    apply_terrain_arg("plane", cfg)
+    assert cfg.terrain.mesh_type == "plane"
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        apply_terrain_arg("missing.json", cfg)
