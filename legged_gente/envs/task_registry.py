@@ -6,6 +6,8 @@ import os
 from datetime import datetime
 from pathlib import Path
 
+import torch
+
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO, rsl_rl_train_cfg
 
 LOG_ROOT = Path(os.environ.get("GENTE_LOG_ROOT", Path(__file__).resolve().parents[2] / "logs"))
@@ -28,12 +30,14 @@ class TaskRegistry:
         """The task's env with ``args`` (argparse namespace from utils.args) applied to its config."""
         from legged_gente.utils.args import apply_args
 
-        env_class = self.tasks[name][0] if name in self.tasks else None
         default_env_cfg, train_cfg = self.get_cfgs(name)
+        env_class = self.tasks[name][0]
         env_cfg = env_cfg or default_env_cfg
         if args is not None:
             apply_args(args, env_cfg, train_cfg)
         device = getattr(args, "device", None) or "cpu"
+        # seed before the env draws anything (spawn yaw, commands, domain randomisation); one seed per rank
+        torch.manual_seed(int(train_cfg.seed) + int(os.environ.get("RANK", "0")))
         env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
         return env, env_cfg
 

@@ -82,7 +82,8 @@ class LeggedRobot(VecEnv):
         from legged_gente.external_forces.field import TerrainForces
 
         forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain.height_field, self.terrain.origin_xy,
-                               self.terrain.resolution, material, self.cfg.forces, seed=int(self.cfg.terrain.seed))
+                               self.terrain.resolution, material, self.cfg.forces,
+                               seed=int(torch.randint(0, 2**31 - 1, ()).item()))  # follows torch's (per-rank) seed
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
         return forces
