@@ -188,11 +188,11 @@ class TerrainForces:
         """Set the mujoco_warp callbacks (contact filter for soil/friction, passive for the forces)."""
         cfg = self.cfg
         if cfg.soil or cfg.friction_from_map:
-            self.m.callback.contactfilter = self._contactfilter
+            self.m.callback.contactfilter = self.contact_filter
         if cfg.wading or cfg.soil:
-            self.m.callback.passive = self._passive
+            self.m.callback.passive = self.passive
 
-    def _contactfilter(self, m, d):
+    def contact_filter(self, m, d):
         dev = self.device
         nf = max(self.nfoot, 1)
         wp.launch(K.foot_untouch_kernel, dim=(self.nworld, nf), device=dev, inputs=[self.foot_touch, self.foot_cand])
@@ -209,7 +209,7 @@ class TerrainForces:
         wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
                   inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil])
 
-    def _passive(self, m, d):
+    def passive(self, m, d):
         cfg, dev = self.cfg, self.device
         d.xfrc_applied.zero_()
         if cfg.wading and self.nseg:

@@ -60,6 +60,31 @@ def raw_physics(env, steps: int, with_forces: bool = False) -> float:
     return steps * env.num_envs / elapsed
 
 
+def force_kernels_per_s(env, steps: int) -> float:
+    """Force-kernel passes/s (all worlds) with no physics around them: the callbacks' and the after-substep
+    kernels launched on the current contacts and state, captured in a graph on GPU."""
+    forces, sim = env.forces, env.sim
+
+    def kernels():
+        forces.contact_filter(sim.m, sim.d)
+        forces.passive(sim.m, sim.d)
+        forces.after_substep()
+
+    with wp.ScopedDevice(sim.wp_device):
+        kernels()
+        graph = None
+        if sim.wp_device.is_cuda:
+            with wp.ScopedCapture() as capture:
+                kernels()
+            graph = capture.graph
+        _sync(env.device)
+        start = time.perf_counter()
+        for _ in range(steps):
+            wp.capture_launch(graph) if graph is not None else kernels()
+        _sync(env.device)
+    return steps * env.num_envs / (time.perf_counter() - start)
+
+
 def env_steps(env, steps: int) -> float:
     actions = torch.zeros(env.num_envs, env.num_actions, device=env.device)
     env.step(actions)
@@ -91,17 +116,18 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int) -
         free_before = torch.cuda.mem_get_info(device)[0] if device.startswith("cuda") else 0
         env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
         raw = raw_physics(env, steps * env.cfg.control.decimation)
-        forces_share = float("nan")
+        forces_share = forces_slowdown = float("nan")
         if env.forces is not None:
             with_forces = raw_physics(env, steps * env.cfg.control.decimation, with_forces=True)
-            forces_share = max(0.0, 1.0 - with_forces / raw)
+            forces_slowdown = max(0.0, 1.0 - with_forces / raw)
+            forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
         stepped = env_steps(env, steps)
         ppo = ppo_steps(env, task, iterations) if iterations > 0 else float("nan")
         ceiling = raw / env.cfg.control.decimation
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
-                     "forces_share": forces_share, "gpu_memory_gib": memory})
+                     "forces_share": forces_share, "forces_slowdown": forces_slowdown, "gpu_memory_gib": memory})
         del env
         if device.startswith("cuda"):
             torch.cuda.empty_cache()
@@ -112,15 +138,16 @@ def print_table(rows: list[dict], device: str) -> None:
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "CPU"
     print(f"\ndevice: {name}")
     header = (f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} "
-              f"{'PPO/raw':>8} {'forces':>7} {'GPU GiB':>8}")
+              f"{'PPO/raw':>8} {'forces':>7} {'forces Δ':>8} {'GPU GiB':>8}")
     print(header)
     print("-" * len(header))
     for r in rows:
         print(f"{r['num_envs']:>9d} {r['raw_substeps_per_s']:>15,.0f} {r['env_steps_per_s']:>12,.0f} "
               f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f} "
-              f"{r['forces_share']:>7.1%} {r['gpu_memory_gib']:>8.2f}")
+              f"{r['forces_share']:>7.1%} {r['forces_slowdown']:>8.1%} {r['gpu_memory_gib']:>8.2f}")
     print("raw: mjw.step substeps/s; raw ceiling in env steps/s = raw / decimation (the ratios' denominator);\n"
-          "forces: share of the substep time spent in the terrain force kernels (nan: terrain has none)")
+          "forces: the terrain force kernels' time as a share of a substep with them (nan: terrain has none);\n"
+          "forces Δ: how much slower the physics substep is with the force fields on (kernels + changed contacts)")
 
 
 def main(argv=None) -> None:
@@ -131,6 +158,7 @@ def main(argv=None) -> None:
     parser.add_argument("--steps", type=int, default=100, help="policy steps timed per measurement")
     parser.add_argument("--iterations", type=int, default=3, help="PPO iterations timed (0 skips PPO)")
     parser.add_argument("--terrain_build", action="store_true", help="also time the terrain grid build")
+    parser.add_argument("--csv", help="also write the table to this CSV file")
     args = parser.parse_args(argv)
     device = args.device or default_device()
     if any(n < 1 for n in args.num_envs):
@@ -139,7 +167,15 @@ def main(argv=None) -> None:
         from legged_gente.terrain.benchmark import benchmark_grid
 
         benchmark_grid()
-    print_table(run(args.task, args.num_envs, device, args.steps, args.iterations), device)
+    rows = run(args.task, args.num_envs, device, args.steps, args.iterations)
+    print_table(rows, device)
+    if args.csv:
+        import csv
+
+        with open(args.csv, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,38 @@
+"""Throughput versus num_envs from gente-benchmark CSVs (one line style per file)."""
+
+import argparse
+import csv
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("png")
+    parser.add_argument("csvs", nargs="+", help="LABEL=PATH")
+    args = parser.parse_args()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for style, item in zip(("-", "--", ":"), args.csvs):
+        label, path = item.split("=", 1)
+        rows = list(csv.DictReader(open(Path(path))))
+        n = [int(r["num_envs"]) for r in rows]
+        for key, colour, name in (("raw_substeps_per_s", "k", "raw / decimation"), ("env_steps_per_s", "tab:blue", "env"),
+                                  ("ppo_steps_per_s", "tab:orange", "PPO")):
+            scale = 0.25 if key == "raw_substeps_per_s" else 1.0  # decimation 4: the raw ceiling in env steps
+            ax.plot(n, [float(r[key]) * scale for r in rows], style, color=colour, marker="o", label=f"{label}: {name}")
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log")
+    ax.set_xlabel("num_envs")
+    ax.set_ylabel("env steps / s")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=90)
+
+
+if __name__ == "__main__":
+    main()
