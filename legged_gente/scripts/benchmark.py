@@ -85,14 +85,22 @@ def force_kernels_per_s(env, steps: int) -> float:
     return steps * env.num_envs / (time.perf_counter() - start)
 
 
-def env_steps(env, steps: int) -> float:
+def env_steps(env, steps: int, check_sync: bool = False) -> float:
+    """Policy steps/s (all worlds) of LeggedRobot.step with random actions. ``check_sync`` (CUDA only): torch
+    raises on any operation that waits for the device inside the timed steps (the env must have none)."""
     actions = torch.zeros(env.num_envs, env.num_actions, device=env.device)
     env.step(actions)
     _sync(env.device)
-    start = time.perf_counter()
-    for _ in range(steps):
-        actions.uniform_(-1.0, 1.0)
-        env.step(actions)
+    if check_sync:
+        torch.cuda.set_sync_debug_mode("error")
+    try:
+        start = time.perf_counter()
+        for _ in range(steps):
+            actions.uniform_(-1.0, 1.0)
+            env.step(actions)
+    finally:
+        if check_sync:
+            torch.cuda.set_sync_debug_mode("default")
     _sync(env.device)
     return steps * env.num_envs / (time.perf_counter() - start)
 
@@ -108,7 +116,7 @@ def ppo_steps(env, task: str, iterations: int) -> float:
     return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / (time.perf_counter() - start)
 
 
-def run(task: str, sizes: list[int], device: str, steps: int, iterations: int) -> list[dict]:
+def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, check_sync: bool = False) -> list[dict]:
     rows = []
     for num_envs in sizes:
         env_cfg, _ = task_registry.get_cfgs(task)
@@ -121,7 +129,7 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int) -
             with_forces = raw_physics(env, steps * env.cfg.control.decimation, with_forces=True)
             forces_slowdown = max(0.0, 1.0 - with_forces / raw)
             forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
-        stepped = env_steps(env, steps)
+        stepped = env_steps(env, steps, check_sync)
         ppo = ppo_steps(env, task, iterations) if iterations > 0 else float("nan")
         ceiling = raw / env.cfg.control.decimation
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
@@ -159,6 +167,8 @@ def main(argv=None) -> None:
     parser.add_argument("--iterations", type=int, default=3, help="PPO iterations timed (0 skips PPO)")
     parser.add_argument("--terrain_build", action="store_true", help="also time the terrain grid build")
     parser.add_argument("--csv", help="also write the table to this CSV file")
+    parser.add_argument("--check_sync", action="store_true",
+                        help="CUDA: fail if LeggedRobot.step waits for the device anywhere (torch sync debug mode)")
     args = parser.parse_args(argv)
     device = args.device or default_device()
     if any(n < 1 for n in args.num_envs):
@@ -167,7 +177,11 @@ def main(argv=None) -> None:
         from legged_gente.terrain.benchmark import benchmark_grid
 
         benchmark_grid()
-    rows = run(args.task, args.num_envs, device, args.steps, args.iterations)
+    if args.check_sync and not device.startswith("cuda"):
+        parser.error("--check_sync needs a CUDA device (--device cuda)")
+    rows = run(args.task, args.num_envs, device, args.steps, args.iterations, args.check_sync)
+    if args.check_sync:
+        print("check_sync: no host-device synchronisation in LeggedRobot.step")
     print_table(rows, device)
     if args.csv:
         import csv
