@@ -109,3 +109,18 @@ def test_figures(tmp_path):
     run = {"pos": np.array([[10.0, 10.0], [12.0, 11.0]]), "waypoints": np.array([[12.0, 11.5]]), "finished": True}
     path = figures.plot_trajectories(np.zeros((200, 200)), 0.1, {0.1: run, 1.0: run}, tmp_path / "c.png")
     assert path.stat().st_size > 0
+
+
+def test_one_evaluation_runs_several_times():
+    """The waypoint figure reruns one Evaluation per reach distance: the second run must start cleanly."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[:1]), 1, "cpu", 0.2, "waypoints")
+
+    def still(obs):
+        return torch.zeros(evaluation.env.num_envs, evaluation.env.num_actions)
+
+    for d in (0.1, 20.0):
+        result = evaluation.run(still, evaluation.make_task(reach_distance=d), progress=False)
+        assert result.traces["pos"].shape[1] == round(0.2 / 0.02)

@@ -185,12 +185,13 @@ class Evaluation:
         task = task or self.make_task()
         env.eval_task, env.eval_recorder = task, None
         torch.manual_seed(self.seed)
-        obs = env.reset()  # every robot to its tile's spawn, commands from the task
         first = torch.arange(0, env.num_envs, self.robots_per_terrain, device=env.device)
-        recorder = Recorder(env, settle_s, first)
-        env.eval_recorder = recorder
         try:
+            # the reset too: buffers made inside an earlier run are inference tensors
             with torch.inference_mode():
+                obs = env.reset()  # every robot to its tile's spawn, commands from the task
+                recorder = Recorder(env, settle_s, first)
+                env.eval_recorder = recorder
                 for _ in tqdm(range(env.max_episode_length), desc=f"{self.mode} rollout", disable=not progress,
                               unit="step"):
                     obs, _, _, _ = env.step(policy(obs))
