@@ -25,9 +25,27 @@ def _sync(device: str) -> None:
         wp.synchronize()
 
 
+def _timed_calls(env, fn, steps: int) -> float:
+    """Calls/s of ``fn``: captured once into a CUDA graph and replayed on GPU, called directly on the CPU."""
+    sim = env.sim
+    with wp.ScopedDevice(sim.wp_device):
+        fn()  # loads every kernel module before capture or timing
+        graph = None
+        if sim.wp_device.is_cuda:
+            with wp.ScopedCapture() as capture:
+                fn()
+            graph = capture.graph
+        _sync(env.device)
+        start = time.perf_counter()
+        for _ in range(steps):
+            wp.capture_launch(graph) if graph is not None else fn()
+        _sync(env.device)
+    return steps / (time.perf_counter() - start)
+
+
 def raw_physics(env, steps: int, with_forces: bool = False) -> float:
-    """Substeps/s (all worlds) of mjw.step on the env's model and data, captured in a graph on GPU; no env
-    logic. ``with_forces`` keeps the terrain force callbacks and their after-substep kernel in the loop."""
+    """Substeps/s (all worlds) of mjw.step on the env's model and data; no env logic. ``with_forces`` keeps the
+    terrain force callbacks and their after-substep kernel in the loop."""
     import mujoco_warp as mjw
 
     sim = env.sim
@@ -41,28 +59,15 @@ def raw_physics(env, steps: int, with_forces: bool = False) -> float:
         for hook in hooks:
             hook()
 
-    with wp.ScopedDevice(sim.wp_device):
-        try:
-            substep()
-            graph = None
-            if sim.wp_device.is_cuda:
-                with wp.ScopedCapture() as capture:
-                    substep()
-                graph = capture.graph
-            _sync(env.device)
-            start = time.perf_counter()
-            for _ in range(steps):
-                wp.capture_launch(graph) if graph is not None else substep()
-            _sync(env.device)
-            elapsed = time.perf_counter() - start
-        finally:
-            sim.m.callback.passive, sim.m.callback.contactfilter = callbacks
-    return steps * env.num_envs / elapsed
+    try:
+        return _timed_calls(env, substep, steps) * env.num_envs
+    finally:
+        sim.m.callback.passive, sim.m.callback.contactfilter = callbacks
 
 
 def force_kernels_per_s(env, steps: int) -> float:
     """Force-kernel passes/s (all worlds) with no physics around them: the callbacks' and the after-substep
-    kernels launched on the current contacts and state, captured in a graph on GPU."""
+    kernels launched on the current contacts and state."""
     forces, sim = env.forces, env.sim
 
     def kernels():
@@ -70,19 +75,7 @@ def force_kernels_per_s(env, steps: int) -> float:
         forces.passive(sim.m, sim.d)
         forces.after_substep()
 
-    with wp.ScopedDevice(sim.wp_device):
-        kernels()
-        graph = None
-        if sim.wp_device.is_cuda:
-            with wp.ScopedCapture() as capture:
-                kernels()
-            graph = capture.graph
-        _sync(env.device)
-        start = time.perf_counter()
-        for _ in range(steps):
-            wp.capture_launch(graph) if graph is not None else kernels()
-        _sync(env.device)
-    return steps * env.num_envs / (time.perf_counter() - start)
+    return _timed_calls(env, kernels, steps) * env.num_envs
 
 
 def env_steps(env, steps: int, check_sync: bool = False) -> float:
