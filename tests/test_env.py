@@ -133,3 +133,20 @@ def test_task_registry_knows_the_biped():
     assert env_cfg.asset.file.endswith("gente_biped.xml")
     with pytest.raises(KeyError, match="registered tasks"):
         task_registry.get_cfgs("no_such_task")
+
+
+def test_episode_statistics_are_per_finished_episode_means():
+    cfg = small_cfg()
+    cfg.domain_rand.push_robots = False
+    env = GenteBiped(cfg, device="cpu")
+    env._log_every = 1
+    for _ in range(5):
+        _, _, done, extras = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+        assert not done.any()
+        assert extras["episode"]["rew_alive"] == 0.0  # no episode ended yet
+    env.episode_length_buf[:2] = env.max_episode_length - 1  # robots 0 and 1 time out on the next step
+    _, _, done, extras = env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    assert done[:2].all() and not done[2:].any()
+    alive_per_step = cfg.rewards.scales.alive * env.dt
+    assert extras["episode"]["rew_alive"].item() == pytest.approx(6 * alive_per_step / env.max_episode_length_s)
+    assert extras["episode"]["terrain_level"].item() == 0.0

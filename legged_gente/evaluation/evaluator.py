@@ -54,9 +54,8 @@ def _eval_env_class(base: type) -> type:
         def _resample_commands(self, mask):
             if self.eval_task is None:
                 return super()._resample_commands(mask)
-            # robots being reset stand at their spawn once this returns: steer from there
-            spawn = self.env_origins[:, :2] + self.init_base_state[:2]
-            new = self.eval_task.commands(torch.where(mask[:, None], spawn, self.base_pos[:, :2]), self.commands)
+            # called after the masked reset: robots just reset already stand at their spawn
+            new = self.eval_task.commands(self.base_pos[:, :2], self.commands)
             self.commands = torch.where(mask[:, None], new, self.commands)
 
         def _check_termination(self, nonfinite):

@@ -133,7 +133,7 @@ class LeggedRobot(VecEnv):
             self.height_samples = torch.as_tensor(self.terrain.height_field, dtype=torch.float32, device=dev)
             self.terrain_origin_xy = torch.tensor(self.terrain.origin_xy, dtype=torch.float32, device=dev)
         # episode statistics, reduced on device and reported once per rollout (no per-step host sync)
-        self._stat_sums: dict[str, torch.Tensor] = {}
+        self._stat_level_sum = 0.0
         self._stat_count = torch.zeros((), device=dev)
         self.diverged_resets = torch.zeros((), device=dev)
         self._update_state()
@@ -148,7 +148,10 @@ class LeggedRobot(VecEnv):
         return torch.stack([gx.flatten(), gy.flatten(), torch.zeros_like(gx.flatten())], dim=1)
 
     def _prepare_reward_function(self) -> None:
-        """Every non-zero scale needs a ``_reward_<name>`` method; scales are multiplied by the policy dt."""
+        """Every non-zero scale needs a ``_reward_<name>`` method; scales are multiplied by the policy dt.
+
+        The terms are evaluated into one (num_envs, n_terms) tensor so that scaling, summing and the episode
+        bookkeeping are a handful of batched operations, whatever the number of terms."""
         self.reward_scales: dict[str, float] = {}
         self.reward_functions = []
         for name in sorted(n for n in dir(self.cfg.rewards.scales) if not n.startswith("_")):
@@ -161,7 +164,12 @@ class LeggedRobot(VecEnv):
                                      f"_reward_{name} method; implement it or set the scale to 0.")
             self.reward_scales[name] = scale * self.dt
             self.reward_functions.append((name, method))
-        self.episode_sums = {name: torch.zeros(self.num_envs, device=self.device) for name in self.reward_scales}
+        names = [name for name, _ in self.reward_functions]
+        self._reward_scale_vec = torch.tensor([self.reward_scales[n] for n in names], device=self.device)
+        # termination is added after the only-positive clip, so that dying always costs something
+        self._clipped_terms = torch.tensor([n != "termination" for n in names], device=self.device)
+        self.episode_sums = torch.zeros(self.num_envs, len(names), device=self.device)
+        self._stat_reward_sums = torch.zeros(len(names), device=self.device)
 
     def _init_origins(self) -> None:
         n, dev = self.num_envs, self.device
@@ -208,6 +216,7 @@ class LeggedRobot(VecEnv):
     def reset(self) -> TensorDict:
         all_envs = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
         self._reset_envs(all_envs)
+        self._resample_commands(all_envs)
         self._update_state()
         self._compute_observations()
         return self.obs_buf
@@ -233,7 +242,9 @@ class LeggedRobot(VecEnv):
         self._compute_reward()
         self._log_and_update_curriculum(self.reset_buf)
         self._reset_envs(self.reset_buf)
-        self._resample_commands((self.episode_length_buf % self._resample_steps == 0) & ~self.reset_buf)
+        # new commands for the robots just reset and for those whose resampling time came (episode length 0
+        # after a reset, so both are caught by the same test)
+        self._resample_commands(self.episode_length_buf % self._resample_steps == 0)
         if self.cfg.domain_rand.push_robots and self.common_step_counter % self._push_steps == 0:
             self._push_robots()
         self._update_state()
@@ -289,30 +300,24 @@ class LeggedRobot(VecEnv):
         self.reset_buf |= self.time_out_buf
 
     def _compute_reward(self) -> None:
-        self.rew_buf.zero_()
-        for name, fn in self.reward_functions:
-            if name == "termination":
-                continue
-            term = torch.nan_to_num(fn(), nan=0.0, posinf=0.0, neginf=0.0) * self.reward_scales[name]
-            self.rew_buf += term
-            self.episode_sums[name] += term
+        if not self.reward_functions:
+            self.rew_buf.zero_()
+            return
+        terms = torch.stack([fn() for _, fn in self.reward_functions], dim=1)
+        terms = torch.nan_to_num(terms, nan=0.0, posinf=0.0, neginf=0.0) * self._reward_scale_vec
+        self.rew_buf = torch.where(self._clipped_terms, terms, 0.0).sum(dim=1)
         if self.cfg.rewards.only_positive_rewards:
             self.rew_buf.clamp_(min=0.0)
-        if "termination" in self.reward_scales:
-            term = self._reward_termination() * self.reward_scales["termination"]
-            self.rew_buf += term
-            self.episode_sums["termination"] += term
+        self.rew_buf += torch.where(self._clipped_terms, 0.0, terms).sum(dim=1)
+        self.episode_sums += terms
 
     def _log_and_update_curriculum(self, done: torch.Tensor) -> None:
         """Accumulate finished episodes' statistics on device, then move finished robots' terrain levels."""
         mask = done.float()
-        for name, sums in self.episode_sums.items():
-            key = f"rew_{name}"
-            self._stat_sums[key] = self._stat_sums.get(key, 0.0) + (sums * mask).sum() / self.max_episode_length_s
+        self._stat_reward_sums += mask @ self.episode_sums / self.max_episode_length_s
         if self.terrain is not None and self.cfg.terrain.curriculum and self.cfg.terrain.mode == "curriculum":
             self._update_terrain_curriculum(done)
-        self._stat_sums["terrain_level"] = self._stat_sums.get("terrain_level", 0.0) + \
-            (self.terrain_levels.float() * mask).sum()
+        self._stat_level_sum = getattr(self, "_stat_level_sum", 0.0) + self.terrain_levels.float() @ mask
         self._stat_count += mask.sum()
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
@@ -330,10 +335,14 @@ class LeggedRobot(VecEnv):
                                        self.env_origins)
 
     def _episode_statistics(self) -> dict[str, torch.Tensor]:
+        """Means over the episodes that ended since the last report (once per rollout, still on device)."""
         count = self._stat_count.clamp(min=1.0)
-        stats = {key: value / count for key, value in self._stat_sums.items()}
+        rewards = self._stat_reward_sums / count
+        stats = {f"rew_{name}": rewards[i] for i, (name, _) in enumerate(self.reward_functions)}
+        stats["terrain_level"] = self._stat_level_sum / count
         stats["diverged_resets"] = self.diverged_resets.clone()
-        self._stat_sums = {}
+        self._stat_reward_sums = torch.zeros_like(self._stat_reward_sums)
+        self._stat_level_sum = 0.0
         self._stat_count = torch.zeros((), device=self.device)
         return stats
 
@@ -362,14 +371,12 @@ class LeggedRobot(VecEnv):
         self.sim.time[:] = torch.where(mask, torch.zeros_like(self.sim.time), self.sim.time)
         self.sim.body_contact_force[:] = torch.where(m[..., None], torch.zeros_like(self.sim.body_contact_force),
                                                      self.sim.body_contact_force)
-        self._resample_commands(mask)
         for buf in (self.actions, self.last_actions, self.last_dof_vel, self.feet_air_time):
             buf[:] = torch.where(m, torch.zeros_like(buf), buf)
         self.last_contacts &= ~m
         self.episode_length_buf[:] = torch.where(mask, torch.zeros_like(self.episode_length_buf),
                                                  self.episode_length_buf)
-        for sums in self.episode_sums.values():
-            sums[:] = torch.where(mask, torch.zeros_like(sums), sums)
+        self.episode_sums = torch.where(m, 0.0, self.episode_sums)
         if self.forces is not None:
             self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
 
