@@ -71,7 +71,7 @@ class Simulation:
     def _make_views(self) -> None:
         t = wp.to_torch
         d, m = self.d, self.m
-        self.qpos, self.qvel, self.qacc, self.ctrl = t(d.qpos), t(d.qvel), t(d.qacc), t(d.ctrl)
+        self.qpos, self.qvel, self.ctrl = t(d.qpos), t(d.qvel), t(d.ctrl)
         self.xpos, self.xquat, self.cvel = t(d.xpos), t(d.xquat), t(d.cvel)
         self.subtree_com, self.actuator_force = t(d.subtree_com), t(d.actuator_force)
         self.nefc, self.time = t(d.nefc), t(d.time)

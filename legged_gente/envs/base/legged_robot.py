@@ -259,11 +259,11 @@ class LeggedRobot(VecEnv):
     def _sanitize_diverged(self) -> torch.Tensor:
         """Diverged worlds: state non-finite or absurdly fast, or constraint rows overflowed. Zero them and flag
         them for reset, so that one exploding world never reaches the observation normalisers or the logs."""
-        bad = ~(torch.isfinite(self.sim.qpos).all(1) & torch.isfinite(self.sim.qvel).all(1))
-        bad |= self.sim.qvel.abs().amax(1) > self.cfg.sim.max_qvel
+        # "not <=" is also true for NaN, which amax propagates
+        bad = ~(self.sim.qvel.abs().amax(1) <= self.cfg.sim.max_qvel) | ~torch.isfinite(self.sim.qpos).all(1)
         bad |= self.sim.nefc >= self.cfg.sim.njmax
-        self.sim.qpos[:] = torch.where(bad[:, None], torch.zeros_like(self.sim.qpos), self.sim.qpos)
-        self.sim.qvel[:] = torch.where(bad[:, None], torch.zeros_like(self.sim.qvel), self.sim.qvel)
+        self.sim.qpos[:] = torch.where(bad[:, None], 0.0, self.sim.qpos)
+        self.sim.qvel[:] = torch.where(bad[:, None], 0.0, self.sim.qvel)
         self.diverged_resets += bad.sum()
         return bad
 
@@ -364,18 +364,15 @@ class LeggedRobot(VecEnv):
         new_qpos[:, self.qpos_adr] = dof_pos
         new_qvel = torch.zeros_like(qvel)
         new_qvel[:, 0:2] = rand_uniform(-0.5, 0.5, (n, 2), dev)
+        # (ctrl needs no reset: the next step writes it before the physics runs)
         qpos[:] = torch.where(m, new_qpos, qpos)
         qvel[:] = torch.where(m, new_qvel, qvel)
-        self.sim.ctrl[:] = torch.where(m, self.default_dof_pos + torch.zeros_like(self.sim.ctrl), self.sim.ctrl)
-        self.sim.qacc[:] = torch.where(m, torch.zeros_like(self.sim.qacc), self.sim.qacc)
-        self.sim.time[:] = torch.where(mask, torch.zeros_like(self.sim.time), self.sim.time)
-        self.sim.body_contact_force[:] = torch.where(m[..., None], torch.zeros_like(self.sim.body_contact_force),
-                                                     self.sim.body_contact_force)
+        self.sim.time[:] = torch.where(mask, 0.0, self.sim.time)
+        self.sim.body_contact_force[:] = torch.where(m[..., None], 0.0, self.sim.body_contact_force)
         for buf in (self.actions, self.last_actions, self.last_dof_vel, self.feet_air_time):
-            buf[:] = torch.where(m, torch.zeros_like(buf), buf)
+            buf[:] = torch.where(m, 0.0, buf)
         self.last_contacts &= ~m
-        self.episode_length_buf[:] = torch.where(mask, torch.zeros_like(self.episode_length_buf),
-                                                 self.episode_length_buf)
+        self.episode_length_buf[:] = torch.where(mask, 0, self.episode_length_buf)
         self.episode_sums = torch.where(m, 0.0, self.episode_sums)
         if self.forces is not None:
             self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
