@@ -84,12 +84,14 @@ class TerrainForces:
             return wp.array(np.ascontiguousarray(x), dtype=dtype, device=dev)
 
         self.heights = arr(heights, float)
-        self.water_surface = arr(material.water_surface.astype(np.float32), float)
-        self.flow_kind = arr(material.flow_kind.astype(np.int32), int)
-        self.flow_speed = arr(material.flow_speed.astype(np.float32), float)
-        self.flow_dir = arr(material.flow_direction.astype(np.float32), float)
-        self.flow_omega = arr(material.flow_omega.astype(np.float32), float)
-        self.flow_phase = arr(material.flow_phase.astype(np.float32), float)
+        self.water = K.WaterMap()
+        self.water.origin, self.water.resolution = self.origin, self.resolution
+        self.water.surface = arr(material.water_surface.astype(np.float32), float)
+        self.water.flow_kind = arr(material.flow_kind.astype(np.int32), int)
+        self.water.flow_speed = arr(material.flow_speed.astype(np.float32), float)
+        self.water.flow_dir = arr(material.flow_direction.astype(np.float32), float)
+        self.water.flow_omega = arr(material.flow_omega.astype(np.float32), float)
+        self.water.flow_phase = arr(material.flow_phase.astype(np.float32), float)
         self.soil = arr(material.soil.astype(np.int32), int)
         self.friction = arr(material.friction.astype(np.float32), float)
         if material.has_soil().any() and int(material.soil.max()) >= len(material.soil_presets):
@@ -217,8 +219,7 @@ class TerrainForces:
                 K.wading_kernel, dim=(self.nworld, self.nseg), device=dev,
                 inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, m.body_rootid,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time,
-                        self.origin, self.resolution, self.water_surface, self.flow_kind, self.flow_speed,
-                        self.flow_dir, self.flow_omega, self.flow_phase,
+                        self.water,
                         float(cfg.water_density), float(cfg.drag_coefficient), float(cfg.added_mass_coefficient),
                         self.g, self.dt, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
@@ -250,8 +251,7 @@ class TerrainForces:
             K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev,
             inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
                     self.foot_geom, d.geom_xpos, self.heights,
-                    self.origin, self.resolution, d.time, self.water_surface, self.flow_kind, self.flow_speed,
-                    self.flow_dir, self.flow_omega, self.flow_phase, self.xi, self.soil_params, self.foot_fn,
+                    d.time, self.water, self.xi, self.soil_params, self.foot_fn,
                     self.foot_vel, self.foot_sinkage, self.foot_soil, self.foot_slip, self.foot_load, self.obs],
         )
 

@@ -133,6 +133,34 @@ def flow_velocity(
     return wp.vec3(u * wp.cos(direction), u * wp.sin(direction), 0.0)
 
 
+@wp.struct
+class WaterMap:
+    """The water layer of the MaterialMap on the device, with the grid's placement (one kernel argument)."""
+
+    origin: wp.vec2
+    resolution: float
+    surface: wp.array2d[float]
+    flow_kind: wp.array2d[int]
+    flow_speed: wp.array2d[float]
+    flow_dir: wp.array2d[float]
+    flow_omega: wp.array2d[float]
+    flow_phase: wp.array2d[float]
+
+
+@wp.func
+def water_cell(water: WaterMap, p: wp.vec3) -> wp.vec2i:
+    return cell_of(p, water.origin, water.resolution, water.surface.shape[0], water.surface.shape[1])
+
+
+@wp.func
+def water_flow(water: WaterMap, cell: wp.vec2i, t: float, xi: float) -> wp.vec3:
+    """Flow velocity in the cell at time t, times the per-step flow noise xi."""
+    i = cell[0]
+    j = cell[1]
+    return flow_velocity(water.flow_kind[i, j], t, water.flow_speed[i, j], water.flow_dir[i, j],
+                         water.flow_omega[i, j], water.flow_phase[i, j], xi)
+
+
 # --------------------------------------------------------------------------------------------------------
 # Noise and per-episode draws
 
@@ -204,15 +232,7 @@ def wading_kernel(
     cvel: wp.array2d[wp.spatial_vector],
     subtree_com: wp.array2d[wp.vec3],
     time: wp.array[float],
-    # material map
-    origin: wp.vec2,
-    resolution: float,
-    water_surface: wp.array2d[float],
-    flow_kind: wp.array2d[int],
-    flow_speed: wp.array2d[float],
-    flow_dir: wp.array2d[float],
-    flow_omega: wp.array2d[float],
-    flow_phase: wp.array2d[float],
+    water: WaterMap,
     # parameters
     rho: float,
     cd: float,
@@ -252,8 +272,8 @@ def wading_kernel(
     if pa[2] > pb[2]:
         lo = pb
         hi = pa
-    cell = cell_of(c, origin, resolution, water_surface.shape[0], water_surface.shape[1])
-    zw = water_surface[cell[0], cell[1]]
+    cell = water_cell(water, c)
+    zw = water.surface[cell[0], cell[1]]
     length = 2.0 * half
     frac = float(1.0)
     if hi[2] > zw:
@@ -269,12 +289,12 @@ def wading_kernel(
         return
     centroid = lo + 0.5 * frac * (hi - lo)  # centre of buoyancy of the submerged part
     t = time[w]
-    kind = flow_kind[cell[0], cell[1]]
-    amp = flow_speed[cell[0], cell[1]]
-    fdir = flow_dir[cell[0], cell[1]]
-    om = flow_omega[cell[0], cell[1]]
-    ph = flow_phase[cell[0], cell[1]]
-    u = flow_velocity(kind, t, amp, fdir, om, ph, xi[w])
+    kind = water.flow_kind[cell[0], cell[1]]
+    amp = water.flow_speed[cell[0], cell[1]]
+    fdir = water.flow_dir[cell[0], cell[1]]
+    om = water.flow_omega[cell[0], cell[1]]
+    ph = water.flow_phase[cell[0], cell[1]]
+    u = water_flow(water, cell, t, xi[w])
     v = point_velocity(cvel, subtree_com, body_rootid, w, b, centroid)
     vrel = v - u
     if vertical_drag == 0:
@@ -500,15 +520,8 @@ def foot_state_kernel(
     foot_geom: wp.array[int],
     geom_xpos: wp.array2d[wp.vec3],
     heights: wp.array2d[float],
-    origin: wp.vec2,
-    resolution: float,
     time: wp.array[float],
-    water_surface: wp.array2d[float],
-    flow_kind: wp.array2d[int],
-    flow_speed: wp.array2d[float],
-    flow_dir: wp.array2d[float],
-    flow_omega: wp.array2d[float],
-    flow_phase: wp.array2d[float],
+    water: WaterMap,
     xi: wp.array[float],
     soil_params: wp.array3d[float],
     foot_fn: wp.array2d[float],
@@ -531,12 +544,9 @@ def foot_state_kernel(
     else:
         foot_slip[w, f] = wp.vec3(0.0)
     p = geom_xpos[w, foot_geom[f]]
-    cell = cell_of(p, origin, resolution, heights.shape[0], heights.shape[1])
-    ci = cell[0]
-    cj = cell[1]
-    depth = wp.max(water_surface[ci, cj] - heights[ci, cj], 0.0)
-    u = flow_velocity(flow_kind[ci, cj], time[w], flow_speed[ci, cj], flow_dir[ci, cj], flow_omega[ci, cj],
-                      flow_phase[ci, cj], xi[w])
+    cell = water_cell(water, p)  # heights and the water layer share the grid
+    depth = wp.max(water.surface[cell[0], cell[1]] - heights[cell[0], cell[1]], 0.0)
+    u = water_flow(water, cell, time[w], xi[w])
     o = f * OBS_PER_FOOT
     obs[w, o + 0] = depth
     obs[w, o + 1] = u[0]
