@@ -150,3 +150,25 @@ def test_episode_statistics_are_per_finished_episode_means():
     alive_per_step = cfg.rewards.scales.alive * env.dt
     assert extras["episode"]["rew_alive"].item() == pytest.approx(6 * alive_per_step / env.max_episode_length_s)
     assert extras["episode"]["terrain_level"].item() == 0.0
+
+
+def test_domain_randomisation_writes_per_world_model_fields():
+    cfg = small_cfg()
+    cfg.domain_rand.randomize_friction = True
+    cfg.domain_rand.friction_range = [0.3, 0.4]
+    cfg.domain_rand.randomize_base_mass = True
+    cfg.domain_rand.added_mass_range = [1.0, 2.0]
+    env = GenteBiped(cfg, device="cpu")
+    friction = env.sim.geom_friction[:, :, 0]
+    assert ((friction >= 0.3) & (friction <= 0.4)).all()
+    assert torch.equal(friction[:, 0:1].expand_as(friction), friction)  # one coefficient per world
+    assert len(set(friction[:, 0].tolist())) == NUM_ENVS
+    mass0 = float(env.mjm.body_mass[env.base])
+    added = env.sim.body_mass[:, env.base] - mass0
+    assert torch.allclose(added, env.added_base_mass[:, 0], atol=1e-5)
+    assert ((added >= 1.0) & (added <= 2.0)).all()
+    ratio = env.sim.body_inertia[:, env.base] / torch.as_tensor(env.mjm.body_inertia[env.base], dtype=torch.float32)
+    assert torch.allclose(ratio, (env.sim.body_mass[:, env.base] / mass0)[:, None].expand_as(ratio), rtol=1e-5)
+    # the critic sees the randomised values
+    critic = env.get_observations()["critic"]
+    assert torch.allclose(critic[:, 44:46], torch.cat([env.friction_coeffs, env.added_base_mass], dim=1))
