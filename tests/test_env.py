@@ -172,3 +172,23 @@ def test_domain_randomisation_writes_per_world_model_fields():
     # the critic sees the randomised values
     critic = env.get_observations()["critic"]
     assert torch.allclose(critic[:, 44:46], torch.cat([env.friction_coeffs, env.added_base_mass], dim=1))
+
+
+def test_heading_commands_turn_towards_the_heading(env):
+    from legged_gente.utils.torch_math import yaw_of
+
+    yaw = yaw_of(env.base_quat)
+    env.commands[:, 3] = yaw + torch.tensor([0.5, -0.5, 3.0, 0.0])
+    env._compute_observations()
+    stiffness, (low, high) = env.cfg.commands.heading_stiffness, env.cfg.commands.ranges.ang_vel_yaw
+    expected = torch.tensor([0.5, -0.5, 3.0, 0.0]) * stiffness
+    assert torch.allclose(env.commands[:, 2], expected.clamp(low, high), atol=1e-5)
+
+
+def test_pushes_change_base_velocity_only_in_the_plane(env):
+    before = env.sim.qvel.clone()
+    env._push_robots()
+    delta = env.sim.qvel - before
+    assert (delta[:, :2].abs() > 0).any(dim=1).all()
+    assert delta[:, :2].abs().max() <= env.cfg.domain_rand.max_push_vel_xy
+    assert torch.equal(delta[:, 2:], torch.zeros_like(delta[:, 2:]))
