@@ -397,6 +397,15 @@ PILLAR_PARAMS = {
 }
 
 
+def _scatter(rng, max_density: float, shape, resolution: float, min_radius: float, max_radius: float):
+    """Centres (m) and radii of as many round obstacles as the highest density allows; callers keep the first n,
+    so a denser terrain is a superset of a sparser one with the same seed."""
+    n_max = _count(max_density, shape, resolution)
+    centres = rng.uniform(0.0, 1.0, (n_max, 2)) * np.array(shape) * resolution
+    radii = min_radius + (max_radius - min_radius) * rng.uniform(0.0, 1.0, n_max)
+    return n_max, centres, radii
+
+
 def _discs(shape, resolution, centres, radii, heights) -> np.ndarray:
     """Heights of vertical cylinders (the max where they overlap), each written in its own window."""
     h = np.zeros(shape, F32)
@@ -421,10 +430,7 @@ def _discs(shape, resolution, centres, radii, heights) -> np.ndarray:
 )
 def pillars(shape, resolution, rng, height, min_radius, max_radius, density, platform):
     _min_le_max("pillars", "min_radius", min_radius, "max_radius", max_radius)
-    # Draw as many pillars as the highest density allows and keep the first n: denser is a superset.
-    n_max = _count(PILLAR_PARAMS["density"].high, shape, resolution)
-    centres = rng.uniform(0.0, 1.0, (n_max, 2)) * np.array(shape) * resolution
-    radii = min_radius + (max_radius - min_radius) * rng.uniform(0.0, 1.0, n_max)
+    n_max, centres, radii = _scatter(rng, PILLAR_PARAMS["density"].high, shape, resolution, min_radius, max_radius)
     n = _count(density, shape, resolution)
     h = _discs(shape, resolution, centres[:n], radii[:n], np.full(n, height))
     return _clear_centre(h, resolution, platform)
@@ -449,9 +455,7 @@ ROCK_PARAMS = {
 )
 def rocks(shape, resolution, rng, max_height, min_radius, max_radius, density, platform):
     _min_le_max("rocks", "min_radius", min_radius, "max_radius", max_radius)
-    n_max = _count(ROCK_PARAMS["density"].high, shape, resolution)
-    centres = rng.uniform(0.0, 1.0, (n_max, 2)) * np.array(shape) * resolution
-    radii = min_radius + (max_radius - min_radius) * rng.uniform(0.0, 1.0, n_max)
+    n_max, centres, radii = _scatter(rng, ROCK_PARAMS["density"].high, shape, resolution, min_radius, max_radius)
     tops = max_height * rng.uniform(0.3, 1.0, n_max)
     n = _count(density, shape, resolution)
     h = np.zeros(shape, F32)
