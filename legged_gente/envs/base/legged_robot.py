@@ -317,7 +317,7 @@ class LeggedRobot(VecEnv):
         self._stat_reward_sums += mask @ self.episode_sums / self.max_episode_length_s
         if self.terrain is not None and self.cfg.terrain.curriculum and self.cfg.terrain.mode == "curriculum":
             self._update_terrain_curriculum(done)
-        self._stat_level_sum = getattr(self, "_stat_level_sum", 0.0) + self.terrain_levels.float() @ mask
+        self._stat_level_sum = self._stat_level_sum + self.terrain_levels.float() @ mask
         self._stat_count += mask.sum()
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
