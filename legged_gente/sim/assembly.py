@@ -80,10 +80,10 @@ def _body_names(spec_model: mujoco.MjModel) -> list[str]:
 def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     """Compile robot + terrain into one MjModel and resolve the robot's names into indices."""
     spec = mujoco.MjSpec.from_file(str(resolve_path(cfg.asset.file)))
+    robot = spec.copy().compile()  # the robot as its file has it, before any edit
+    _check_robot(robot, cfg)
     _configure_options(spec, cfg.sim)
     _add_terrain(spec, cfg.terrain, terrain)
-    robot = mujoco.MjSpec.from_file(str(resolve_path(cfg.asset.file))).compile()  # names before edits
-    _check_robot(robot, cfg)
     bodies = _body_names(robot)
     collide = match_names(cfg.asset.penalize_contacts_on + cfg.asset.terminate_after_contacts_on, bodies, "body") if (
         cfg.asset.penalize_contacts_on or cfg.asset.terminate_after_contacts_on) else []
