@@ -207,9 +207,10 @@ def test_sinkage_grows_with_load_as_bekker_in_sim():
     # the rut keeps the deepest sinkage of the stance: the landing transient may add a little (plastic soil)
     assert np.all(z >= 0.995 * z_ref) and np.all(z <= 1.15 * z_ref), (z, z_ref)
     assert np.all(z[:, 1] > z[:, 0]) and np.all(z[:, 0] > 0.003)  # the heavier foot sinks deeper
-    # the foot really sits lower than on rigid ground by the sinkage
+    # the foot really sits lower than on rigid ground by the sinkage, shown down to max_rut_depth only
+    assert z.max() > SoilCfg.max_rut_depth > z.min()  # both cases occur
     lowered = d_rigid.qpos.numpy() - d.qpos.numpy()
-    np.testing.assert_allclose(lowered, z, rtol=0.05)
+    np.testing.assert_allclose(lowered, np.minimum(z, SoilCfg.max_rut_depth), rtol=0.05)
     obs = f.privileged_obs().numpy().reshape(2, 2, -1)
     assert np.all(obs[..., 3] == 1.0) and np.allclose(obs[..., 4], z)
 

@@ -92,7 +92,7 @@ def test_forces_resolve_against_the_quadruped_geoms():
     seg = forces.seg_geom.numpy()
     assert [mjm.geom(int(g)).name for g in seg] == cfg.forces.leg_geom_names
     assert forces.seg_radius.numpy() == pytest.approx([0.025, 0.02] * 4)
-    assert [mjm.geom(int(g)).name for g in forces.foot_geom.numpy()] == cfg.forces.foot_geom_names
+    assert [mjm.body(int(b)).name for b in forces.foot_body.numpy()] == [f"{leg}_foot" for leg in ("FL", "FR", "RL", "RR")]
     assert (forces.sole_length, forces.sole_width) == pytest.approx((0.04, 0.04))
     for _ in range(10):
         obs, rew, _, _ = env.step(0.5 * torch.randn(NUM_ENVS, env.num_actions))
@@ -100,5 +100,5 @@ def test_forces_resolve_against_the_quadruped_geoms():
     assert env.diverged_resets.item() == 0
     # the terrain forces push on the legs: some leg or foot body carries a non-zero external force
     xfrc = env.sim.d.xfrc_applied.numpy()
-    bodies = np.unique(np.concatenate([forces.seg_body.numpy(), mjm.geom_bodyid[forces.foot_geom.numpy()]]))
+    bodies = np.unique(np.concatenate([forces.seg_body.numpy(), forces.foot_body.numpy()]))
     assert np.abs(xfrc[:, bodies]).max() > 0.0

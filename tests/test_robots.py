@@ -20,6 +20,7 @@ class RobotExpectation:
     base_height_range: tuple[float, float]
     joints: tuple[str, ...]
     feet: tuple[str, ...]
+    foot_colliders: tuple[str, ...]  # the only geoms that collide
     segment_geoms: tuple[str, ...]
     segment_radius_range: tuple[float, float]
 
@@ -33,6 +34,7 @@ BIPED = RobotExpectation(
     base_height_range=(0.9, 1.0),
     joints=tuple(f"{s}_{j}" for s in SIDES for j in ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle")),
     feet=tuple(f"{s}_foot" for s in SIDES),
+    foot_colliders=tuple(f"{s}_sole_{c}" for s in SIDES for c in ("toe_l", "toe_r", "heel_l", "heel_r")),
     segment_geoms=tuple(f"{s}_{seg}_geom" for s in SIDES for seg in ("thigh", "shank")),
     segment_radius_range=(0.05, 0.05),  # the water model assumes exactly 0.05 m
 )
@@ -43,6 +45,7 @@ QUADRUPED = RobotExpectation(
     base_height_range=(0.27, 0.33),
     joints=tuple(f"{leg}_{j}" for leg in LEGS for j in ("hip", "thigh", "calf")),
     feet=tuple(f"{leg}_foot" for leg in LEGS),
+    foot_colliders=tuple(f"{leg}_foot_geom" for leg in LEGS),
     segment_geoms=tuple(f"{leg}_{seg}_geom" for leg in LEGS for seg in ("thigh", "calf")),
     segment_radius_range=(0.02, 0.025),
 )
@@ -150,6 +153,24 @@ def test_biped_foot_sole_size():
         assert 0.015 <= half[2] <= 0.04
 
 
+def test_biped_sole_spheres_sit_at_the_corners_of_the_sole_box():
+    """The foot touches the ground through 4 spheres (heightfield-safe, docs/robots.md); together they span
+    the visual sole box, and their bottoms are the sole."""
+    model = _model(BIPED)
+    for side in SIDES:
+        box = model.geom(f"{side}_foot_geom").id
+        spheres = [model.geom(f"{side}_sole_{c}").id for c in ("toe_l", "toe_r", "heel_l", "heel_r")]
+        assert all(model.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE for g in spheres)
+        r = model.geom_size[spheres, 0]
+        pos = model.geom_pos[spheres]
+        box_lo = model.geom_pos[box] - model.geom_size[box]
+        box_hi = model.geom_pos[box] + model.geom_size[box]
+        np.testing.assert_allclose(pos[:, 2] - r, box_lo[2], atol=1e-9)  # sphere bottoms on the sole plane
+        np.testing.assert_allclose([(pos[:, 0] + r).max(), (pos[:, 0] - r).min()], [box_hi[0], box_lo[0]],
+                                   atol=1e-9)
+        assert (pos[:, 1].max() - pos[:, 1].min()) >= 0.5 * (box_hi[1] - box_lo[1])  # resists rolling
+
+
 def test_quadruped_feet_are_welded_spheres():
     model = _model(QUADRUPED)
     for leg in LEGS:
@@ -164,7 +185,7 @@ def test_quadruped_feet_are_welded_spheres():
 @pytest.mark.parametrize("robot", ROBOTS, ids=lambda r: r.name)
 def test_only_feet_collide_and_no_ground_inside(robot):
     model = _model(robot)
-    foot_geoms = {f"{foot}_geom" for foot in robot.feet}
+    foot_geoms = set(robot.foot_colliders)
     for g in range(model.ngeom):
         name = model.geom(g).name
         assert model.geom_type[g] not in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD)
@@ -183,6 +204,8 @@ def test_keyframe_stands_flat_on_the_ground(robot):
     np.testing.assert_allclose(key.ctrl, key.qpos[7:])
     lo, hi = robot.base_height_range
     assert lo <= data.body(robot.base).xpos[2] <= hi
+    for geom in robot.foot_colliders:
+        assert abs(_lowest_point_z(model, data, model.geom(geom).id)) < 0.005
     for foot in robot.feet:
         assert abs(_lowest_point_z(model, data, model.geom(f"{foot}_geom").id)) < 0.005
         assert abs(data.site(f"{foot}_site").xpos[2]) < 0.005

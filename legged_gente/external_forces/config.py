@@ -21,13 +21,16 @@ class ForcesConfig:
     paper_flow_force: bool add GenTe's flow term as a force (N) on each submerged segment, on top of the
                            flow entering the drag as a velocity
     leg_geom_names: list[str]   capsule (or cylinder) geoms of the legs that feel water
-    foot_geom_names: list[str]  geoms of the feet that sink into soil
-    sole_length, sole_width: float | None  sole size (m); None: from the first foot geom (box: 2*size x, 2*size
-                           y; sphere/capsule/cylinder: the diameter for both)
+    foot_geom_names: list[str]  colliding geoms of the feet that sink into soil; geoms on one body form one
+                           foot (a box sole, or e.g. the spheres at its corners)
+    sole_length, sole_width: float | None  sole size (m); None: the footprint of the first foot's geoms in its
+                           body's x-y plane (box: its extent; sphere/capsule/cylinder: a disc of its radius)
     contact_threshold: float  foot normal force (N) above which a foot counts as in contact (slip resets below)
     bulldozing_speed_reg: float  speed (m/s) below which the bulldozing direction fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
+    max_rut_depth: float  deepest the foot is shown lowered into its rut (m); the forces use the full sinkage.
+                           Heightfield contacts go wrong once a geom is ~3 cm inside a cell (docs/forces.md)
     """
 
     wading = True
@@ -49,4 +52,5 @@ class ForcesConfig:
     contact_threshold = 1.0
     bulldozing_speed_reg = 0.05
     sinkage_rate = 0.5
+    max_rut_depth = 0.01
     sinkage_load_tau = 0.05

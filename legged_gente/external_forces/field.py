@@ -116,16 +116,21 @@ class TerrainForces:
         self.seg_halflen = arr(halflen.astype(np.float32), float)
         self._check_added_mass(mjm, seg, halflen)
 
-        # feet
-        feet = _geom_ids(mjm, cfg.foot_geom_names, "foot_geom_names")
-        self.nfoot = len(feet)
-        self.foot_geom = arr(feet, int)
-        self.foot_body = arr(mjm.geom_bodyid[feet].astype(np.int32), int)
+        # feet: the listed geoms grouped by body, one foot per body (a box sole, or the spheres at its corners)
+        foot_geoms = _geom_ids(mjm, cfg.foot_geom_names, "foot_geom_names")
+        bodies = list(dict.fromkeys(int(b) for b in mjm.geom_bodyid[foot_geoms]))
+        self.nfoot = len(bodies)
+        groups = [foot_geoms[mjm.geom_bodyid[foot_geoms] == b] for b in bodies]
+        self.foot_body = arr(np.asarray(bodies, np.int32), int)
+        # sole centre in the foot body's frame: the mean of its geoms' centres
+        offsets = [mjm.geom_pos[g].mean(0) for g in groups] or np.zeros((1, 3))
+        self.foot_offset = arr(np.asarray(offsets, np.float32), wp.vec3)
         geom_foot = np.full(mjm.ngeom, -1, np.int32)
-        geom_foot[feet] = np.arange(len(feet), dtype=np.int32)
+        for f, g in enumerate(groups):
+            geom_foot[g] = f
         self.geom_foot = arr(geom_foot, int)
         self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
-        self.sole_length, self.sole_width = self._sole(mjm, feet)
+        self.sole_length, self.sole_width = self._sole(mjm, groups)
 
         n, nf, ns = self.nworld, max(self.nfoot, 1), max(self.nseg, 1)
         z = lambda shape, dtype: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
@@ -167,19 +172,20 @@ class TerrainForces:
                           f"mass; the explicit added-mass force may oscillate. Use paper_added_mass=True or a "
                           f"smaller added_mass_coefficient for such light legs.", stacklevel=3)
 
-    def _sole(self, mjm, feet):
+    def _sole(self, mjm, groups):
+        """Sole length and width (m): from the config, else the footprint of the first foot's geoms in its
+        body's x-y plane (box: its x-y extent; sphere, capsule, cylinder: a disc of its radius)."""
         cfg = self.cfg
         if cfg.sole_length is not None and cfg.sole_width is not None:
             length, width = float(cfg.sole_length), float(cfg.sole_width)
-        elif len(feet) == 0:
+        elif not groups:
             length = width = 1.0  # no feet: never used
         else:
-            g = feet[0]
-            size = mjm.geom_size[g]
-            if mjm.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_BOX):
-                length, width = 2 * max(size[0], size[1]), 2 * min(size[0], size[1])
-            else:
-                length = width = 2 * size[0]
+            g = groups[0]
+            box = mjm.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_BOX)
+            half = np.where(box[:, None], mjm.geom_size[g, :2], mjm.geom_size[g, :1])
+            lo, hi = (mjm.geom_pos[g, :2] - half).min(0), (mjm.geom_pos[g, :2] + half).max(0)
+            length, width = float((hi - lo).max()), float((hi - lo).min())
         if not (length > 0 and width > 0):
             raise ValueError(f"sole size must be > 0 m, got length={length}, width={width}; set "
                              f"forces.sole_length / sole_width.")
@@ -204,7 +210,7 @@ class TerrainForces:
             inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
                     self.friction, float(self.cfg.friction_reference), int(bool(self.cfg.friction_from_map)),
                     int(bool(self.cfg.soil) and self.nfoot > 0), self.sole_length * self.sole_width,
-                    self.sole_width, float(self.cfg.sinkage_rate) * self.dt, self.soil_params, self.foot_load,
+                    self.sole_width, float(self.cfg.sinkage_rate) * self.dt, float(self.cfg.max_rut_depth), self.soil_params, self.foot_load,
                     self.foot_sinkage, c.pos, c.geom, c.worldid, c.dist, c.friction, self.foot_soil,
                     self.foot_touch, self.foot_cand],
         )
@@ -228,7 +234,7 @@ class TerrainForces:
         if cfg.soil and self.nfoot:
             wp.launch(
                 K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
-                inputs=[self.foot_geom, self.foot_body, m.body_rootid, d.geom_xpos, d.xipos, d.cvel,
+                inputs=[self.foot_body, self.foot_offset, m.body_rootid, d.xpos, d.xmat, d.xipos, d.cvel,
                         d.subtree_com, self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params,
                         self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_slip,
                         self.foot_vel, self.foot_force, d.xfrc_applied],
@@ -250,7 +256,7 @@ class TerrainForces:
         wp.launch(
             K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev,
             inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
-                    self.foot_geom, d.geom_xpos, self.heights,
+                    self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights,
                     d.time, self.water, self.xi, self.soil_params, self.foot_fn,
                     self.foot_vel, self.foot_sinkage, self.foot_soil, self.foot_slip, self.foot_load, self.obs],
         )

@@ -117,6 +117,12 @@ def point_velocity(
 
 
 @wp.func
+def sole_point(xpos: wp.array2d[wp.vec3], xmat: wp.array2d[wp.mat33], w: int, b: int, offset: wp.vec3) -> wp.vec3:
+    """World position of a foot's sole centre, ``offset`` in its body's frame."""
+    return xpos[w, b] + xmat[w, b] @ offset
+
+
+@wp.func
 def apply_force(
     xfrc: wp.array2d[wp.spatial_vector], xipos: wp.array2d[wp.vec3], w: int, b: int, f: wp.vec3, p: wp.vec3
 ):
@@ -349,6 +355,7 @@ def contact_filter_kernel(
     sole_area: float,
     sole_width: float,
     sink_step: float,
+    max_rut: float,
     soil_params: wp.array3d[float],
     foot_fn: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
@@ -366,8 +373,9 @@ def contact_filter_kernel(
     """Ground contacts take the cell's friction; a foot on soil sits in a rut of depth z.
 
     The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration
-    (contact dist += z): the solver holds the foot z deeper with the contact's usual stiffness, so the
-    sinkage shows as a lowered foot. The rut deepens towards Bekker's z(F_N / sole area) but never
+    (contact dist += z, at most max_rut): the solver holds the foot that much deeper with the contact's
+    usual stiffness, so the sinkage shows as a lowered foot. max_rut keeps geoms within the depth where
+    heightfield contacts stay correct; the forces and observations use the full z. The rut deepens towards Bekker's z(F_N / sole area) but never
     further than the foot's current penetration plus sink_step (sinkage_rate * dt), and never rises
     during a stance: soil sinkage is plastic (Wong: unloading recovers little). Without these two
     rules the loop F_N -> z -> contact chatters or ratchets: a rut deeper than the foot releases the
@@ -402,8 +410,11 @@ def contact_filter_kernel(
     z = bekker_sinkage_fn(
         foot_fn[w, f] / sole_area, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], sole_width
     )
-    wp.atomic_max(foot_cand, w, f, wp.min(z, -contact_dist[i] + sink_step))
-    contact_dist[i] = contact_dist[i] + foot_sinkage[w, f]
+    rut = foot_sinkage[w, f]
+    shown = wp.min(rut, max_rut)
+    # the foot's depth counting the rut's unshown part: the rut deepens at most sink_step below it
+    wp.atomic_max(foot_cand, w, f, wp.min(z, -contact_dist[i] + rut - shown + sink_step))
+    contact_dist[i] = contact_dist[i] + shown
     foot_soil[w, f] = s
     foot_touch[w, f] = 1
 
@@ -428,10 +439,11 @@ def foot_rut_kernel(
 
 @wp.kernel
 def soil_force_kernel(
-    foot_geom: wp.array[int],
     foot_body: wp.array[int],
+    foot_offset: wp.array[wp.vec3],
     body_rootid: wp.array[int],
-    geom_xpos: wp.array2d[wp.vec3],
+    xpos: wp.array2d[wp.vec3],
+    xmat: wp.array2d[wp.mat33],
     xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
     subtree_com: wp.array2d[wp.vec3],
@@ -453,9 +465,8 @@ def soil_force_kernel(
     speed_reg instead of chattering around zero speed.
     """
     w, f = wp.tid()
-    gid = foot_geom[f]
     b = foot_body[f]
-    p = geom_xpos[w, gid]
+    p = sole_point(xpos, xmat, w, b, foot_offset[f])
     v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
     vh = wp.vec3(v[0], v[1], 0.0)
     foot_vel[w, f] = vh
@@ -517,8 +528,10 @@ def foot_state_kernel(
     dt: float,
     contact_threshold: float,
     load_alpha: float,
-    foot_geom: wp.array[int],
-    geom_xpos: wp.array2d[wp.vec3],
+    foot_body: wp.array[int],
+    foot_offset: wp.array[wp.vec3],
+    xpos: wp.array2d[wp.vec3],
+    xmat: wp.array2d[wp.mat33],
     heights: wp.array2d[float],
     time: wp.array[float],
     water: WaterMap,
@@ -543,7 +556,7 @@ def foot_state_kernel(
         foot_slip[w, f] = foot_slip[w, f] + dt * foot_vel[w, f]
     else:
         foot_slip[w, f] = wp.vec3(0.0)
-    p = geom_xpos[w, foot_geom[f]]
+    p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
     cell = water_cell(water, p)  # heights and the water layer share the grid
     depth = wp.max(water.surface[cell[0], cell[1]] - heights[cell[0], cell[1]], 0.0)
     u = water_flow(water, cell, time[w], xi[w])

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import warnings
 from pathlib import Path
 
 import mujoco
@@ -99,7 +100,22 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
     _configure_actuators(spec, robot, cfg.control)
     mjm = spec.compile()
-    return mjm, _layout(mjm, cfg)
+    layout = _layout(mjm, cfg)
+    if mjm.geom_type[layout.terrain_geom] == mujoco.mjtGeom.mjGEOM_HFIELD:
+        _warn_flat_feet_on_heightfield(mjm, layout.foot_bodies)
+    return mjm, layout
+
+
+def _warn_flat_feet_on_heightfield(mjm: mujoco.MjModel, foot_bodies: np.ndarray) -> None:
+    """Heightfield collisions (prism by prism, general convex solver) give boxes and meshes that sink ~1 cm
+    contacts with downward normals, which launch the foot; spheres stay correct (docs/robots.md)."""
+    flat = {mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_MESH}
+    bad = [mjm.geom(g).name or f"geom {g}" for g in range(mjm.ngeom)
+           if mjm.geom_bodyid[g] in foot_bodies and mjm.geom_contype[g] and mjm.geom_type[g] in flat]
+    if bad:
+        warnings.warn(f"foot geoms {bad} collide with the heightfield terrain as boxes/meshes, whose heightfield "
+                      f"contacts go wrong once they sink ~1 cm (feet get launched); collide through spheres at the "
+                      f"sole's corners instead (see docs/robots.md, 'Why sphere soles').", stacklevel=3)
 
 
 def _check_robot(robot: mujoco.MjModel, cfg) -> None:

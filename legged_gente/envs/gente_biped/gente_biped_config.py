@@ -54,7 +54,9 @@ class GenteBipedCfg(LeggedRobotCfg):
 
     class forces(LeggedRobotCfg.forces):
         leg_geom_names = ["left_thigh_geom", "left_shank_geom", "right_thigh_geom", "right_shank_geom"]
-        foot_geom_names = ["left_foot_geom", "right_foot_geom"]
+        # the four sole spheres of each foot (the box is visual; docs/robots.md says why)
+        foot_geom_names = [f"{side}_sole_{corner}" for side in ("left", "right")
+                           for corner in ("toe_l", "toe_r", "heel_l", "heel_r")]
 
     class commands(LeggedRobotCfg.commands):
         class ranges(LeggedRobotCfg.commands.ranges):
