@@ -117,3 +117,25 @@ def test_low_friction_tiles_lower_contact_friction(env):
     assert (world == slippery).any() and (world == 0).any()
     np.testing.assert_allclose(mu[world == slippery], cell_mu, rtol=1e-5)
     np.testing.assert_allclose(mu[world == 0], env.cfg.terrain.static_friction, rtol=1e-5)
+
+
+def test_checkpoints_keep_the_terrain_curriculum(env, tmp_path):
+    """A resumed run climbs on from the saved levels instead of starting over at max_init_terrain_level."""
+    from legged_gente.envs.base.legged_robot_config import rsl_rl_train_cfg
+    from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfgPPO
+    from legged_gente.utils.distributed import GenteOnPolicyRunner
+
+    train_cfg = GenteBipedCfgPPO()
+    train_cfg.actor.hidden_dims = [8]
+    train_cfg.critic.hidden_dims = [8]
+    runner = GenteOnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=None, device="cpu")
+    saved = torch.tensor([2, 0, 1, 2, 1])
+    env.terrain_levels = saved.clone()
+    runner.save(str(tmp_path / "model_0.pt"))
+    env.terrain_levels = torch.zeros_like(saved)
+    runner.load(str(tmp_path / "model_0.pt"))
+    assert torch.equal(env.terrain_levels, saved) and "restored" in runner.curriculum_message
+    assert torch.equal(env.env_origins, env.terrain_origins[saved, env.terrain_columns])
+    # levels saved for another number of robots leave the curriculum as it is, and say so
+    message = env.load_curriculum_state({"terrain_levels": torch.zeros(7, dtype=torch.long)})
+    assert "restarts" in message and torch.equal(env.terrain_levels, saved)

@@ -65,6 +65,7 @@ class TaskRegistry:
             path = find_checkpoint(experiment_root, runner_cfg.load_run, runner_cfg.checkpoint)
             print(f"Loading model from {path}")
             runner.load(str(path))
+            print(runner.curriculum_message)
             # a checkpoint stores the last *finished* iteration; continue with the next one
             runner.current_learning_iteration += 1
         return runner, train_cfg, log_dir

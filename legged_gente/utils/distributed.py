@@ -137,3 +137,15 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         if launch is not None:
             print(f"[distributed] rank {launch.rank}/{launch.world_size} (local {launch.local_rank}) on "
                   f"{self.device}, backend {backend}, seed {self.cfg['seed']}", flush=True)
+
+    def save(self, path: str, infos: dict | None = None) -> None:
+        """rsl-rl's checkpoint plus the env's curriculum state (``infos["curriculum"]``)."""
+        super().save(path, {**(infos or {}), "curriculum": self.env.curriculum_state()})
+
+    def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
+        """rsl-rl's load; also restores the env's curriculum when the checkpoint has one that fits
+        (``self.curriculum_message`` says what happened)."""
+        infos = super().load(path, load_cfg, strict, map_location)
+        self.curriculum_message = (self.env.load_curriculum_state(infos["curriculum"])
+                                   if infos and "curriculum" in infos else "the checkpoint has no curriculum state")
+        return infos

@@ -315,10 +315,30 @@ class LeggedRobot(VecEnv):
         """Accumulate finished episodes' statistics on device, then move finished robots' terrain levels."""
         mask = done.float()
         self._stat_reward_sums += mask @ self.episode_sums / self.max_episode_length_s
-        if self.terrain is not None and self.cfg.terrain.curriculum and self.cfg.terrain.mode == "curriculum":
+        if self._terrain_curriculum:
             self._update_terrain_curriculum(done)
         self._stat_level_sum = self._stat_level_sum + self.terrain_levels.float() @ mask
         self._stat_count += mask.sum()
+
+    @property
+    def _terrain_curriculum(self) -> bool:
+        return self.terrain is not None and self.cfg.terrain.curriculum and self.cfg.terrain.mode == "curriculum"
+
+    def curriculum_state(self) -> dict[str, torch.Tensor]:
+        """The robots' terrain levels, kept in checkpoints so that a resumed run climbs on from where it stopped."""
+        return {"terrain_levels": self.terrain_levels.cpu()}
+
+    def load_curriculum_state(self, state: dict[str, torch.Tensor]) -> str:
+        """Restore ``curriculum_state()`` when it fits this env; says what happened (printed on --resume)."""
+        if not self._terrain_curriculum:
+            return "no terrain curriculum in this env"
+        levels = state["terrain_levels"]
+        if levels.shape != self.terrain_levels.shape or int(levels.max()) >= self.max_terrain_level:
+            return (f"terrain curriculum restarts: the checkpoint's levels ({levels.numel()} robots, up to level "
+                    f"{int(levels.max())}) do not fit {self.num_envs} robots on {self.max_terrain_level} levels")
+        self.terrain_levels = levels.to(self.device)
+        self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_columns]
+        return f"terrain curriculum restored: mean level {levels.float().mean():.2f} (robots move there at their next reset)"
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
         """Up a level after walking more than half a tile; down after less than half the commanded distance;
