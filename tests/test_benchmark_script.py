@@ -23,3 +23,20 @@ def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):
     rows = benchmark.run("gente_biped", [3], "cpu", steps=2, iterations=0)
     assert 0.0 < rows[0]["forces_share"] < 1.0
     assert 0.0 <= rows[0]["forces_slowdown"] < 1.0
+
+
+def test_raw_physics_measures_from_and_returns_to_the_settled_state():
+    import argparse
+
+    import torch
+
+    from legged_gente.envs.task_registry import task_registry
+
+    cfg, _ = task_registry.get_cfgs("gente_biped_flat")
+    cfg.env.num_envs = 2
+    env, _ = task_registry.make_env("gente_biped_flat", env_cfg=cfg, args=argparse.Namespace(device="cpu"))
+    benchmark.settle(env)
+    qpos, qvel = env.sim.qpos.clone(), env.sim.qvel.clone()
+    assert (qpos[:, 2] > 0.8).all()  # landed and standing, not lying on the ground
+    assert benchmark.raw_physics(env, 3 * benchmark.RESTORE_EVERY) > 0.0
+    assert torch.equal(env.sim.qpos, qpos) and torch.equal(env.sim.qvel, qvel)
