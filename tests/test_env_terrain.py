@@ -139,3 +139,19 @@ def test_checkpoints_keep_the_terrain_curriculum(env, tmp_path):
     # levels saved for another number of robots leave the curriculum as it is, and say so
     message = env.load_curriculum_state({"terrain_levels": torch.zeros(7, dtype=torch.long)})
     assert "restarts" in message and torch.equal(env.terrain_levels, saved)
+
+
+def test_critic_keeps_its_width_on_a_terrain_without_materials(env):
+    """A policy trained with water and soil must load on any terrain: without materials the force fields'
+    observation is there as zeros."""
+
+    class Dry(SmallCurriculum):
+        class terrain(SmallCurriculum.terrain):
+            terrain_types = ["random_uniform"]
+            terrain_proportions = [1.0]
+
+    dry = GenteBiped(Dry(), device="cpu")
+    assert dry.forces is None
+    critic = dry.get_observations()["critic"]
+    assert critic.shape[1] == env.get_observations()["critic"].shape[1]
+    assert (critic[:, -24:] == 0).all()

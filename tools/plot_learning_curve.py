@@ -1,4 +1,5 @@
-"""Plot a training CSV from docs/results (iteration, wall_s, mean_episode_length, rew_tracking_lin_vel, ...)."""
+"""Plot a training CSV from docs/results (iteration, wall_s, mean_episode_length, rew_tracking_lin_vel, ...
+and, on a curriculum, terrain_level) against training wall time."""
 
 import argparse
 import csv
@@ -14,6 +15,10 @@ def main() -> None:
     parser.add_argument("csv")
     parser.add_argument("png")
     parser.add_argument("--max_episode_length", type=float, default=1000.0)
+    parser.add_argument("--levels", type=int, help="number of curriculum levels: also plot terrain_level / levels")
+    parser.add_argument("--level_target", type=float, default=6.0, help="terrain level drawn as a dotted line")
+    parser.add_argument("--mark", type=float, nargs="*", default=[], help="minutes to mark (e.g. resumes)")
+    parser.add_argument("--title", default="")
     args = parser.parse_args()
     rows = list(csv.DictReader(open(args.csv)))
     t = [float(r["wall_s"]) / 60 for r in rows]
@@ -22,10 +27,18 @@ def main() -> None:
     ax.plot(t, [float(r["rew_tracking_lin_vel"]) for r in rows], label="tracking_lin_vel / max")
     ax.axhline(0.9, color="tab:blue", ls=":", lw=1)
     ax.axhline(0.8, color="tab:orange", ls=":", lw=1)
+    if args.levels:
+        ax.plot(t, [float(r["terrain_level"]) / args.levels for r in rows], color="tab:green",
+                label=f"mean terrain level / {args.levels}")
+        ax.axhline(args.level_target / args.levels, color="tab:green", ls=":", lw=1)
+    for minute in args.mark:
+        ax.axvline(minute, color="grey", ls="--", lw=1)
     ax.set_xlabel("training wall time (min)")
     ax.set_ylim(0, 1.05)
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right")
+    ax.legend(loc="lower right", fontsize=8)
+    if args.title:
+        ax.set_title(args.title, fontsize=9)
     fig.tight_layout()
     fig.savefig(args.png, dpi=90)
 

@@ -14,6 +14,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("png")
     parser.add_argument("csvs", nargs="+", help="LABEL=PATH")
+    parser.add_argument("--skip_raw", nargs="*", default=[], help="labels whose raw column is not plotted")
     args = parser.parse_args()
     fig, ax = plt.subplots(figsize=(7, 4))
     for style, item in zip(("-", "--", ":"), args.csvs):
@@ -22,6 +23,8 @@ def main() -> None:
         n = [int(r["num_envs"]) for r in rows]
         for key, colour, name in (("raw_substeps_per_s", "k", "raw / decimation"), ("env_steps_per_s", "tab:blue", "env"),
                                   ("ppo_steps_per_s", "tab:orange", "PPO")):
+            if key == "raw_substeps_per_s" and label in args.skip_raw:
+                continue
             scale = 0.25 if key == "raw_substeps_per_s" else 1.0  # decimation 4: the raw ceiling in env steps
             ax.plot(n, [float(r[key]) * scale for r in rows], style, color=colour, marker="o", label=f"{label}: {name}")
     ax.set_xscale("log", base=2)

@@ -46,6 +46,19 @@ def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:
     return np.asarray(ids, np.int32)
 
 
+def foot_groups(mjm: mujoco.MjModel, names) -> tuple[list[int], list[np.ndarray]]:
+    """The feet of ``forces.foot_geom_names``: the listed geoms grouped by body, one foot per body (a box sole,
+    or the spheres at its corners), as (foot bodies, geom ids per foot) in the order listed."""
+    geoms = _geom_ids(mjm, names, "foot_geom_names")
+    bodies = list(dict.fromkeys(int(b) for b in mjm.geom_bodyid[geoms]))
+    return bodies, [geoms[mjm.geom_bodyid[geoms] == b] for b in bodies]
+
+
+def privileged_obs_size(mjm: mujoco.MjModel, cfg) -> int:
+    """Width of ``TerrainForces.privileged_obs()`` for this robot and config, without building the field."""
+    return len(foot_groups(mjm, cfg.foot_geom_names)[0]) * K.OBS_PER_FOOT
+
+
 class TerrainForces:
     """Terrain force fields for ``nworld`` robots on one terrain (see the module docstring for the calls).
 
@@ -116,11 +129,8 @@ class TerrainForces:
         self.seg_halflen = arr(halflen.astype(np.float32), float)
         self._check_added_mass(mjm, seg, halflen)
 
-        # feet: the listed geoms grouped by body, one foot per body (a box sole, or the spheres at its corners)
-        foot_geoms = _geom_ids(mjm, cfg.foot_geom_names, "foot_geom_names")
-        bodies = list(dict.fromkeys(int(b) for b in mjm.geom_bodyid[foot_geoms]))
+        bodies, groups = foot_groups(mjm, cfg.foot_geom_names)
         self.nfoot = len(bodies)
-        groups = [foot_geoms[mjm.geom_bodyid[foot_geoms] == b] for b in bodies]
         self.foot_body = arr(np.asarray(bodies, np.int32), int)
         # sole centre in the foot body's frame: the mean of its geoms' centres
         offsets = [mjm.geom_pos[g].mean(0) for g in groups] or np.zeros((1, 3))

@@ -69,12 +69,19 @@ class LeggedRobot(VecEnv):
         return Terrain(self.cfg.terrain, self.num_envs)
 
     def _create_forces(self):
-        """Terrain force fields (water, soil, friction) where the terrain has such materials."""
+        """Terrain force fields (water, soil, friction) where the terrain has such materials. On a heightfield
+        without any, the critic still gets the fields' observation as zeros, so a policy trained with forces
+        loads and runs on any terrain."""
+        self._no_force_obs = None
         if self.terrain is None or not self.cfg.forces.enabled:
             return None
         material = self.terrain.material
         if not (material.has_water().any() or material.has_soil().any() or
                 (material.friction != self.cfg.terrain.static_friction).any()):
+            from legged_gente.external_forces.field import privileged_obs_size
+
+            self._no_force_obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces),
+                                             device=self.device)
             return None
         if self.cfg.forces.friction_reference != self.cfg.terrain.static_friction:
             raise ValueError(f"cfg.forces.friction_reference={self.cfg.forces.friction_reference} differs from "
@@ -455,6 +462,8 @@ class LeggedRobot(VecEnv):
         privileged = [clean, self.friction_coeffs, self.added_base_mass, feet_forces]
         if self.forces is not None:
             privileged.append(self.forces.privileged_obs())
+        elif self._no_force_obs is not None:
+            privileged.append(self._no_force_obs)
         clip = self.cfg.normalization.clip_observations
         critic = torch.nan_to_num(torch.cat(privileged, dim=-1), nan=0.0)
         self.obs_buf = TensorDict(

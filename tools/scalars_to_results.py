@@ -1,0 +1,50 @@
+"""Turn the scalars CSVs of one training run (``python -m legged_gente.utils.tb_export``; several when it was
+resumed, in order) into the results format of docs/results: iteration, wall_s, mean_episode_length,
+rew_tracking_lin_vel, mean_reward, env_steps_per_s, terrain_level, diverged_resets_cumulative.
+
+wall_s is the training time rsl-rl measures (collection + learning, summed over iterations): process start-up
+and the pause between resumed chunks are not in it.
+
+    python tools/scalars_to_results.py OUT.csv chunk1.csv [chunk2.csv ...]
+"""
+
+import argparse
+import csv
+
+COLUMNS = {  # results column: TensorBoard tag
+    "mean_episode_length": "Train/mean_episode_length",
+    "rew_tracking_lin_vel": "Episode/rew_tracking_lin_vel",
+    "mean_reward": "Train/mean_reward",
+    "env_steps_per_s": "Perf/total_fps",
+    "terrain_level": "Episode/terrain_level",
+}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("out")
+    parser.add_argument("chunks", nargs="+")
+    args = parser.parse_args()
+    out_rows, wall, diverged_offset = [], 0.0, 0.0
+    for path in args.chunks:
+        rows = [r for r in csv.DictReader(open(path)) if r["Train/mean_episode_length"] != ""]
+        if not rows:
+            raise SystemExit(f"{path}: no training iterations (is it a tb_export CSV of a run?)")
+        last_diverged = 0.0
+        for r in rows:
+            wall += float(r["Perf/collection_time"]) + float(r["Perf/learning_time"])
+            last_diverged = float(r.get("Episode/diverged_resets") or 0.0)  # cumulative within the chunk
+            row = {"iteration": int(r["step"]), "wall_s": round(wall, 1)}
+            row.update({name: f"{float(r[tag]):.4g}" if r.get(tag) else "" for name, tag in COLUMNS.items()})
+            row["diverged_resets_cumulative"] = int(diverged_offset + last_diverged)
+            out_rows.append(row)
+        diverged_offset += last_diverged
+    with open(args.out, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(out_rows[0]))
+        writer.writeheader()
+        writer.writerows(out_rows)
+    print(f"wrote {args.out}: {len(out_rows)} iterations, {wall / 60:.1f} min of training")
+
+
+if __name__ == "__main__":
+    main()
