@@ -9,6 +9,7 @@ import os
 import re
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
@@ -196,3 +197,22 @@ def test_menagerie_style_motors_and_visual_meshes(tutorial, tmp_path):
     assert env.mjm.geom_contype[env.mjm.geom("FR_thigh_geom").id] != 0  # penalised body switched on
     obs, _, _, _ = env.step(torch.zeros(2, env.num_actions))
     assert torch.isfinite(obs["policy"]).all()
+
+
+def test_box_feet_on_a_heightfield_warn(tutorial, tmp_path):
+    from legged_gente.sim.assembly import build_model
+    from legged_gente.terrain.terrain import Terrain
+
+    boxes = variant(tutorial, tmp_path, '<geom type="sphere" size="0.02" mass="0.02"', '<geom type="box" size="0.02 0.02 0.02" mass="0.02"')
+    cfg, _ = task_registry.get_cfgs("my_robot_rough")
+    cfg.asset.file = boxes
+    cfg.terrain.num_rows, cfg.terrain.num_cols = 1, 5
+    cfg.terrain.terrain_length = cfg.terrain.terrain_width = 3.0
+    cfg.terrain.border_size = 1.0
+    terrain = Terrain(cfg.terrain, 2)
+    with pytest.warns(UserWarning, match=r"foot geoms \['FL_foot_geom'.*spheres"):
+        build_model(cfg, terrain)
+    cfg.asset.file = str(tutorial / "my_robot/my_robot.xml")  # the tutorial's sphere feet: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        build_model(cfg, terrain)

@@ -109,9 +109,9 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
 def _warn_flat_feet_on_heightfield(mjm: mujoco.MjModel, foot_bodies: np.ndarray) -> None:
     """Heightfield collisions (prism by prism, general convex solver) give boxes and meshes that sink ~1 cm
     contacts with downward normals, which launch the foot; spheres stay correct (docs/robots.md)."""
-    flat = {mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_MESH}
+    flat = {int(mujoco.mjtGeom.mjGEOM_BOX), int(mujoco.mjtGeom.mjGEOM_MESH)}
     bad = [mjm.geom(g).name or f"geom {g}" for g in range(mjm.ngeom)
-           if mjm.geom_bodyid[g] in foot_bodies and mjm.geom_contype[g] and mjm.geom_type[g] in flat]
+           if mjm.geom_bodyid[g] in foot_bodies and mjm.geom_contype[g] and int(mjm.geom_type[g]) in flat]
     if bad:
         warnings.warn(f"foot geoms {bad} collide with the heightfield terrain as boxes/meshes, whose heightfield "
                       f"contacts go wrong once they sink ~1 cm (feet get launched); collide through spheres at the "
