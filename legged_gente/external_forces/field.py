@@ -220,7 +220,8 @@ class TerrainForces:
             inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
                     self.friction, float(self.cfg.friction_reference), int(bool(self.cfg.friction_from_map)),
                     int(bool(self.cfg.soil) and self.nfoot > 0), self.sole_length * self.sole_width,
-                    self.sole_width, float(self.cfg.sinkage_rate) * self.dt, float(self.cfg.max_rut_depth), self.soil_params, self.foot_load,
+                    self.sole_width, float(self.cfg.sinkage_rate) * self.dt, float(self.cfg.max_rut_depth),
+                    self.soil_params, self.foot_load,
                     self.foot_sinkage, c.pos, c.geom, c.worldid, c.dist, c.friction, self.foot_soil,
                     self.foot_touch, self.foot_cand],
         )

@@ -375,9 +375,9 @@ def contact_filter_kernel(
     The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration
     (contact dist += z, at most max_rut): the solver holds the foot that much deeper with the contact's
     usual stiffness, so the sinkage shows as a lowered foot. max_rut keeps geoms within the depth where
-    heightfield contacts stay correct; the forces and observations use the full z. The rut deepens towards Bekker's z(F_N / sole area) but never
-    further than the foot's current penetration plus sink_step (sinkage_rate * dt), and never rises
-    during a stance: soil sinkage is plastic (Wong: unloading recovers little). Without these two
+    heightfield contacts stay correct; the forces and observations use the full z. The rut deepens towards
+    Bekker's z(F_N / sole area) but never further than the foot's current penetration (counting the rut's
+    unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance: soil sinkage is plastic (Wong: unloading recovers little). Without these two
     rules the loop F_N -> z -> contact chatters or ratchets: a rut deeper than the foot releases the
     contact, the foot falls into it and the impact load digs it deeper still.
     """

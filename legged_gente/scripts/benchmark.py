@@ -3,8 +3,8 @@
     gente-benchmark --task gente_biped_flat --num_envs 1024 4096 8192 [--device cuda]
 
 Raw physics is ``mjw.step`` of the very model the env compiles (captured in a CUDA graph on GPU), from the
-robots standing after landing (restored every RESTORE_EVERY substeps, so they never lie fallen), reported as substeps/s
-summed over worlds; env steps/s is policy steps/s summed over worlds; PPO is rsl-rl's
+robots standing after landing (restored every RESTORE_EVERY substeps, so they never lie fallen), reported as
+substeps/s summed over worlds; env steps/s is policy steps/s summed over worlds; PPO is rsl-rl's
 collection + learning. ``env/raw`` compares env steps against the raw ceiling (raw substeps / decimation).
 """
 

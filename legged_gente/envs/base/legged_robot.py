@@ -345,7 +345,8 @@ class LeggedRobot(VecEnv):
                     f"{int(levels.max())}) do not fit {self.num_envs} robots on {self.max_terrain_level} levels")
         self.terrain_levels = levels.to(self.device)
         self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_columns]
-        return f"terrain curriculum restored: mean level {levels.float().mean():.2f} (robots move there at their next reset)"
+        return (f"terrain curriculum restored: mean level {levels.float().mean():.2f} (robots move there at their "
+                f"next reset)")
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
         """Up a level after walking more than half a tile; down after less than half the commanded distance;
