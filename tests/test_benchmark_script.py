@@ -40,3 +40,14 @@ def test_raw_physics_measures_from_and_returns_to_the_settled_state():
     assert (qpos[:, 2] > 0.8).all()  # landed and standing, not lying on the ground
     assert benchmark.raw_physics(env, 3 * benchmark.RESTORE_EVERY) > 0.0
     assert torch.equal(env.sim.qpos, qpos) and torch.equal(env.sim.qvel, qvel)
+
+
+def test_profile_prints_the_costliest_operations_and_writes_a_trace(tmp_path, capsys):
+    import json
+
+    trace = tmp_path / "trace.json"
+    benchmark.main(["--task", "gente_biped_flat", "--num_envs", "2", "--steps", "1", "--iterations", "0",
+                    "--device", "cpu", "--profile", str(trace)])
+    printed = capsys.readouterr().out
+    assert "Self CPU" in printed and "aten::" in printed
+    assert json.load(open(trace))["traceEvents"]

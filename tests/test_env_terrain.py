@@ -84,6 +84,30 @@ def test_curriculum_moves_levels_as_specified(env):
     assert env.terrain_levels[2] == 1 and env.terrain_levels[4] == 1
     assert 0 <= env.terrain_levels[3] < env.max_terrain_level
     assert torch.equal(env.env_origins, env.terrain_origins[env.terrain_levels, env.terrain_columns])
+    # with solved_top_level = "stay", robots that solve the top level keep it; the others move as before
+    env.terrain_levels[:] = torch.tensor([1, 1, 1, 2, 1])
+    env.env_origins[:] = env.terrain_origins[env.terrain_levels, env.terrain_columns]
+    env.cfg.terrain.solved_top_level = "stay"
+    try:
+        for _ in range(3):  # never random
+            env.sim.qpos[:, :2] = torch.stack([far[0], near[1], near[2], far[3], far[4]])
+            env._update_state()
+            env._update_terrain_curriculum(done)
+            assert env.terrain_levels[3] == env.max_terrain_level - 1
+    finally:
+        env.cfg.terrain.solved_top_level = "random"
+
+
+def test_terrain_level_statistic_is_the_mean_over_all_robots(env):
+    env.terrain_levels[:] = torch.tensor([0, 1, 2, 2, 0])
+    assert env._episode_statistics()["terrain_level"].item() == pytest.approx(1.0)
+
+
+def test_unknown_solved_top_level_is_rejected():
+    cfg = SmallCurriculum()
+    cfg.terrain.solved_top_level = "stya"
+    with pytest.raises(ValueError, match="solved_top_level='stya'; use 'random'"):
+        GenteBiped(cfg, device="cpu")
 
 
 def test_forces_act_in_water_and_soil_only(env):

@@ -2,7 +2,8 @@
 # GPU evidence, run on the lent GPU machine after ../shared/device staging. The evaluation needs jsonschema,
 # which the device lacks: stage it with ../shared/device/prepare jsonschema==4.26.0 jsonschema-specifications
 # referencing rpds-py attrs (or carry their cp312 wheels in .whl and pip install --target /tmp/site).
-#   phase train:   train $TASK at $NUM_ENVS envs for $TRAIN_SECONDS (RESUME=1 continues the latest run); the
+#   phase train:   train $TASK at $NUM_ENVS envs for $TRAIN_SECONDS (RESUME=1 continues the latest run; $TRAIN_ARGS
+#                  are more train.py flags, e.g. "--set terrain.solved_top_level=stay"); the
 #                  latest checkpoint and the run's scalars CSV go to $OUT after every chunk
 #   phase report:  benchmark (+ sync check, CSV), play (tracking plot + exports), scalars CSV -> $OUT
 #   phase eval:    gente-evaluate the latest $TASK run on benchmarks/gente100 -> $OUT/eval; with FIG_ITEMS="id id id"
@@ -14,7 +15,7 @@ task=${TASK:-gente_biped_flat}
 latest_run() { ls -d "$GENTE_LOG_ROOT/$task"/20* | tail -1; }
 case "$phase" in
   train)
-    extra=(); [ "${RESUME:-0}" = 1 ] && extra=(--resume)
+    read -ra extra <<< "${TRAIN_ARGS:-}"; [ "${RESUME:-0}" = 1 ] && extra+=(--resume)
     timeout -s INT "${TRAIN_SECONDS:-480}" python3 legged_gente/scripts/train.py --task="$task" --headless \
       --num_envs "${NUM_ENVS:-4096}" --max_iterations "${MAX_ITERS:-100000}" "${extra[@]}" 2>&1 \
       | grep -E "Learning iteration|Mean episode length|terrain_level|Steps per second|Interrupted|Error|Traceback" | tail -8

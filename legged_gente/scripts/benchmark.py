@@ -142,7 +142,34 @@ def ppo_steps(env, task: str, iterations: int) -> float:
     return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / (time.perf_counter() - start)
 
 
-def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, check_sync: bool = False) -> list[dict]:
+def profile(env, task: str, steps: int, out: str) -> None:
+    """torch.profiler over ``steps`` env steps and one PPO iteration: prints the operations that take the most
+    device (or CPU) time and writes a Chrome trace (chrome://tracing, ui.perfetto.dev) to ``out``."""
+    from torch.profiler import ProfilerActivity, profile as torch_profile
+
+    _, train_cfg = task_registry.get_cfgs(task)
+    runner, _, _ = task_registry.make_alg_runner(env, task, train_cfg=train_cfg, log_root=None)
+    runner.learn(1)  # warm-up outside the trace
+    actions = torch.zeros(env.num_envs, env.num_actions, device=env.device)
+    cuda = env.device.startswith("cuda")
+    activities = [ProfilerActivity.CPU] + ([ProfilerActivity.CUDA] if cuda else [])
+    _sync(env.device)
+    with torch_profile(activities=activities) as prof:
+        with torch.inference_mode():  # as in rsl-rl's rollouts (learn() left the env's buffers inference tensors)
+            for _ in range(steps):
+                actions.uniform_(-1.0, 1.0)
+                env.step(actions)
+        _sync(env.device)
+        runner.learn(1)
+        _sync(env.device)
+    sort_by = "self_cuda_time_total" if cuda else "self_cpu_time_total"
+    print(prof.key_averages().table(sort_by=sort_by, row_limit=25, max_name_column_width=60))
+    prof.export_chrome_trace(out)
+    print(f"profile: {steps} env steps + 1 PPO iteration at {env.num_envs} envs -> {out}")
+
+
+def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, check_sync: bool = False,
+        profile_out: str | None = None, profile_envs: int | None = None) -> list[dict]:
     rows = []
     for num_envs in sizes:
         env_cfg, _ = task_registry.get_cfgs(task)
@@ -158,6 +185,8 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
         stepped = env_steps(env, steps, check_sync)
         ppo = ppo_steps(env, task, iterations) if iterations > 0 else float("nan")
+        if profile_out and num_envs == (profile_envs or sizes[-1]):
+            profile(env, task, 10, profile_out)
         ceiling = raw / env.cfg.control.decimation
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
@@ -196,6 +225,10 @@ def main(argv=None) -> None:
     parser.add_argument("--csv", help="also write the table to this CSV file")
     parser.add_argument("--check_sync", action="store_true",
                         help="CUDA: fail if LeggedRobot.step waits for the device anywhere (torch sync debug mode)")
+    parser.add_argument("--profile", metavar="TRACE_JSON",
+                        help="also profile 10 env steps + 1 PPO iteration (torch.profiler): print the costliest "
+                             "operations, write a Chrome trace here")
+    parser.add_argument("--profile_envs", type=int, help="the num_envs to profile at (default: the last of --num_envs)")
     args = parser.parse_args(argv)
     device = args.device or default_device()
     if any(n < 1 for n in args.num_envs):
@@ -204,9 +237,12 @@ def main(argv=None) -> None:
         from legged_gente.terrain.benchmark import benchmark_grid
 
         benchmark_grid()
+    if args.profile_envs is not None and args.profile_envs not in args.num_envs:
+        parser.error(f"--profile_envs {args.profile_envs} is not one of --num_envs {args.num_envs}")
     if args.check_sync and not device.startswith("cuda"):
         parser.error("--check_sync needs a CUDA device (--device cuda)")
-    rows = run(args.task, args.num_envs, device, args.steps, args.iterations, args.check_sync)
+    rows = run(args.task, args.num_envs, device, args.steps, args.iterations, args.check_sync, args.profile,
+               args.profile_envs)
     if args.check_sync:
         print("check_sync: no host-device synchronisation in LeggedRobot.step")
     print_table(rows, device)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import ast
 
 
 def build_parser(description: str) -> argparse.ArgumentParser:
@@ -19,6 +20,9 @@ def build_parser(description: str) -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, help="random seed")
     parser.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     parser.add_argument("--terrain", help="'plane', a generated terrain spec JSON, or an emitted terrain_cfg.py")
+    parser.add_argument("--set", action="append", default=[], metavar="SECTION.FIELD=VALUE", dest="overrides",
+                        help="override any config field (repeatable), e.g. --set terrain.solved_top_level=stay "
+                             "--set algorithm.learning_rate=3e-4 (train config: actor, critic, algorithm, runner)")
     return parser
 
 
@@ -48,11 +52,67 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
         parser.error("--num_envs must be >= 1")
     if args.max_iterations is not None and args.max_iterations < 0:
         parser.error("--max_iterations must be >= 0")
+    for text in args.overrides:
+        try:
+            _parse_override(text)
+        except ValueError as error:
+            parser.error(str(error))
     return args
+
+
+def _parse_override(text: str) -> tuple[list[str], str]:
+    key, sep, value = text.partition("=")
+    path = key.strip().split(".")
+    if not sep or len(path) < 2 or not all(path):
+        raise ValueError(f"--set {text!r}: write SECTION.FIELD=VALUE, e.g. --set terrain.solved_top_level=stay")
+    return path, value.strip()
+
+
+def _override_value(text: str, current, name: str):
+    """The override's value as a Python literal (never evaluated as code), of the same type as ``current``."""
+    try:
+        value = ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        value = text  # a bare word: a string
+    if isinstance(current, str) and not isinstance(value, str):
+        value = text
+    expected = type(current)
+    if current is None or isinstance(value, expected) and not (isinstance(value, bool) and expected is int):
+        return value
+    if expected is float and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    if expected in (list, tuple) and isinstance(value, (list, tuple)):
+        return expected(value)
+    raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; give a "
+                     f"value of that type")
+
+
+def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
+    """Apply ``--set SECTION.FIELD=VALUE`` to whichever config owns SECTION (the train config's sections are
+    those of LeggedRobotCfgPPO); a config given as None is skipped, an unknown field is an error."""
+    from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO
+
+    for text in overrides:
+        path, value = _parse_override(text)
+        cfg = train_cfg if hasattr(LeggedRobotCfgPPO, path[0]) else env_cfg
+        if cfg is None:
+            continue
+        owner = cfg
+        for i, part in enumerate(path[:-1]):
+            owner = getattr(owner, part, None)
+            if owner is None or isinstance(owner, (int, float, str, list, dict)):
+                raise ValueError(f"--set {text!r}: {'.'.join(path[:i + 1])} is not a config section of "
+                                 f"{type(cfg).__name__}")
+        if not hasattr(owner, path[-1]) or path[-1].startswith("_"):
+            fields = sorted(n for n in dir(owner) if not n.startswith("_"))
+            raise ValueError(f"--set {text!r}: {'.'.join(path[:-1])} has no field {path[-1]!r}; its fields: "
+                             f"{', '.join(fields)}")
+        setattr(owner, path[-1], _override_value(value, getattr(owner, path[-1]), ".".join(path)))
 
 
 def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
     """Override config instances with the flags that were given (None means 'keep the config's value')."""
+    apply_overrides(getattr(args, "overrides", None) or [], env_cfg, train_cfg)
     if env_cfg is not None:
         if getattr(args, "num_envs", None) is not None:
             env_cfg.env.num_envs = args.num_envs

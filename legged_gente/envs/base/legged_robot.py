@@ -54,6 +54,9 @@ class LeggedRobot(VecEnv):
             raise ValueError(f"cfg.env.num_envs must be >= 1, got {self.num_envs}.")
         if cfg.control.decimation < 1:
             raise ValueError(f"cfg.control.decimation must be >= 1, got {cfg.control.decimation}.")
+        if cfg.terrain.solved_top_level not in ("random", "stay"):
+            raise ValueError(f"cfg.terrain.solved_top_level={cfg.terrain.solved_top_level!r}; use 'random' "
+                             f"(legged_gym) or 'stay'.")
         if cfg.terrain.mesh_type not in ("plane", "heightfield"):
             raise ValueError(f"cfg.terrain.mesh_type={cfg.terrain.mesh_type!r}; use 'plane' or 'heightfield'.")
         if not cfg.asset.file:
@@ -140,7 +143,6 @@ class LeggedRobot(VecEnv):
             self.height_samples = torch.as_tensor(self.terrain.height_field, dtype=torch.float32, device=dev)
             self.terrain_origin_xy = torch.tensor(self.terrain.origin_xy, dtype=torch.float32, device=dev)
         # episode statistics, reduced on device and reported once per rollout (no per-step host sync)
-        self._stat_level_sum = 0.0
         self._stat_count = torch.zeros((), device=dev)
         self.diverged_resets = torch.zeros((), device=dev)
         self._update_state()
@@ -324,7 +326,6 @@ class LeggedRobot(VecEnv):
         self._stat_reward_sums += mask @ self.episode_sums / self.max_episode_length_s
         if self._terrain_curriculum:
             self._update_terrain_curriculum(done)
-        self._stat_level_sum = self._stat_level_sum + self.terrain_levels.float() @ mask
         self._stat_count += mask.sum()
 
     @property
@@ -349,15 +350,20 @@ class LeggedRobot(VecEnv):
                 f"next reset)")
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
-        """Up a level after walking more than half a tile; down after less than half the commanded distance;
-        a random level after solving the hardest one (legged_gym's game-inspired curriculum)."""
+        """Up a level after walking more than half a tile; down after less than half the commanded distance
+        (legged_gym's game-inspired curriculum). A robot that solves the hardest level goes to a random level
+        (``solved_top_level = "random"``, legged_gym) or stays there (``"stay"``)."""
         distance = torch.norm(self.base_pos[:, :2] - self.env_origins[:, :2], dim=1)
         move_up = distance > 0.5 * self.cfg.terrain.terrain_length
         commanded = torch.norm(self.commands[:, :2], dim=1) * self.max_episode_length_s
         move_down = (distance < 0.5 * commanded) & ~move_up
         level = self.terrain_levels + move_up.long() - move_down.long()
-        random_level = torch.randint_like(level, 0, self.max_terrain_level)
-        level = torch.where(level >= self.max_terrain_level, random_level, level.clamp(min=0))
+        top = self.max_terrain_level - 1
+        if self.cfg.terrain.solved_top_level == "random":
+            solved_top = torch.randint_like(level, 0, self.max_terrain_level)
+        else:
+            solved_top = torch.full_like(level, top)
+        level = torch.where(level > top, solved_top, level.clamp(min=0))
         self.terrain_levels = torch.where(done, level, self.terrain_levels)
         self.env_origins = torch.where(done[:, None], self.terrain_origins[self.terrain_levels, self.terrain_columns],
                                        self.env_origins)
@@ -367,10 +373,10 @@ class LeggedRobot(VecEnv):
         count = self._stat_count.clamp(min=1.0)
         rewards = self._stat_reward_sums / count
         stats = {f"rew_{name}": rewards[i] for i, (name, _) in enumerate(self.reward_functions)}
-        stats["terrain_level"] = self._stat_level_sum / count
+        # legged_gym's statistic: the mean level of all robots now (not only of those whose episode ended)
+        stats["terrain_level"] = self.terrain_levels.float().mean()
         stats["diverged_resets"] = self.diverged_resets.clone()
         self._stat_reward_sums = torch.zeros_like(self._stat_reward_sums)
-        self._stat_level_sum = 0.0
         self._stat_count = torch.zeros((), device=self.device)
         return stats
 
