@@ -131,9 +131,15 @@ def env_steps(env, steps: int, check_sync: bool = False) -> float:
     return steps * env.num_envs / (time.perf_counter() - start)
 
 
-def ppo_steps(env, task: str, iterations: int) -> float:
+def _runner(env, task: str):
+    """The task's PPO runner on ``env``, logging nowhere."""
     _, train_cfg = task_registry.get_cfgs(task)
     runner, train_cfg, _ = task_registry.make_alg_runner(env, task, train_cfg=train_cfg, log_root=None)
+    return runner, train_cfg
+
+
+def ppo_steps(env, task: str, iterations: int) -> float:
+    runner, train_cfg = _runner(env, task)
     runner.learn(1)  # warm-up
     _sync(env.device)
     start = time.perf_counter()
@@ -147,8 +153,7 @@ def profile(env, task: str, steps: int, out: str) -> None:
     device (or CPU) time and writes a Chrome trace (chrome://tracing, ui.perfetto.dev) to ``out``."""
     from torch.profiler import ProfilerActivity, profile as torch_profile
 
-    _, train_cfg = task_registry.get_cfgs(task)
-    runner, _, _ = task_registry.make_alg_runner(env, task, train_cfg=train_cfg, log_root=None)
+    runner, _ = _runner(env, task)
     runner.learn(1)  # warm-up outside the trace
     actions = torch.zeros(env.num_envs, env.num_actions, device=env.device)
     cuda = env.device.startswith("cuda")

@@ -360,10 +360,8 @@ class LeggedRobot(VecEnv):
         level = self.terrain_levels + move_up.long() - move_down.long()
         top = self.max_terrain_level - 1
         if self.cfg.terrain.solved_top_level == "random":
-            solved_top = torch.randint_like(level, 0, self.max_terrain_level)
-        else:
-            solved_top = torch.full_like(level, top)
-        level = torch.where(level > top, solved_top, level.clamp(min=0))
+            level = torch.where(level > top, torch.randint_like(level, 0, self.max_terrain_level), level)
+        level = level.clamp(0, top)
         self.terrain_levels = torch.where(done, level, self.terrain_levels)
         self.env_origins = torch.where(done[:, None], self.terrain_origins[self.terrain_levels, self.terrain_columns],
                                        self.env_origins)
