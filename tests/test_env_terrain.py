@@ -179,3 +179,39 @@ def test_critic_keeps_its_width_on_a_terrain_without_materials(env):
     critic = dry.get_observations()["critic"]
     assert critic.shape[1] == env.get_observations()["critic"].shape[1]
     assert (critic[:, -24:] == 0).all()
+
+
+def test_step_body_updates_carried_state_in_place(env):
+    """What the GPU step graph relies on: a step (with resets, curriculum moves, forces) rebinds only the
+    tensors it recomputes from scratch (``step_outputs``); everything carried to the next step keeps its
+    storage, or a graph replay would read stale tensors."""
+    from legged_gente.sim.step_graph import carried_state_rebound, rebound_attributes
+
+    env.episode_length_buf = torch.full_like(env.episode_length_buf, env.max_episode_length - 1)  # all reset
+    env._stat_reward_sums.fill_(1.0)
+    before = dict(vars(env))
+    env.step(torch.zeros(env.num_envs, env.num_actions))
+    env._episode_statistics()
+    rebound = rebound_attributes(env, before)
+    assert (env.episode_length_buf == 0).all(), "the step did not reset the robots"
+    assert carried_state_rebound(rebound, env.step_outputs) == []
+    assert {"obs_buf", "rew_buf", "reset_buf"} <= set(rebound)
+    assert (env._stat_reward_sums == 0).all()
+
+    class Rebinding(type(env)):
+        def _post_physics_step(self):
+            super()._post_physics_step()
+            self.feet_air_time = self.feet_air_time + 1.0  # carried state rebound: a graph would lose it
+
+    bad = Rebinding.__new__(Rebinding)
+    bad.__dict__.update(vars(env))
+    before = dict(vars(bad))
+    bad.step(torch.zeros(env.num_envs, env.num_actions))
+    assert carried_state_rebound(rebound_attributes(bad, before), bad.step_outputs) == ["feet_air_time"]
+
+
+def test_unknown_cuda_graph_mode_is_rejected():
+    cfg = SmallCurriculum()
+    cfg.sim.cuda_graph = "yes"
+    with pytest.raises(ValueError, match="cuda_graph"):
+        GenteBiped(cfg, device="cpu")

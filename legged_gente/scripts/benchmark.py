@@ -174,11 +174,13 @@ def profile(env, task: str, steps: int, out: str) -> None:
 
 
 def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, check_sync: bool = False,
-        profile_out: str | None = None, profile_envs: int | None = None) -> list[dict]:
+        profile_out: str | None = None, profile_envs: int | None = None, cuda_graph: str | None = None) -> list[dict]:
     rows = []
     for num_envs in sizes:
         env_cfg, _ = task_registry.get_cfgs(task)
         env_cfg.env.num_envs = num_envs
+        if cuda_graph is not None:
+            env_cfg.sim.cuda_graph = cuda_graph
         free_before = torch.cuda.mem_get_info(device)[0] if device.startswith("cuda") else 0
         env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
         settle(env)
@@ -233,6 +235,8 @@ def main(argv=None) -> None:
     parser.add_argument("--profile", metavar="TRACE_JSON",
                         help="also profile 10 env steps + 1 PPO iteration (torch.profiler): print the costliest "
                              "operations, write a Chrome trace here")
+    parser.add_argument("--cuda_graph", choices=["env_step", "physics", "off"],
+                        help="override the task's cfg.sim.cuda_graph (what one CUDA graph records on GPU)")
     parser.add_argument("--profile_envs", type=int, help="the num_envs to profile at (default: the last of --num_envs)")
     args = parser.parse_args(argv)
     device = args.device or default_device()
@@ -247,7 +251,7 @@ def main(argv=None) -> None:
     if args.check_sync and not device.startswith("cuda"):
         parser.error("--check_sync needs a CUDA device (--device cuda)")
     rows = run(args.task, args.num_envs, device, args.steps, args.iterations, args.check_sync, args.profile,
-               args.profile_envs)
+               args.profile_envs, args.cuda_graph)
     if args.check_sync:
         print("check_sync: no host-device synchronisation in LeggedRobot.step")
     print_table(rows, device)

@@ -1,9 +1,10 @@
 """Thin MuJoCo-Warp backend: device model/data, zero-copy torch views, a captured substep loop.
 
 All worlds share one compiled model (robot + terrain); per-world model fields that domain randomisation
-touches are batched with ``put_model(batch_sizes=...)``. On a CUDA device the ``decimation`` substeps (and
-any force kernels installed as mujoco_warp callbacks) are captured once into a CUDA graph and replayed
-each policy step; on the CPU they are plain launches.
+touches are batched with ``put_model(batch_sizes=...)``. With ``cuda_graph = "physics"`` on a CUDA device the
+``decimation`` substeps (and any force kernels installed as mujoco_warp callbacks) are captured once into a
+CUDA graph and replayed each policy step; otherwise they are plain launches on torch's current stream (the
+env may record them into its own graph of the whole step, ``cuda_graph = "env_step"``).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ class Simulation:
         self.num_worlds = num_worlds
         self.device = device
         self.wp_device = wp.get_device("cpu" if device == "cpu" else device)
-        self.use_graph = bool(sim_cfg.use_cuda_graph) and self.wp_device.is_cuda
+        self.use_graph = sim_cfg.cuda_graph == "physics" and self.wp_device.is_cuda
         with wp.ScopedDevice(self.wp_device):
             batch = {name: num_worlds for name in BATCHED_FIELDS} if batch_model else {}
             self.m = mjw.put_model(mjm, batch_sizes=batch)
@@ -94,10 +95,14 @@ class Simulation:
     def step(self, decimation: int) -> None:
         """Advance all worlds by ``decimation`` substeps; contact forces per body are refreshed at the end."""
         with wp.ScopedDevice(self.wp_device):
-            if not self.use_graph:
+            if not self.wp_device.is_cuda:
                 self._substeps(decimation)
                 return
             torch_stream = wp.stream_from_torch(torch.cuda.current_stream(self.device))
+            if not self.use_graph:
+                with wp.ScopedStream(torch_stream, sync_enter=False):
+                    self._substeps(decimation)
+                return
             if self._graph is None:
                 self._sim_stream = wp.Stream(self.wp_device)
                 self._sim_stream.wait_stream(torch_stream)

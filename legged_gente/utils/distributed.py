@@ -24,6 +24,8 @@ import torch
 import torch.distributed as dist
 from rsl_rl.runners import OnPolicyRunner
 
+from legged_gente.utils.episode_logger import DeferredLogger
+
 TORCHRUN_VARS = ("RANK", "LOCAL_RANK", "WORLD_SIZE")
 
 # NVLink multicast (NVLS / NVLink SHARP) stays off: on the lent multi-GPU hosts a program that uses it can put
@@ -113,8 +115,24 @@ def init_process_group(launch: Launch, device: str) -> str:
     return backend
 
 
+MATMUL_PRECISIONS = ("highest", "high", "medium")  # torch.set_float32_matmul_precision's settings
+
+
 class GenteOnPolicyRunner(OnPolicyRunner):
-    """rsl-rl's OnPolicyRunner, made distributed by any torchrun launch, with per-rank torch seeds."""
+    """rsl-rl's OnPolicyRunner, made distributed by any torchrun launch, with per-rank torch seeds, the
+    configured float32 matmul precision, and a logger that does not sync with the GPU at every env step."""
+
+    def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu"):
+        precision = train_cfg.get("matmul_precision", "highest")
+        if precision not in MATMUL_PRECISIONS:
+            raise ValueError(f"runner.matmul_precision={precision!r}; use one of {MATMUL_PRECISIONS} "
+                             f"(torch.set_float32_matmul_precision)")
+        if str(device).startswith("cuda"):
+            torch.set_float32_matmul_precision(precision)
+        super().__init__(env, train_cfg, log_dir, device)
+        self.logger = DeferredLogger(log_dir=log_dir, cfg=self.cfg, env_cfg=self.env.cfg, num_envs=self.env.num_envs,
+                                     is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
+                                     gpu_global_rank=self.gpu_global_rank, device=self.device)
 
     def _configure_multi_gpu(self) -> None:
         launch = torchrun_launch()

@@ -1,9 +1,11 @@
 """LeggedRobot: an rsl-rl ``VecEnv`` of ``num_envs`` MuJoCo-Warp worlds sharing one terrain.
 
-legged_gym's task shape on MuJoCo-Warp: PD position actuators run inside the physics; ``decimation``
-substeps (plus terrain force kernels) are one captured CUDA graph on GPU; everything else is batched torch
-on zero-copy views of the simulator's arrays. Resets, command resampling and curriculum updates are masked
-tensor operations, so a policy step never waits on the host.
+legged_gym's task shape on MuJoCo-Warp: PD position actuators run inside the physics; everything else is
+batched torch on zero-copy views of the simulator's arrays. Resets, command resampling and curriculum updates
+are masked tensor operations, so a policy step never waits on the host, and on GPU the whole step (the
+``decimation`` substeps, terrain force kernels, rewards, resets, observations) is one captured CUDA graph
+(``cfg.sim.cuda_graph``): state carried between steps is updated in place, and host-side work (pushes, logging)
+happens outside the graph.
 """
 
 from __future__ import annotations
@@ -19,10 +21,15 @@ from tensordict import TensorDict
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
 from legged_gente.sim.assembly import build_model
 from legged_gente.sim.backend import Simulation
+from legged_gente.sim.step_graph import StepGraph
 from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
 
 
 class LeggedRobot(VecEnv):
+    step_outputs = ("actions", "obs_buf", "rew_buf", "reset_buf", "time_out_buf", "base_pos", "base_quat",
+                    "base_lin_vel", "base_ang_vel", "projected_gravity", "dof_pos", "dof_vel", "feet_pos")
+    """Tensors the step recomputes from scratch (may be rebound); all other state is updated in place."""
+
     def __init__(self, cfg: LeggedRobotCfg, device: str = "cpu", train_cfg_steps_per_env: int = 24):
         self.cfg = cfg
         self.device = device
@@ -44,6 +51,8 @@ class LeggedRobot(VecEnv):
         self._init_origins()
         self._randomize_model()
         self.reset()
+        self._step_graph = (StepGraph(self, self._step_body, self.step_outputs, device)
+                            if self.sim.wp_device.is_cuda and cfg.sim.cuda_graph == "env_step" else None)
 
     # ------------------------------------------------------------------------------------------------------
     # construction
@@ -54,6 +63,9 @@ class LeggedRobot(VecEnv):
             raise ValueError(f"cfg.env.num_envs must be >= 1, got {self.num_envs}.")
         if cfg.control.decimation < 1:
             raise ValueError(f"cfg.control.decimation must be >= 1, got {cfg.control.decimation}.")
+        if cfg.sim.cuda_graph not in ("env_step", "physics", "off"):
+            raise ValueError(f"cfg.sim.cuda_graph={cfg.sim.cuda_graph!r}; use 'env_step' (the whole step in one "
+                             f"CUDA graph), 'physics' (only the substeps) or 'off'.")
         if cfg.terrain.solved_top_level not in ("random", "stay"):
             raise ValueError(f"cfg.terrain.solved_top_level={cfg.terrain.solved_top_level!r}; use 'random' "
                              f"(legged_gym) or 'stay'.")
@@ -116,10 +128,11 @@ class LeggedRobot(VecEnv):
         self.base = lay.base_body
         self.root_body = int(self.mjm.body_rootid[self.base])
 
+        self._step_actions = torch.zeros(n, self.num_actions, device=dev)  # the step's input, read by its graph
         self.actions = torch.zeros(n, self.num_actions, device=dev)
         self.last_actions = torch.zeros_like(self.actions)
         self.last_dof_vel = torch.zeros(n, self.num_actions, device=dev)
-        self.episode_length_buf = torch.zeros(n, dtype=torch.long, device=dev)
+        self._episode_length_buf = torch.zeros(n, dtype=torch.long, device=dev)
         self.reset_buf = torch.ones(n, dtype=torch.bool, device=dev)
         self.time_out_buf = torch.zeros(n, dtype=torch.bool, device=dev)
         self.rew_buf = torch.zeros(n, device=dev)
@@ -219,8 +232,17 @@ class LeggedRobot(VecEnv):
     # ------------------------------------------------------------------------------------------------------
     # VecEnv
     # ------------------------------------------------------------------------------------------------------
+    @property
+    def episode_length_buf(self) -> torch.Tensor:
+        return self._episode_length_buf
+
+    @episode_length_buf.setter
+    def episode_length_buf(self, value: torch.Tensor) -> None:
+        """An assignment (rsl-rl's random initial episode lengths) copies into the buffer the step graph reads."""
+        self._episode_length_buf.copy_(value)
+
     def get_observations(self) -> TensorDict:
-        return self.obs_buf
+        return self.obs_buf.clone()  # a copy: the next step overwrites obs_buf in place
 
     def reset(self) -> TensorDict:
         all_envs = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
@@ -231,20 +253,40 @@ class LeggedRobot(VecEnv):
         return self.obs_buf
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        """One policy step. Returns copies: the step graph overwrites its buffers in place on the next step,
+        and rsl-rl keeps references to observations across it."""
+        if actions.shape != self._step_actions.shape:
+            raise ValueError(f"actions of shape {tuple(actions.shape)}; this env takes (num_envs, num_actions) = "
+                             f"{tuple(self._step_actions.shape)}")
+        self._step_actions.copy_(actions)
+        if self._step_graph is not None:
+            self._step_graph()
+        else:
+            self._step_body()
+        self.common_step_counter += 1
+        if self.cfg.domain_rand.push_robots and self.common_step_counter % self._push_steps == 0:
+            # after the observations, as in legged_gym: the push shows in the next step
+            self._push_robots()
+        extras = {"time_outs": self.time_out_buf.clone()}
+        if self.common_step_counter % self._log_every == 0:
+            extras["episode"] = self._episode_statistics()
+        return self.obs_buf.clone(), self.rew_buf.clone(), self.reset_buf.clone(), extras
+
+    def _step_body(self) -> None:
+        """Everything a step does on the device: this is what the step graph records."""
         clip = self.cfg.normalization.clip_actions
-        self.actions = torch.clamp(actions.to(self.device), -clip, clip)
+        self.actions = torch.clamp(self._step_actions, -clip, clip)
         self.sim.ctrl[:] = self.default_dof_pos + self.cfg.control.action_scale * self.actions
         if self.forces is not None:
             self.forces.new_policy_step()
         self.sim.step(self.cfg.control.decimation)
-        return self._post_physics_step()
+        self._post_physics_step()
 
     # ------------------------------------------------------------------------------------------------------
     # step internals
     # ------------------------------------------------------------------------------------------------------
-    def _post_physics_step(self):
+    def _post_physics_step(self) -> None:
         self.episode_length_buf += 1
-        self.common_step_counter += 1
         diverged = self._sanitize_diverged()
         self._update_state()
         self._check_termination(diverged)
@@ -254,16 +296,10 @@ class LeggedRobot(VecEnv):
         # new commands for the robots just reset and for those whose resampling time came (episode length 0
         # after a reset, so both are caught by the same test)
         self._resample_commands(self.episode_length_buf % self._resample_steps == 0)
-        if self.cfg.domain_rand.push_robots and self.common_step_counter % self._push_steps == 0:
-            self._push_robots()
         self._update_state()
         self._compute_observations()
         self.last_actions[:] = self.actions
         self.last_dof_vel[:] = self.dof_vel
-        extras = {"time_outs": self.time_out_buf.clone()}
-        if self.common_step_counter % self._log_every == 0:
-            extras["episode"] = self._episode_statistics()
-        return self.obs_buf, self.rew_buf, self.reset_buf.clone(), extras
 
     def _sanitize_diverged(self) -> torch.Tensor:
         """Diverged worlds: state non-finite or absurdly fast, or constraint rows overflowed. Zero them and flag
@@ -344,8 +380,8 @@ class LeggedRobot(VecEnv):
         if levels.shape != self.terrain_levels.shape or int(levels.max()) >= self.max_terrain_level:
             return (f"terrain curriculum restarts: the checkpoint's levels ({levels.numel()} robots, up to level "
                     f"{int(levels.max())}) do not fit {self.num_envs} robots on {self.max_terrain_level} levels")
-        self.terrain_levels = levels.to(self.device)
-        self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_columns]
+        self.terrain_levels.copy_(levels)
+        self.env_origins.copy_(self.terrain_origins[self.terrain_levels, self.terrain_columns])
         return (f"terrain curriculum restored: mean level {levels.float().mean():.2f} (robots move there at their "
                 f"next reset)")
 
@@ -362,9 +398,10 @@ class LeggedRobot(VecEnv):
         if self.cfg.terrain.solved_top_level == "random":
             level = torch.where(level > top, torch.randint_like(level, 0, self.max_terrain_level), level)
         level = level.clamp(0, top)
-        self.terrain_levels = torch.where(done, level, self.terrain_levels)
-        self.env_origins = torch.where(done[:, None], self.terrain_origins[self.terrain_levels, self.terrain_columns],
-                                       self.env_origins)
+        self.terrain_levels[:] = torch.where(done, level, self.terrain_levels)
+        self.env_origins[:] = torch.where(done[:, None],
+                                          self.terrain_origins[self.terrain_levels, self.terrain_columns],
+                                          self.env_origins)
 
     def _episode_statistics(self) -> dict[str, torch.Tensor]:
         """Means over the episodes that ended since the last report (once per rollout, still on device)."""
@@ -374,8 +411,8 @@ class LeggedRobot(VecEnv):
         # legged_gym's statistic: the mean level of all robots now (not only of those whose episode ended)
         stats["terrain_level"] = self.terrain_levels.float().mean()
         stats["diverged_resets"] = self.diverged_resets.clone()
-        self._stat_reward_sums = torch.zeros_like(self._stat_reward_sums)
-        self._stat_count = torch.zeros((), device=self.device)
+        self._stat_reward_sums.zero_()
+        self._stat_count.zero_()
         return stats
 
     def _reset_envs(self, mask: torch.Tensor) -> None:
@@ -405,7 +442,7 @@ class LeggedRobot(VecEnv):
             buf[:] = torch.where(m, 0.0, buf)
         self.last_contacts &= ~m
         self.episode_length_buf[:] = torch.where(mask, 0, self.episode_length_buf)
-        self.episode_sums = torch.where(m, 0.0, self.episode_sums)
+        self.episode_sums.masked_fill_(m, 0.0)
         if self.forces is not None:
             self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
 
@@ -417,7 +454,7 @@ class LeggedRobot(VecEnv):
         still = torch.rand(n, device=dev) < self.cfg.commands.still_fraction
         new[:, :2] *= (~(small | still))[:, None]
         new[:, 2] *= (~still)
-        self.commands = torch.where(mask[:, None], new, self.commands)
+        self.commands[:] = torch.where(mask[:, None], new, self.commands)
 
     def _push_robots(self) -> None:
         v = self.cfg.domain_rand.max_push_vel_xy
@@ -546,7 +583,7 @@ class LeggedRobot(VecEnv):
         """Reward steps whose swing lasted longer than the target, paid at touchdown (legged_gym)."""
         contact = self.foot_contacts()
         contact_filt = contact | self.last_contacts
-        self.last_contacts = contact
+        self.last_contacts.copy_(contact)
         first_contact = (self.feet_air_time > 0.0) & contact_filt
         self.feet_air_time += self.dt
         reward = torch.sum((self.feet_air_time - self.cfg.rewards.feet_air_time_target) * first_contact, dim=1)

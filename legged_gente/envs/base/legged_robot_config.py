@@ -156,7 +156,10 @@ class LeggedRobotCfg(BaseConfig):
         nconmax = 32  # contacts per world (contact arrays are shared: naconmax = nconmax * num_envs)
         njmax = 160  # constraint rows per world: 4 per pyramidal condim-3 contact + joint limits; a fallen robot
         # on rough ground can touch with many bodies at once, and an overflowing world is reset as diverged
-        use_cuda_graph = True  # capture the substep loop once on GPU
+        # on GPU: "env_step" records the whole step (physics, force kernels, rewards, resets, observations)
+        # into one CUDA graph; "physics" only the substep loop (for env code that branches on host values);
+        # "off" launches everything one by one. Ignored on the CPU.
+        cuda_graph = "env_step"
         max_qvel = 1000.0  # m/s or rad/s; a world moving faster has diverged (real ones reach 1e6+) and is reset
 
     class forces(ForcesConfig):
@@ -211,6 +214,10 @@ class LeggedRobotCfgPPO(BaseConfig):
         run_name = ""
         logger = "tensorboard"
         check_for_nan = False  # the env resets non-finite worlds itself; the check costs a sync per step
+        # float32 matrix products (torch.set_float32_matmul_precision): "high" lets the PPO update use TF32
+        # tensor cores on Ampere and newer GPUs (several times faster GEMMs, 10-bit mantissa inputs with fp32
+        # accumulation); "highest" keeps full fp32. Applied on CUDA devices only.
+        matmul_precision = "high"
         obs_groups = {"actor": ["policy"], "critic": ["critic"]}
         resume = False
         load_run = -1  # -1: the latest run
@@ -228,6 +235,7 @@ def rsl_rl_train_cfg(cfg: LeggedRobotCfgPPO) -> dict:
         "run_name": runner["run_name"],
         "logger": runner["logger"],
         "check_for_nan": runner["check_for_nan"],
+        "matmul_precision": runner["matmul_precision"],
         "obs_groups": runner["obs_groups"],
         "actor": class_to_dict(cfg.actor),
         "critic": class_to_dict(cfg.critic),

@@ -1,0 +1,46 @@
+"""rsl-rl's training logger without its host sync in every rollout step.
+
+rsl-rl 5.5's ``Logger.process_env_step`` finds the finished episodes with ``nonzero()`` and copies their
+returns to the host at every env step: the CPU waits for the GPU to finish the step before it can launch the
+next one, so the two never overlap. ``DeferredLogger`` keeps the per-step (done, return, length) tensors on
+the device and moves them to the host once per iteration, in ``log``. The numbers it logs are the same.
+"""
+
+from __future__ import annotations
+
+import torch
+from rsl_rl.utils.logger import Logger
+
+
+class DeferredLogger(Logger):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._finished: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = []
+
+    def process_env_step(self, rewards: torch.Tensor, dones: torch.Tensor, extras: dict,
+                         intrinsic_rewards: torch.Tensor | None = None) -> None:
+        if self.writer is None or intrinsic_rewards is not None:  # nothing to log, or RND's extra buffers
+            return super().process_env_step(rewards, dones, extras, intrinsic_rewards)
+        if "episode" in extras:
+            self.ep_extras.append(extras["episode"])
+        elif "log" in extras:
+            self.ep_extras.append(extras["log"])
+        self.cur_reward_sum += rewards
+        self.cur_episode_length += 1
+        done = dones > 0
+        self._finished.append((done, self.cur_reward_sum.clone(), self.cur_episode_length.clone()))
+        self.cur_reward_sum.masked_fill_(done, 0.0)
+        self.cur_episode_length.masked_fill_(done, 0.0)
+
+    def flush(self) -> None:
+        """Move the episodes that finished since the last flush into the host-side buffers (one sync)."""
+        if not self._finished:
+            return
+        done, returns, lengths = (torch.stack(parts) for parts in zip(*self._finished))
+        self._finished.clear()
+        self.rewbuffer.extend(returns[done].tolist())
+        self.lenbuffer.extend(lengths[done].tolist())
+
+    def log(self, *args, **kwargs) -> None:
+        self.flush()
+        super().log(*args, **kwargs)
