@@ -17,6 +17,7 @@ def test_benchmark_prints_and_writes_a_table(tmp_path, capsys):
         for key in ("raw_substeps_per_s", "env_steps_per_s", "ppo_steps_per_s"):
             assert float(r[key]) > 0.0
         assert float(r["env_over_raw"]) == float(r["env_steps_per_s"]) / (float(r["raw_substeps_per_s"]) / 4)
+        assert 0.0 < float(r["ppo_update_share"]) < 1.0
 
 
 def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):

@@ -138,14 +138,28 @@ def _runner(env, task: str):
     return runner, train_cfg
 
 
-def ppo_steps(env, task: str, iterations: int) -> float:
+def ppo_steps(env, task: str, iterations: int) -> tuple[float, float]:
+    """PPO env-steps/s (collection + learning) and the share of the time spent in the policy update."""
     runner, train_cfg = _runner(env, task)
     runner.learn(1)  # warm-up
+    update, update_seconds = runner.alg.update, 0.0
+
+    def timed_update():
+        nonlocal update_seconds
+        _sync(env.device)
+        start = time.perf_counter()
+        losses = update()
+        _sync(env.device)
+        update_seconds += time.perf_counter() - start
+        return losses
+
+    runner.alg.update = timed_update
     _sync(env.device)
     start = time.perf_counter()
     runner.learn(iterations)
     _sync(env.device)
-    return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / (time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / seconds, update_seconds / seconds
 
 
 def profile(env, task: str, steps: int, out: str) -> None:
@@ -167,8 +181,8 @@ def profile(env, task: str, steps: int, out: str) -> None:
         _sync(env.device)
         runner.learn(1)
         _sync(env.device)
-    sort_by = "self_cuda_time_total" if cuda else "self_cpu_time_total"
-    print(prof.key_averages().table(sort_by=sort_by, row_limit=25, max_name_column_width=60))
+    for sort_by in (["self_cuda_time_total"] if cuda else []) + ["self_cpu_time_total"]:
+        print(prof.key_averages().table(sort_by=sort_by, row_limit=20, max_name_column_width=60))
     prof.export_chrome_trace(out)
     print(f"profile: {steps} env steps + 1 PPO iteration at {env.num_envs} envs -> {out}")
 
@@ -191,14 +205,14 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             forces_slowdown = max(0.0, 1.0 - with_forces / raw)
             forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
         stepped = env_steps(env, steps, check_sync)
-        ppo = ppo_steps(env, task, iterations) if iterations > 0 else float("nan")
+        ppo, update_share = ppo_steps(env, task, iterations) if iterations > 0 else (float("nan"), float("nan"))
         if profile_out and num_envs == (profile_envs or sizes[-1]):
             profile(env, task, 10, profile_out)
         ceiling = raw / env.cfg.control.decimation
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
-                     "forces_share": forces_share, "forces_slowdown": forces_slowdown, "gpu_memory_gib": memory})
+                     "ppo_update_share": update_share, "forces_share": forces_share, "forces_slowdown": forces_slowdown, "gpu_memory_gib": memory})
         del env
         if device.startswith("cuda"):
             torch.cuda.empty_cache()
@@ -209,14 +223,16 @@ def print_table(rows: list[dict], device: str) -> None:
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "CPU"
     print(f"\ndevice: {name}")
     header = (f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} "
-              f"{'PPO/raw':>8} {'forces':>7} {'forces Δ':>8} {'GPU GiB':>8}")
+              f"{'PPO/raw':>8} {'update':>7} {'forces':>7} {'forces Δ':>8} {'GPU GiB':>8}")
     print(header)
     print("-" * len(header))
     for r in rows:
         print(f"{r['num_envs']:>9d} {r['raw_substeps_per_s']:>15,.0f} {r['env_steps_per_s']:>12,.0f} "
               f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f} "
+              f"{r['ppo_update_share']:>7.1%} "
               f"{r['forces_share']:>7.1%} {r['forces_slowdown']:>8.1%} {r['gpu_memory_gib']:>8.2f}")
     print("raw: mjw.step substeps/s; raw ceiling in env steps/s = raw / decimation (the ratios' denominator);\n"
+          "update: the PPO update's share of the PPO time (the rest is collection: policy + env steps);\n"
           "forces: the terrain force kernels' time as a share of a substep with them (nan: terrain has none);\n"
           "forces Δ: how much slower the physics substep is with the force fields on (kernels + changed contacts)")
 

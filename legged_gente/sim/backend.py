@@ -3,8 +3,8 @@
 All worlds share one compiled model (robot + terrain); per-world model fields that domain randomisation
 touches are batched with ``put_model(batch_sizes=...)``. With ``cuda_graph = "physics"`` on a CUDA device the
 ``decimation`` substeps (and any force kernels installed as mujoco_warp callbacks) are captured once into a
-CUDA graph and replayed each policy step; otherwise they are plain launches on torch's current stream (the
-env may record them into its own graph of the whole step, ``cuda_graph = "env_step"``).
+CUDA graph and replayed each policy step; otherwise they are plain launches on Warp's current stream (the
+env records them into its own graph of the whole step with ``cuda_graph = "env_step"``).
 """
 
 from __future__ import annotations
@@ -95,14 +95,10 @@ class Simulation:
     def step(self, decimation: int) -> None:
         """Advance all worlds by ``decimation`` substeps; contact forces per body are refreshed at the end."""
         with wp.ScopedDevice(self.wp_device):
-            if not self.wp_device.is_cuda:
-                self._substeps(decimation)
+            if not self.use_graph:
+                self._substeps(decimation)  # on Warp's current stream (the env's step graph sets it to torch's)
                 return
             torch_stream = wp.stream_from_torch(torch.cuda.current_stream(self.device))
-            if not self.use_graph:
-                with wp.ScopedStream(torch_stream, sync_enter=False):
-                    self._substeps(decimation)
-                return
             if self._graph is None:
                 self._sim_stream = wp.Stream(self.wp_device)
                 self._sim_stream.wait_stream(torch_stream)

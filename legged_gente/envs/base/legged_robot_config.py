@@ -192,7 +192,8 @@ class LeggedRobotCfgPPO(BaseConfig):
         obs_normalization = True
 
     class algorithm:
-        class_name = "PPO"
+        # rsl-rl's PPO with a sync-free update (same math; "PPO" selects rsl-rl's own)
+        class_name = "legged_gente.utils.ppo:GentePPO"
         value_loss_coef = 1.0
         use_clipped_value_loss = True
         clip_param = 0.2

@@ -1,0 +1,97 @@
+"""rsl-rl's PPO with an update that never waits for the GPU.
+
+rsl-rl 5.5's ``PPO.update`` reads four numbers back to the host in every mini-batch: the KL divergence (to
+adapt the learning rate in Python) and the three losses (``.item()``). Each read makes the CPU wait until the
+GPU has finished the mini-batch before it launches the next one, so the few hundred small kernels of a
+mini-batch are issued and executed one after the other instead of overlapping. ``GentePPO`` keeps the
+learning rate in a device tensor that the optimizer reads (adapted in place by the same rule), sums the
+losses on the device, and reads everything once per update. The loss is PPO's clipped surrogate with the
+clipped value loss and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to
+rsl-rl's for what it does not cover (recurrent models, RND, symmetry, optimizers other than Adam).
+"""
+
+from __future__ import annotations
+
+from itertools import chain
+
+import torch
+from rsl_rl.algorithms import PPO
+from torch import nn
+
+
+class GentePPO(PPO):
+    def __init__(self, actor, critic, storage, *args, optimizer: str = "adam", **kwargs):
+        super().__init__(actor, critic, storage, *args, optimizer=optimizer, **kwargs)
+        self.device_side_update = (optimizer == "adam" and self.rnd is None and self.symmetry is None
+                                   and not (actor.is_recurrent or critic.is_recurrent))
+        if self.device_side_update:
+            # Adam reading its learning rate from a tensor: the adaptive schedule changes it on the device
+            lr = torch.tensor(float(self.learning_rate), device=self.device)
+            self.optimizer = torch.optim.Adam(chain(self.actor.parameters(), self.critic.parameters()), lr=lr,
+                                              fused=True)
+
+    def _learning_rate_tensor(self) -> torch.Tensor:
+        """The optimizer's learning rate as a device tensor (a checkpoint of rsl-rl's PPO restores a float)."""
+        group = self.optimizer.param_groups[0]
+        if not isinstance(group["lr"], torch.Tensor):
+            group["lr"] = torch.tensor(float(group["lr"]), device=self.device)
+        return group["lr"]
+
+    def _adapt_learning_rate(self, lr: torch.Tensor, kl: torch.Tensor) -> None:
+        """rsl-rl's adaptive rule, in place on the device: /1.5 above 2 x desired KL, x1.5 below half of it."""
+        lower = torch.clamp(lr / 1.5, min=1e-5)
+        higher = torch.clamp(lr * 1.5, max=1e-2)
+        lr.copy_(torch.where(kl > 2.0 * self.desired_kl, lower,
+                             torch.where((kl < 0.5 * self.desired_kl) & (kl > 0.0), higher, lr)))
+
+    def update(self) -> dict[str, float]:
+        if not self.device_side_update:
+            return super().update()
+        lr = self._learning_rate_tensor()
+        adaptive = self.desired_kl is not None and self.schedule == "adaptive"
+        loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
+        device_type = torch.device(self.device).type
+        for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
+            advantages = batch.advantages.squeeze(-1)
+            if self.normalize_advantage_per_mini_batch:
+                advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+            with torch.amp.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16):
+                self.actor(batch.observations, stochastic_output=True)
+                log_prob = self.actor.get_output_log_prob(batch.actions)
+                entropy = self.actor.output_entropy.mean()
+                values = self.critic(batch.observations)
+                if adaptive:
+                    with torch.no_grad():
+                        kl = self.actor.get_kl_divergence(batch.old_distribution_params,
+                                                          self.actor.output_distribution_params).mean()
+                        if self.is_multi_gpu:  # every rank gets the same mean, so the same learning rate
+                            torch.distributed.all_reduce(kl, op=torch.distributed.ReduceOp.SUM)
+                            kl /= self.gpu_world_size
+                        self._adapt_learning_rate(lr, kl)
+                ratio = torch.exp(log_prob - batch.old_actions_log_prob.squeeze(-1))
+                clipped_ratio = ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
+                surrogate_loss = torch.max(-advantages * ratio, -advantages * clipped_ratio).mean()
+                if self.use_clipped_value_loss:
+                    clipped_values = batch.values + (values - batch.values).clamp(-self.clip_param, self.clip_param)
+                    value_loss = torch.max((values - batch.returns).square(),
+                                           (clipped_values - batch.returns).square()).mean()
+                else:
+                    value_loss = (values - batch.returns).square().mean()
+                loss = surrogate_loss + self.value_loss_coef * value_loss - self.entropy_coef * entropy
+            self.optimizer.zero_grad()
+            loss.backward()
+            if self.is_multi_gpu:
+                self.reduce_parameters()
+            nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
+            nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
+            self.optimizer.step()
+            loss_sums += torch.stack([value_loss, surrogate_loss, entropy]).detach()
+
+        observations = self.storage.observations.flatten(0, 1)
+        self.actor.update_normalization(observations)
+        self.critic.update_normalization(observations)
+        self.storage.clear()
+        num_updates = self.num_learning_epochs * self.num_mini_batches
+        value, surrogate, entropy, learning_rate = torch.cat([loss_sums / num_updates, lr.reshape(1)]).tolist()
+        self.learning_rate = learning_rate  # a float for the logger, read once per update
+        return {"value": value, "surrogate": surrogate, "entropy": entropy}

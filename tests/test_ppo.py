@@ -1,0 +1,67 @@
+"""GentePPO's sync-free update computes what rsl-rl's PPO.update computes."""
+
+import copy
+from types import SimpleNamespace
+
+import pytest
+import torch
+from rsl_rl.algorithms import PPO
+from tensordict import TensorDict
+
+from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO, rsl_rl_train_cfg
+from legged_gente.utils.ppo import GentePPO
+
+NUM_ENVS, NUM_ACTIONS, STEPS = 32, 3, 8
+
+
+def observations(generator):
+    return TensorDict({"policy": torch.randn(NUM_ENVS, 5, generator=generator),
+                       "critic": torch.randn(NUM_ENVS, 7, generator=generator)}, batch_size=[NUM_ENVS])
+
+
+def updated(alg_class, learning_rate):
+    """Build the algorithm from the default train config, fill one rollout with seeded data, update once."""
+    generator = torch.Generator().manual_seed(0)
+    cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
+    cfg["num_steps_per_env"] = STEPS
+    cfg["multi_gpu"] = None
+    cfg["algorithm"].update(class_name=alg_class, num_mini_batches=2, num_learning_epochs=3,
+                            learning_rate=learning_rate)
+    torch.manual_seed(0)
+    alg = PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
+                                  cfg, "cpu")
+    obs = observations(generator)
+    for _ in range(STEPS):
+        alg.act(obs)
+        obs = observations(generator)
+        dones = torch.rand(NUM_ENVS, generator=generator) < 0.1
+        alg.process_env_step(obs, torch.randn(NUM_ENVS, generator=generator), dones,
+                             {"time_outs": dones & (torch.rand(NUM_ENVS, generator=generator) < 0.5)})
+    alg.compute_returns(obs)
+    losses = alg.update()
+    return alg, losses
+
+
+@pytest.mark.parametrize("learning_rate", [1e-3, 5e-2])  # 5e-2: large steps, the adaptive rate must come down
+def test_device_side_update_matches_rsl_rl(learning_rate):
+    reference, reference_losses = updated(PPO, learning_rate)
+    ours, losses = updated(GentePPO, learning_rate)
+    assert ours.device_side_update
+    assert isinstance(ours.optimizer.param_groups[0]["lr"], torch.Tensor)
+    assert ours.learning_rate == pytest.approx(reference.learning_rate, rel=1e-6)
+    assert losses == pytest.approx(reference_losses, rel=1e-4, abs=1e-6)
+    for theirs, mine in zip(reference.actor.parameters(), ours.actor.parameters()):
+        assert torch.allclose(theirs, mine, atol=1e-5)
+    for theirs, mine in zip(reference.critic.parameters(), ours.critic.parameters()):
+        assert torch.allclose(theirs, mine, atol=1e-5)
+    if learning_rate == 5e-2:
+        assert ours.learning_rate < learning_rate
+
+
+def test_a_checkpoint_with_a_float_learning_rate_still_adapts():
+    ours, _ = updated(GentePPO, 1e-3)
+    state = copy.deepcopy(ours.optimizer.state_dict())
+    state["param_groups"][0]["lr"] = 2e-3  # as saved by rsl-rl's PPO
+    ours.optimizer.load_state_dict(state)
+    assert isinstance(ours._learning_rate_tensor(), torch.Tensor)
+    assert float(ours._learning_rate_tensor()) == pytest.approx(2e-3)
