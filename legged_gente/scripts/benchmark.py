@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import argparse
 import time
+import warnings
+from collections import Counter
 
 import torch
 import warp as wp
@@ -138,6 +140,21 @@ def _runner(env, task: str):
     return runner, train_cfg
 
 
+def ppo_sync_points(env, task: str) -> Counter:
+    """Where one PPO iteration (rsl-rl collection + update) makes the host wait for the device: torch's sync
+    debug mode warns at each such operation; counted per source line (CUDA only)."""
+    runner, _ = _runner(env, task)
+    runner.learn(1)  # warm-up
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        torch.cuda.set_sync_debug_mode("warn")
+        try:
+            runner.learn(1)
+        finally:
+            torch.cuda.set_sync_debug_mode("default")
+    return Counter(f"{w.filename}:{w.lineno}" for w in caught if "synchroniz" in str(w.message))
+
+
 def ppo_steps(env, task: str, iterations: int) -> tuple[float, float]:
     """PPO env-steps/s (collection + learning) and the share of the time spent in the policy update."""
     runner, train_cfg = _runner(env, task)
@@ -205,6 +222,10 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             forces_slowdown = max(0.0, 1.0 - with_forces / raw)
             forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
         stepped = env_steps(env, steps, check_sync)
+        if check_sync and iterations > 0:
+            points = ppo_sync_points(env, task)
+            print(f"PPO iteration at {num_envs} envs: {sum(points.values())} host-device syncs"
+                  + "".join(f"\n  {count:4d} x {where}" for where, count in points.most_common()))
         ppo, update_share = ppo_steps(env, task, iterations) if iterations > 0 else (float("nan"), float("nan"))
         if profile_out and num_envs == (profile_envs or sizes[-1]):
             profile(env, task, 10, profile_out)
@@ -247,7 +268,8 @@ def main(argv=None) -> None:
     parser.add_argument("--terrain_build", action="store_true", help="also time the terrain grid build")
     parser.add_argument("--csv", help="also write the table to this CSV file")
     parser.add_argument("--check_sync", action="store_true",
-                        help="CUDA: fail if LeggedRobot.step waits for the device anywhere (torch sync debug mode)")
+                        help="CUDA: fail if LeggedRobot.step waits for the device anywhere (torch sync debug mode); "
+                             "list where a PPO iteration does")
     parser.add_argument("--profile", metavar="TRACE_JSON",
                         help="also profile 10 env steps + 1 PPO iteration (torch.profiler): print the costliest "
                              "operations, write a Chrome trace here")
