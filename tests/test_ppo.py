@@ -65,3 +65,18 @@ def test_a_checkpoint_with_a_float_learning_rate_still_adapts():
     ours.optimizer.load_state_dict(state)
     assert isinstance(ours._learning_rate_tensor(), torch.Tensor)
     assert float(ours._learning_rate_tensor()) == pytest.approx(2e-3)
+
+
+def test_sync_free_gaussian_samples_the_same_distribution():
+    from rsl_rl.modules.distribution import GaussianDistribution
+
+    from legged_gente.utils.ppo import SyncFreeGaussianDistribution
+
+    ours, theirs = SyncFreeGaussianDistribution(2, init_std=0.5), GaussianDistribution(2, init_std=0.5)
+    assert ours.state_dict().keys() == theirs.state_dict().keys()  # checkpoints load either way
+    mean = torch.tensor([[1.0, -2.0]]).expand(200_000, 2)
+    ours.update(mean)
+    samples = ours.sample()
+    assert torch.allclose(samples.mean(0), torch.tensor([1.0, -2.0]), atol=0.01)
+    assert torch.allclose(samples.std(0), torch.tensor([0.5, 0.5]), atol=0.01)
+    assert not samples.requires_grad

@@ -8,6 +8,10 @@ learning rate in a device tensor that the optimizer reads (adapted in place by t
 losses on the device, and reads everything once per update. The loss is PPO's clipped surrogate with the
 clipped value loss and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to
 rsl-rl's for what it does not cover (recurrent models, RND, symmetry, optimizers other than Adam).
+
+``SyncFreeGaussianDistribution`` is rsl-rl's Gaussian policy distribution sampled as mean + std * N(0, 1):
+``torch.normal(mean, std)``, which rsl-rl's ``sample`` calls, checks ``std >= 0`` on the host, a sync at
+every action sampled in the rollout and in every mini-batch.
 """
 
 from __future__ import annotations
@@ -16,7 +20,15 @@ from itertools import chain
 
 import torch
 from rsl_rl.algorithms import PPO
+from rsl_rl.modules.distribution import GaussianDistribution
 from torch import nn
+
+
+class SyncFreeGaussianDistribution(GaussianDistribution):
+    def sample(self) -> torch.Tensor:
+        """A draw from the same Gaussian, without torch.normal's host-side check of the std."""
+        with torch.no_grad():
+            return self._distribution.rsample()
 
 
 class GentePPO(PPO):

@@ -181,7 +181,7 @@ class LeggedRobotCfgPPO(BaseConfig):
         obs_normalization = True
 
         class distribution_cfg:
-            class_name = "GaussianDistribution"
+            class_name = "legged_gente.utils.ppo:SyncFreeGaussianDistribution"  # rsl-rl's, sampled without a sync
             init_std = 1.0
             std_type = "scalar"
 
