@@ -185,7 +185,7 @@ def test_step_body_updates_carried_state_in_place(env):
     """What the GPU step graph relies on: a step (with resets, curriculum moves, forces) rebinds only the
     tensors it recomputes from scratch (``step_outputs``); everything carried to the next step keeps its
     storage, or a graph replay would read stale tensors."""
-    from legged_gente.sim.step_graph import carried_state_rebound, rebound_attributes
+    from legged_gente.utils.cuda_graph import carried_state_rebound, rebound_attributes
 
     env.episode_length_buf = torch.full_like(env.episode_length_buf, env.max_episode_length - 1)  # all reset
     env._stat_reward_sums.fill_(1.0)

@@ -5,7 +5,9 @@ adapt the learning rate in Python) and the three losses (``.item()``). Each read
 GPU has finished the mini-batch before it launches the next one, so the few hundred small kernels of a
 mini-batch are issued and executed one after the other instead of overlapping. ``GentePPO`` keeps the
 learning rate in a device tensor that the optimizer reads (adapted in place by the same rule), sums the
-losses on the device, and reads everything once per update. The loss is PPO's clipped surrogate with the
+losses on the device, and reads everything once per update. On a single GPU each mini-batch step (forward,
+loss, backward, gradient clipping, Adam) is then one CUDA graph (``StepGraph``), fed through a static
+mini-batch that each step's data is copied into. The loss is PPO's clipped surrogate with the
 clipped value loss and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to
 rsl-rl's for what it does not cover (recurrent models, RND, symmetry, optimizers other than Adam).
 
@@ -21,7 +23,10 @@ from itertools import chain
 import torch
 from rsl_rl.algorithms import PPO
 from rsl_rl.modules.distribution import GaussianDistribution
+from rsl_rl.storage import RolloutStorage
 from torch import nn
+
+from legged_gente.utils.cuda_graph import StepGraph
 
 
 class SyncFreeGaussianDistribution(GaussianDistribution):
@@ -38,9 +43,14 @@ class GentePPO(PPO):
                                    and not (actor.is_recurrent or critic.is_recurrent))
         if self.device_side_update:
             # Adam reading its learning rate from a tensor: the adaptive schedule changes it on the device
+            cuda = torch.device(self.device).type == "cuda"
             lr = torch.tensor(float(self.learning_rate), device=self.device)
             self.optimizer = torch.optim.Adam(chain(self.actor.parameters(), self.critic.parameters()), lr=lr,
-                                              fused=True)
+                                              fused=True, capturable=cuda)
+            self._loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
+            self._batch: RolloutStorage.Batch | None = None  # the mini-batch _minibatch_step reads
+            self._minibatch_graph = (StepGraph(self, self._minibatch_step, (), self.device, warp=False)
+                                     if cuda and not self.is_multi_gpu else None)
 
     def _learning_rate_tensor(self) -> torch.Tensor:
         """The optimizer's learning rate as a device tensor (a checkpoint of rsl-rl's PPO restores a float)."""
@@ -56,54 +66,92 @@ class GentePPO(PPO):
         lr.copy_(torch.where(kl > 2.0 * self.desired_kl, lower,
                              torch.where((kl < 0.5 * self.desired_kl) & (kl > 0.0), higher, lr)))
 
+    def _load_batch(self, batch: RolloutStorage.Batch) -> None:
+        """Make ``batch`` the one the next mini-batch step reads: copied into the static one under a graph."""
+        if self._minibatch_graph is None:
+            self._batch = batch
+        elif self._batch is None:
+            self._batch = RolloutStorage.Batch(
+                observations=batch.observations.clone(), actions=batch.actions.clone(), values=batch.values.clone(),
+                advantages=batch.advantages.clone(), returns=batch.returns.clone(),
+                old_actions_log_prob=batch.old_actions_log_prob.clone(),
+                old_distribution_params=tuple(p.clone() for p in batch.old_distribution_params))
+        else:
+            static = self._batch
+            static.observations.copy_(batch.observations)
+            for name in ("actions", "values", "advantages", "returns", "old_actions_log_prob"):
+                getattr(static, name).copy_(getattr(batch, name))
+            for mine, theirs in zip(static.old_distribution_params, batch.old_distribution_params):
+                mine.copy_(theirs)
+
+    def _minibatch_step(self) -> None:
+        """PPO's loss on ``self._batch``, one Adam step, the losses added to ``self._loss_sums``."""
+        batch = self._batch
+        advantages = batch.advantages.squeeze(-1)
+        if self.normalize_advantage_per_mini_batch:
+            advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+        device_type = torch.device(self.device).type
+        # (autocast's cast cache cannot be used under CUDA graph capture)
+        with torch.amp.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16,
+                                cache_enabled=False):
+            self.actor(batch.observations, stochastic_output=True)
+            log_prob = self.actor.get_output_log_prob(batch.actions)
+            entropy = self.actor.output_entropy.mean()
+            values = self.critic(batch.observations)
+            if self.desired_kl is not None and self.schedule == "adaptive":
+                with torch.no_grad():
+                    kl = self.actor.get_kl_divergence(batch.old_distribution_params,
+                                                      self.actor.output_distribution_params).mean()
+                    if self.is_multi_gpu:  # every rank gets the same mean, so the same learning rate
+                        torch.distributed.all_reduce(kl, op=torch.distributed.ReduceOp.SUM)
+                        kl /= self.gpu_world_size
+                    self._adapt_learning_rate(self._learning_rate_tensor(), kl)
+            ratio = torch.exp(log_prob - batch.old_actions_log_prob.squeeze(-1))
+            clipped_ratio = ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
+            surrogate_loss = torch.max(-advantages * ratio, -advantages * clipped_ratio).mean()
+            if self.use_clipped_value_loss:
+                clipped_values = batch.values + (values - batch.values).clamp(-self.clip_param, self.clip_param)
+                value_loss = torch.max((values - batch.returns).square(),
+                                       (clipped_values - batch.returns).square()).mean()
+            else:
+                value_loss = (values - batch.returns).square().mean()
+            loss = surrogate_loss + self.value_loss_coef * value_loss - self.entropy_coef * entropy
+        self.optimizer.zero_grad()
+        loss.backward()
+        if self.is_multi_gpu:
+            self.reduce_parameters()
+        nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
+        nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
+        self.optimizer.step()
+        self._loss_sums += torch.stack([value_loss, surrogate_loss, entropy]).detach()
+
+    def _update_normalization(self) -> None:
+        """The models' observation statistics from this rollout. rsl-rl's normaliser assigns a new std tensor;
+        it is copied back into the one the mini-batch graph reads."""
+        observations = self.storage.observations.flatten(0, 1)
+        for model in (self.actor, self.critic):
+            before = dict(model.named_buffers())
+            model.update_normalization(observations)
+            for name, buffer in list(model.named_buffers()):
+                if name in before and buffer is not before[name]:
+                    before[name].copy_(buffer)
+                    owner, _, leaf = name.rpartition(".")
+                    setattr(model.get_submodule(owner), leaf, before[name])
+
     def update(self) -> dict[str, float]:
         if not self.device_side_update:
             return super().update()
-        lr = self._learning_rate_tensor()
-        adaptive = self.desired_kl is not None and self.schedule == "adaptive"
-        loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
-        device_type = torch.device(self.device).type
+        self._loss_sums.zero_()
         for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
-            advantages = batch.advantages.squeeze(-1)
-            if self.normalize_advantage_per_mini_batch:
-                advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
-            with torch.amp.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16):
-                self.actor(batch.observations, stochastic_output=True)
-                log_prob = self.actor.get_output_log_prob(batch.actions)
-                entropy = self.actor.output_entropy.mean()
-                values = self.critic(batch.observations)
-                if adaptive:
-                    with torch.no_grad():
-                        kl = self.actor.get_kl_divergence(batch.old_distribution_params,
-                                                          self.actor.output_distribution_params).mean()
-                        if self.is_multi_gpu:  # every rank gets the same mean, so the same learning rate
-                            torch.distributed.all_reduce(kl, op=torch.distributed.ReduceOp.SUM)
-                            kl /= self.gpu_world_size
-                        self._adapt_learning_rate(lr, kl)
-                ratio = torch.exp(log_prob - batch.old_actions_log_prob.squeeze(-1))
-                clipped_ratio = ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
-                surrogate_loss = torch.max(-advantages * ratio, -advantages * clipped_ratio).mean()
-                if self.use_clipped_value_loss:
-                    clipped_values = batch.values + (values - batch.values).clamp(-self.clip_param, self.clip_param)
-                    value_loss = torch.max((values - batch.returns).square(),
-                                           (clipped_values - batch.returns).square()).mean()
-                else:
-                    value_loss = (values - batch.returns).square().mean()
-                loss = surrogate_loss + self.value_loss_coef * value_loss - self.entropy_coef * entropy
-            self.optimizer.zero_grad()
-            loss.backward()
-            if self.is_multi_gpu:
-                self.reduce_parameters()
-            nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
-            nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
-            self.optimizer.step()
-            loss_sums += torch.stack([value_loss, surrogate_loss, entropy]).detach()
-
-        observations = self.storage.observations.flatten(0, 1)
-        self.actor.update_normalization(observations)
-        self.critic.update_normalization(observations)
+            self._load_batch(batch)
+            if self._minibatch_graph is not None:
+                self._minibatch_graph()
+            else:
+                self._minibatch_step()
+        self._update_normalization()
         self.storage.clear()
         num_updates = self.num_learning_epochs * self.num_mini_batches
-        value, surrogate, entropy, learning_rate = torch.cat([loss_sums / num_updates, lr.reshape(1)]).tolist()
+        means = self._loss_sums / num_updates
+        value, surrogate, entropy, learning_rate = torch.cat([means, self._learning_rate_tensor().reshape(1)]).tolist()
         self.learning_rate = learning_rate  # a float for the logger, read once per update
         return {"value": value, "surrogate": surrogate, "entropy": entropy}

@@ -21,7 +21,7 @@ from tensordict import TensorDict
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
 from legged_gente.sim.assembly import build_model
 from legged_gente.sim.backend import Simulation
-from legged_gente.sim.step_graph import StepGraph
+from legged_gente.utils.cuda_graph import StepGraph
 from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
 
 

@@ -1,16 +1,17 @@
-"""One CUDA graph for a whole env step: the torch operations and the Warp launches recorded together.
+"""One CUDA graph for a whole step: the env step (torch operations and Warp launches recorded together) or
+a PPO mini-batch update (forward, backward, optimizer step).
 
-An env step is a few hundred small torch kernels around the physics graph; launched one by one from Python,
-the host takes longer to issue them than the GPU takes to run them. ``StepGraph`` runs the step body once
-normally (this loads every Warp module and warms up torch), records it into one ``torch.cuda.CUDAGraph`` on
-the second call (Warp joins torch's capture with ``wp.capture_begin(external=True)``), and from then on each
-call is a single graph launch.
+Such a step is a few hundred small kernels; launched one by one from Python, the host takes longer to issue
+them than the GPU takes to run them. ``StepGraph`` runs the step body once normally (this loads every Warp
+module, warms up torch and creates lazily built state such as the optimizer's), records it into one
+``torch.cuda.CUDAGraph`` on the second call (Warp, if the body launches Warp kernels, joins torch's capture
+with ``wp.capture_begin(external=True)``), and from then on each call is a single graph launch.
 
-What a graph replays is fixed at capture: the body must not branch on host values that change between steps,
-and state kept from one step to the next must be updated in place (``x[:] = ...``), because a replay reads
-and writes the tensors that existed at capture. Tensors the body recomputes from scratch each step may be
-rebound; they are named in ``outputs`` and rebound to the graph's tensors after every replay. Any other
-tensor attribute that the body rebinds is an error at capture.
+What a graph replays is fixed at capture: the body must not branch on host values that change between steps
+nor wait for the device, and state kept from one step to the next must be updated in place (``x[:] = ...``),
+because a replay reads and writes the tensors that existed at capture. Tensors the body recomputes from
+scratch each step may be rebound; they are named in ``outputs`` and rebound to the graph's tensors after
+every replay. Any other tensor attribute that the body rebinds is an error at capture.
 """
 
 from __future__ import annotations
@@ -34,10 +35,12 @@ def carried_state_rebound(rebound: dict, outputs) -> list[str]:
 
 
 class StepGraph:
-    """``body()`` (a method of ``owner``) run through one CUDA graph from its second call on."""
+    """``body()`` (a method of ``owner``) run through one CUDA graph from its second call on; ``warp``: the
+    body launches Warp kernels too."""
 
-    def __init__(self, owner, body: Callable[[], None], outputs: tuple[str, ...], device: str):
+    def __init__(self, owner, body: Callable[[], None], outputs: tuple[str, ...], device: str, warp: bool = True):
         self.owner, self.body, self.outputs, self.device = owner, body, frozenset(outputs), torch.device(device)
+        self.warp = warp
         self.graph: torch.cuda.CUDAGraph | None = None
         self.warmed_up = False
         self.bindings: dict = {}
@@ -48,7 +51,10 @@ class StepGraph:
             if self.warmed_up:
                 self._capture()
             else:
-                with wp.ScopedStream(wp.stream_from_torch(torch_stream), sync_enter=False):
+                if self.warp:
+                    with wp.ScopedStream(wp.stream_from_torch(torch_stream), sync_enter=False):
+                        self.body()
+                else:
                     self.body()
                 self.warmed_up = True
                 return
@@ -61,13 +67,16 @@ class StepGraph:
         stream = torch.cuda.Stream(self.device)
         stream.wait_stream(torch.cuda.current_stream(self.device))
         with torch.cuda.graph(graph, stream=stream, capture_error_mode="thread_local"):
-            warp_stream = wp.stream_from_torch(stream)
-            with wp.ScopedStream(warp_stream, sync_enter=False):
-                wp.capture_begin(stream=warp_stream, force_module_load=False, external=True)
-                try:
-                    self.body()
-                finally:
-                    wp.capture_end(stream=warp_stream)
+            if self.warp:
+                warp_stream = wp.stream_from_torch(stream)
+                with wp.ScopedStream(warp_stream, sync_enter=False):
+                    wp.capture_begin(stream=warp_stream, force_module_load=False, external=True)
+                    try:
+                        self.body()
+                    finally:
+                        wp.capture_end(stream=warp_stream)
+            else:
+                self.body()
         rebound = rebound_attributes(self.owner, before)
         carried = carried_state_rebound(rebound, self.outputs)
         if carried:
@@ -75,6 +84,6 @@ class StepGraph:
                 f"{type(self.owner).__name__}'s step rebinds {carried} while being captured as a CUDA graph. State "
                 f"kept from one step to the next must be updated in place (self.x[:] = ..., self.x.copy_(...)); a "
                 f"tensor recomputed from scratch every step goes in {type(self.owner).__name__}.step_outputs. Or "
-                f"set cfg.sim.cuda_graph = 'physics' to capture only the substeps.")
+                f"turn the graph off ({type(self.owner).__name__}'s cuda_graph setting).")
         self.bindings = rebound
         self.graph = graph
