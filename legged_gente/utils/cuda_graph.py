@@ -42,33 +42,41 @@ class StepGraph:
         self.owner, self.body, self.outputs, self.device = owner, body, frozenset(outputs), torch.device(device)
         self.warp = warp
         self.graph: torch.cuda.CUDAGraph | None = None
+        self.stream: torch.cuda.Stream | None = None  # warm-up and capture run here (torch's recipe)
         self.warmed_up = False
         self.bindings: dict = {}
 
     def __call__(self) -> None:
         if self.graph is None:
-            torch_stream = torch.cuda.current_stream(self.device)
-            if self.warmed_up:
-                self._capture()
-            else:
-                if self.warp:
-                    with wp.ScopedStream(wp.stream_from_torch(torch_stream), sync_enter=False):
-                        self.body()
-                else:
-                    self.body()
+            current = torch.cuda.current_stream(self.device)
+            if self.stream is None:
+                self.stream = torch.cuda.Stream(self.device)
+            self.stream.wait_stream(current)
+            if not self.warmed_up:
+                # on the capture stream: autograd's gradient accumulators created here keep running there
+                with torch.cuda.stream(self.stream):
+                    self._run_body()
+                current.wait_stream(self.stream)
                 self.warmed_up = True
                 return
+            self._capture()
         self.graph.replay()
         vars(self.owner).update(self.bindings)
+
+    def _run_body(self) -> None:
+        """The body with Warp launching on torch's current stream."""
+        if self.warp:
+            with wp.ScopedStream(wp.stream_from_torch(torch.cuda.current_stream(self.device)), sync_enter=False):
+                self.body()
+        else:
+            self.body()
 
     def _capture(self) -> None:
         before = dict(vars(self.owner))
         graph = torch.cuda.CUDAGraph()
-        stream = torch.cuda.Stream(self.device)
-        stream.wait_stream(torch.cuda.current_stream(self.device))
-        with torch.cuda.graph(graph, stream=stream, capture_error_mode="thread_local"):
+        with torch.cuda.graph(graph, stream=self.stream, capture_error_mode="thread_local"):
             if self.warp:
-                warp_stream = wp.stream_from_torch(stream)
+                warp_stream = wp.stream_from_torch(self.stream)
                 with wp.ScopedStream(warp_stream, sync_enter=False):
                     wp.capture_begin(stream=warp_stream, force_module_load=False, external=True)
                     try:
