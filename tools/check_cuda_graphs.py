@@ -67,14 +67,15 @@ def ppo_updates(alg_class, updates: int = 3, num_envs: int = 4096, steps: int = 
     history = []
     for update in range(updates):
         torch.manual_seed(100 + update)  # the same sampled actions whatever the update drew before
-        obs = observations()
-        for _ in range(steps):
-            alg.act(obs)
+        with torch.inference_mode():  # as rsl-rl's runner collects
             obs = observations()
-            dones = torch.rand(num_envs, generator=generator, device="cuda") < 0.02
-            alg.process_env_step(obs, torch.randn(num_envs, generator=generator, device="cuda"), dones,
-                                 {"time_outs": dones})
-        alg.compute_returns(obs)
+            for _ in range(steps):
+                alg.act(obs)
+                obs = observations()
+                dones = torch.rand(num_envs, generator=generator, device="cuda") < 0.02
+                alg.process_env_step(obs, torch.randn(num_envs, generator=generator, device="cuda"), dones,
+                                     {"time_outs": dones})
+            alg.compute_returns(obs)
         losses = alg.update()
         history.append((torch.cat([p.detach().flatten() for p in alg.actor.parameters()]), losses,
                         alg.learning_rate))
