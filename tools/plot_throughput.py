@@ -16,7 +16,7 @@ def main() -> None:
     parser.add_argument("csvs", nargs="+", help="LABEL=PATH")
     parser.add_argument("--skip_raw", nargs="*", default=[], help="labels whose raw column is not plotted")
     args = parser.parse_args()
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plt.subplots(figsize=(10, 4))
     for style, item in zip(("-", "--", ":"), args.csvs):
         label, path = item.split("=", 1)
         rows = list(csv.DictReader(open(Path(path))))
@@ -32,7 +32,7 @@ def main() -> None:
     ax.set_xlabel("num_envs")
     ax.set_ylabel("env steps / s")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside the axes: no line hidden
     fig.tight_layout()
     fig.savefig(args.png, dpi=90)
 
