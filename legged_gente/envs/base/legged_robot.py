@@ -250,7 +250,7 @@ class LeggedRobot(VecEnv):
         self._resample_commands(all_envs)
         self._update_state()
         self._compute_observations()
-        return self.obs_buf
+        return self.obs_buf.clone()
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
         """One policy step. Returns copies: the step graph overwrites its buffers in place on the next step,
@@ -286,7 +286,7 @@ class LeggedRobot(VecEnv):
     # step internals
     # ------------------------------------------------------------------------------------------------------
     def _post_physics_step(self) -> None:
-        self.episode_length_buf += 1
+        self._episode_length_buf += 1
         diverged = self._sanitize_diverged()
         self._update_state()
         self._check_termination(diverged)
