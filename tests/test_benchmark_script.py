@@ -52,3 +52,23 @@ def test_profile_prints_the_costliest_operations_and_writes_a_trace(tmp_path, ca
     printed = capsys.readouterr().out
     assert "Self CPU" in printed and "aten::" in printed
     assert json.load(open(trace))["traceEvents"]
+
+
+def test_cuda_graph_override_reaches_the_env_config(monkeypatch):
+    """--cuda_graph sets cfg.sim.cuda_graph of the env it builds (on the CPU the graphs are off anyway)."""
+    import pytest
+
+    from legged_gente.envs.task_registry import task_registry
+
+    seen = []
+    make_env = task_registry.make_env
+
+    def recording_make_env(name, env_cfg=None, args=None):
+        seen.append(env_cfg.sim.cuda_graph)
+        return make_env(name, env_cfg=env_cfg, args=args)
+
+    monkeypatch.setattr(task_registry, "make_env", recording_make_env)
+    benchmark.run("gente_biped_flat", [2], "cpu", steps=1, iterations=0, cuda_graph="physics")
+    assert seen == ["physics"]
+    with pytest.raises(SystemExit):
+        benchmark.main(["--num_envs", "2", "--device", "cpu", "--cuda_graph", "always"])
