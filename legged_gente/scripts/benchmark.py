@@ -134,17 +134,17 @@ def env_steps(env, steps: int, check_sync: bool = False) -> float:
 
 
 def _runner(env, task: str):
-    """The task's PPO runner on ``env``, logging nowhere."""
+    """The task's PPO runner on ``env``, logging nowhere, after one warm-up iteration (kernel loads, graph
+    captures). One runner per env serves the sync check, the timing and the profile."""
     _, train_cfg = task_registry.get_cfgs(task)
     runner, train_cfg, _ = task_registry.make_alg_runner(env, task, train_cfg=train_cfg, log_root=None)
+    runner.learn(1)
     return runner, train_cfg
 
 
-def ppo_sync_points(env, task: str) -> Counter:
+def ppo_sync_points(runner) -> Counter:
     """Where one PPO iteration (rsl-rl collection + update) makes the host wait for the device: torch's sync
     debug mode warns at each such operation; counted per source line (CUDA only)."""
-    runner, _ = _runner(env, task)
-    runner.learn(1)  # warm-up
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         torch.cuda.set_sync_debug_mode("warn")
@@ -155,10 +155,9 @@ def ppo_sync_points(env, task: str) -> Counter:
     return Counter(f"{w.filename}:{w.lineno}" for w in caught if "synchroniz" in str(w.message))
 
 
-def ppo_steps(env, task: str, iterations: int) -> tuple[float, float]:
+def ppo_steps(runner, train_cfg, iterations: int) -> tuple[float, float]:
     """PPO env-steps/s (collection + learning) and the share of the time spent in the policy update."""
-    runner, train_cfg = _runner(env, task)
-    runner.learn(1)  # warm-up
+    env = runner.env
     update, update_seconds = runner.alg.update, 0.0
 
     def timed_update():
@@ -171,21 +170,23 @@ def ppo_steps(env, task: str, iterations: int) -> tuple[float, float]:
         return losses
 
     runner.alg.update = timed_update
-    _sync(env.device)
-    start = time.perf_counter()
-    runner.learn(iterations)
-    _sync(env.device)
-    seconds = time.perf_counter() - start
+    try:
+        _sync(env.device)
+        start = time.perf_counter()
+        runner.learn(iterations)
+        _sync(env.device)
+        seconds = time.perf_counter() - start
+    finally:
+        runner.alg.update = update
     return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / seconds, update_seconds / seconds
 
 
-def profile(env, task: str, steps: int, out: str) -> None:
+def profile(runner, steps: int, out: str) -> None:
     """torch.profiler over ``steps`` env steps and one PPO iteration: prints the operations that take the most
     device (or CPU) time and writes a Chrome trace (chrome://tracing, ui.perfetto.dev) to ``out``."""
     from torch.profiler import ProfilerActivity, profile as torch_profile
 
-    runner, _ = _runner(env, task)
-    runner.learn(1)  # warm-up outside the trace
+    env = runner.env
     actions = torch.zeros(env.num_envs, env.num_actions, device=env.device)
     cuda = env.device.startswith("cuda")
     activities = [ProfilerActivity.CPU] + ([ProfilerActivity.CUDA] if cuda else [])
@@ -222,19 +223,26 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             forces_slowdown = max(0.0, 1.0 - with_forces / raw)
             forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
         stepped = env_steps(env, steps, check_sync)
-        if check_sync and iterations > 0:
-            points = ppo_sync_points(env, task)
-            print(f"PPO iteration at {num_envs} envs: {sum(points.values())} host-device syncs"
-                  + "".join(f"\n  {count:4d} x {where}" for where, count in points.most_common()))
-        ppo, update_share = ppo_steps(env, task, iterations) if iterations > 0 else (float("nan"), float("nan"))
-        if profile_out and num_envs == (profile_envs or sizes[-1]):
-            profile(env, task, 10, profile_out)
+        profiled = profile_out and num_envs == (profile_envs or sizes[-1])
+        ppo = update_share = float("nan")
+        runner = None
+        if iterations > 0 or profiled:
+            runner, train_cfg = _runner(env, task)
+            if check_sync and iterations > 0:
+                points = ppo_sync_points(runner)
+                print(f"PPO iteration at {num_envs} envs: {sum(points.values())} host-device syncs"
+                      + "".join(f"\n  {count:4d} x {where}" for where, count in points.most_common()))
+            if iterations > 0:
+                ppo, update_share = ppo_steps(runner, train_cfg, iterations)
+            if profiled:
+                profile(runner, 10, profile_out)
         ceiling = raw / env.cfg.control.decimation
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
-                     "ppo_update_share": update_share, "forces_share": forces_share, "forces_slowdown": forces_slowdown, "gpu_memory_gib": memory})
-        del env
+                     "ppo_update_share": update_share, "forces_share": forces_share,
+                     "forces_slowdown": forces_slowdown, "gpu_memory_gib": memory})
+        del env, runner  # the runner holds the env: free both before the next size is built
         if device.startswith("cuda"):
             torch.cuda.empty_cache()
     return rows
