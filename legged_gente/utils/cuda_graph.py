@@ -91,7 +91,7 @@ class StepGraph:
             raise RuntimeError(
                 f"{type(self.owner).__name__}'s step rebinds {carried} while being captured as a CUDA graph. State "
                 f"kept from one step to the next must be updated in place (self.x[:] = ..., self.x.copy_(...)); a "
-                f"tensor recomputed from scratch every step goes in {type(self.owner).__name__}.step_outputs. Or "
-                f"turn the graph off ({type(self.owner).__name__}'s cuda_graph setting).")
+                f"tensor recomputed from scratch every step goes in the graph's outputs (an env's step_outputs). "
+                f"Or turn the graph off (an env's cfg.sim.cuda_graph).")
         self.bindings = rebound
         self.graph = graph

@@ -66,20 +66,22 @@ class GentePPO(PPO):
         lr.copy_(torch.where(kl > 2.0 * self.desired_kl, lower,
                              torch.where((kl < 0.5 * self.desired_kl) & (kl > 0.0), higher, lr)))
 
+    BATCH_TENSORS = ("actions", "values", "advantages", "returns", "old_actions_log_prob")
+    """The mini-batch's plain tensors that the update reads (besides observations and distribution params)."""
+
     def _load_batch(self, batch: RolloutStorage.Batch) -> None:
         """Make ``batch`` the one the next mini-batch step reads: copied into the static one under a graph."""
         if self._minibatch_graph is None:
             self._batch = batch
         elif self._batch is None:
             self._batch = RolloutStorage.Batch(
-                observations=batch.observations.clone(), actions=batch.actions.clone(), values=batch.values.clone(),
-                advantages=batch.advantages.clone(), returns=batch.returns.clone(),
-                old_actions_log_prob=batch.old_actions_log_prob.clone(),
-                old_distribution_params=tuple(p.clone() for p in batch.old_distribution_params))
+                observations=batch.observations.clone(),
+                old_distribution_params=tuple(p.clone() for p in batch.old_distribution_params),
+                **{name: getattr(batch, name).clone() for name in self.BATCH_TENSORS})
         else:
             static = self._batch
             static.observations.copy_(batch.observations)
-            for name in ("actions", "values", "advantages", "returns", "old_actions_log_prob"):
+            for name in self.BATCH_TENSORS:
                 getattr(static, name).copy_(getattr(batch, name))
             for mine, theirs in zip(static.old_distribution_params, batch.old_distribution_params):
                 mine.copy_(theirs)
