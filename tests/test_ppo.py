@@ -80,3 +80,23 @@ def test_sync_free_gaussian_samples_the_same_distribution():
     assert torch.allclose(samples.mean(0), torch.tensor([1.0, -2.0]), atol=0.01)
     assert torch.allclose(samples.std(0), torch.tensor([0.5, 0.5]), atol=0.01)
     assert not samples.requires_grad
+
+
+def test_two_rank_update_matches_rsl_rl_over_gloo():
+    """GentePPO's one all-reduce of the gradient buffer (with the KL) against rsl-rl's bucketed gradient
+    all-reduce, KL all-reduce and learning-rate broadcast: two CPU ranks, each with its own rollouts."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[1]
+    env = {k: v for k, v in os.environ.items() if k not in ("RANK", "LOCAL_RANK", "WORLD_SIZE")}
+    env.update(OMP_NUM_THREADS="1", PYTHONUNBUFFERED="1")
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2",
+           "tools/check_cuda_graphs.py", "--ppo_only", "--device", "cpu", "--ppo_envs", "64"]
+    out = subprocess.run(cmd, cwd=repo, env=env, capture_output=True, text=True, timeout=300)
+    log = out.stdout + out.stderr
+    assert out.returncode == 0, log[-4000:]
+    assert log.count("GentePPO agrees with rsl-rl's PPO") == 2, log[-4000:]
+    assert "rank 1: update 3:" in log, log[-4000:]

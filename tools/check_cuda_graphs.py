@@ -1,15 +1,23 @@
 """GPU check: the CUDA graphs compute what plain launches compute.
 
     python tools/check_cuda_graphs.py [--task gente_biped] [--num_envs 512] [--steps 300]
+    NCCL_NVLS_ENABLE=0 torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only
+    torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only --device cpu --ppo_envs 64
 
 Env step: two envs of the task with the same seed, one stepping through the whole-step graph
 (cfg.sim.cuda_graph = "env_step") and one with only the substeps captured ("physics"), get the same random
 actions. The first steps are compared value by value (the order of random draws differs, so resets and
 commands do), the whole run by its statistics: rewards, resets, terrain levels, episode length.
 
-PPO update: GentePPO with its mini-batch graph and rsl-rl's PPO update the same networks on the same
+PPO update: GentePPO with its mini-batch graphs and rsl-rl's PPO update the same networks on the same
 synthetic rollouts (one mini-batch per epoch, so the shuffling draws do not matter); parameters, losses and
-the adaptive learning rate are compared after each update.
+the adaptive learning rate are compared after each update, and the script exits with 1 when they differ by more
+than --tolerance. Under torchrun every rank gets its own rollouts, so the gradient and KL all-reduce between
+GentePPO's two graphs is compared with rsl-rl's (with --device cpu: the same update without graphs, over gloo;
+the CPU tests run it that way).
+
+PPO act: GentePPO's act graph against rsl-rl's act on the same observations: values and distribution
+parameters equal, the graph's sampled actions standard normal around the mean.
 """
 
 from __future__ import annotations
@@ -19,6 +27,7 @@ import argparse
 import torch
 
 from legged_gente.envs.task_registry import task_registry
+from legged_gente.utils.distributed import init_process_group, rank_device, torchrun_launch
 
 
 def run(task: str, num_envs: int, steps: int, mode: str, seed: int) -> dict:
@@ -43,37 +52,54 @@ def run(task: str, num_envs: int, steps: int, mode: str, seed: int) -> dict:
             "time": env.sim.time.mean().item()}
 
 
-def ppo_updates(alg_class, updates: int = 3, num_envs: int = 4096, steps: int = 24):
-    """``updates`` PPO updates on seeded synthetic rollouts; the actor's parameters and losses after each."""
+def multi_gpu_cfg() -> dict | None:
+    """rsl-rl's multi_gpu keys for this torchrun rank, or None outside torchrun."""
+    if not torch.distributed.is_initialized():
+        return None
+    rank = torch.distributed.get_rank()
+    return {"global_rank": rank, "local_rank": rank, "world_size": torch.distributed.get_world_size()}
+
+
+def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observations):
     from types import SimpleNamespace
 
     from rsl_rl.algorithms import PPO
-    from tensordict import TensorDict
 
     from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO, rsl_rl_train_cfg
 
-    generator = torch.Generator(device="cuda").manual_seed(0)
+    cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
+    cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, multi_gpu_cfg()
+    cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
+    torch.manual_seed(0)  # the same initial networks on every rank (rsl-rl's runner broadcasts rank 0's)
+    return PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
+
+
+def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24):
+    """``updates`` PPO updates on seeded synthetic rollouts (each rank its own); the actor's parameters and
+    losses after each."""
+    from tensordict import TensorDict
+
+    rank = torch.distributed.get_rank() if torch.distributed.is_initialized() else 0
+    generator = torch.Generator(device=device).manual_seed(rank)
 
     def observations():
-        return TensorDict({"policy": torch.randn(num_envs, 48, generator=generator, device="cuda"),
-                           "critic": torch.randn(num_envs, 64, generator=generator, device="cuda")},
-                          batch_size=[num_envs], device="cuda")
+        return TensorDict({"policy": torch.randn(num_envs, 48, generator=generator, device=device),
+                           "critic": torch.randn(num_envs, 64, generator=generator, device=device)},
+                          batch_size=[num_envs], device=device)
 
-    cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
-    cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, None
-    cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
-    torch.manual_seed(0)
-    alg = PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, "cuda")
+    alg = ppo_algorithm(alg_class, device, num_envs, steps, observations)
+    if hasattr(alg, "_act_graph"):
+        alg._act_graph = None  # the same sampled actions as rsl-rl's act; the act graph is checked apart
     history = []
     for update in range(updates):
-        torch.manual_seed(100 + update)  # the same sampled actions whatever the update drew before
+        torch.manual_seed(100 + 10 * rank + update)  # the same sampled actions whatever the update drew before
         with torch.inference_mode():  # as rsl-rl's runner collects
             obs = observations()
             for _ in range(steps):
                 alg.act(obs)
                 obs = observations()
-                dones = torch.rand(num_envs, generator=generator, device="cuda") < 0.02
-                alg.process_env_step(obs, torch.randn(num_envs, generator=generator, device="cuda"), dones,
+                dones = torch.rand(num_envs, generator=generator, device=device) < 0.02
+                alg.process_env_step(obs, torch.randn(num_envs, generator=generator, device=device), dones,
                                      {"time_outs": dones})
             alg.compute_returns(obs)
         losses = alg.update()
@@ -82,17 +108,60 @@ def ppo_updates(alg_class, updates: int = 3, num_envs: int = 4096, steps: int = 
     return alg, history
 
 
-def check_ppo() -> None:
+def check_ppo(device: str, num_envs: int, tolerance: float) -> bool:
+    """GentePPO's update against rsl-rl's; True when parameters, losses and learning rates agree."""
     from rsl_rl.algorithms import PPO
 
     from legged_gente.utils.ppo import GentePPO
 
-    ours, mine = ppo_updates(GentePPO)
-    _, theirs = ppo_updates(PPO)
-    print(f"PPO update: GentePPO's mini-batch graph captured: {ours._minibatch_graph.graph is not None}")
+    ours, mine = ppo_updates(GentePPO, device, num_envs)
+    _, theirs = ppo_updates(PPO, device, num_envs)
+    rank = f"rank {torch.distributed.get_rank()}: " if torch.distributed.is_initialized() else ""
+    graphs = [stage.graph is not None for stage in ours._minibatch_stages if hasattr(stage, "graph")]
+    print(f"{rank}PPO update: GentePPO's mini-batch stages {len(ours._minibatch_stages)}, graphs captured {graphs}")
+    agree = True
     for i, ((p, losses, lr), (q, ref_losses, ref_lr)) in enumerate(zip(mine, theirs)):
-        print(f"update {i + 1}: max |diff| actor parameters {(p - q).abs().max():.2e} (largest {q.abs().max():.2f}), "
-              f"losses {losses} vs {ref_losses}, learning rate {lr:.3e} vs {ref_lr:.3e}")
+        difference = float((p - q).abs().max())
+        loss_difference = max(abs(losses[k] - ref_losses[k]) / max(abs(ref_losses[k]), 1e-3) for k in ref_losses
+                              if k in losses)
+        agree &= difference <= tolerance and loss_difference <= tolerance and abs(lr - ref_lr) <= 1e-6 * ref_lr
+        print(f"{rank}update {i + 1}: max |diff| actor parameters {difference:.2e} (largest {q.abs().max():.2f}), "
+              f"largest relative loss difference {loss_difference:.1e}, learning rate {lr:.3e} vs {ref_lr:.3e}")
+    return agree
+
+
+def check_act(device: str, num_envs: int) -> bool:
+    """GentePPO's act graph against rsl-rl's act on the same observations, three calls (warm-up, capture,
+    replay); True when values and distribution parameters agree and the sampled actions are plausible."""
+    from rsl_rl.algorithms import PPO
+    from tensordict import TensorDict
+
+    from legged_gente.utils.ppo import GentePPO
+
+    def observations():
+        return TensorDict({"policy": torch.randn(num_envs, 48, device=device),
+                           "critic": torch.randn(num_envs, 64, device=device)}, batch_size=[num_envs], device=device)
+
+    alg = ppo_algorithm(GentePPO, device, num_envs, 24, observations)
+    agree = True
+    with torch.inference_mode():
+        for call in range(3):
+            obs = observations()
+            actions = alg.act(obs).clone()
+            ours = {name: getattr(alg.transition, name).clone() for name in ("values", "actions_log_prob")}
+            mean, std = (p.clone() for p in alg.transition.distribution_params)
+            PPO.act(alg, obs)
+            reference_mean, reference_std = alg.transition.distribution_params
+            z = (actions - mean) / std
+            log_prob = alg.actor.get_output_log_prob(actions)  # the eager pass above left the same distribution
+            differences = [float((ours["values"] - alg.transition.values).abs().max()),
+                           float((mean - reference_mean).abs().max()), float((std - reference_std).abs().max()),
+                           float((ours["actions_log_prob"] - log_prob).abs().max())]
+            agree &= max(differences) < 1e-4 and abs(float(z.mean())) < 0.05 and abs(float(z.std()) - 1) < 0.05
+            print(f"act call {call + 1}: max |diff| values / mean / std / log-prob {differences}, sampled "
+                  f"(action - mean) / std: mean {float(z.mean()):.3f}, std {float(z.std()):.3f}")
+    print(f"PPO act: GentePPO's act graph captured: {alg._act_graph.graph is not None}")
+    return agree
 
 
 def main() -> None:
@@ -101,10 +170,31 @@ def main() -> None:
     parser.add_argument("--num_envs", type=int, default=512)
     parser.add_argument("--steps", type=int, default=300)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--device", default="cuda", help="cuda, or cpu for the PPO update check without graphs")
+    parser.add_argument("--ppo_envs", type=int, default=4096, help="envs of the synthetic PPO rollouts")
+    parser.add_argument("--tolerance", type=float, default=1e-3,
+                        help="largest accepted parameter and relative loss difference of the PPO updates")
+    parser.add_argument("--ppo_only", action="store_true", help="check the PPO update only (what torchrun runs)")
     args = parser.parse_args()
-    check_ppo()
-    graph = run(args.task, args.num_envs, args.steps, "env_step", args.seed)
-    plain = run(args.task, args.num_envs, args.steps, "physics", args.seed)
+    launch = torchrun_launch()
+    device = args.device
+    if launch is not None:
+        device = rank_device(args.device, launch)
+        init_process_group(launch, device)
+    agree = check_ppo(device, args.ppo_envs, args.tolerance)
+    if device.startswith("cuda") and launch is None:
+        agree &= check_act(device, args.ppo_envs)
+    if not args.ppo_only:
+        env_steps(args.task, args.num_envs, args.steps, args.seed)
+    if not agree:
+        raise SystemExit(f"GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance}")
+    print("GentePPO agrees with rsl-rl's PPO")
+
+
+def env_steps(task: str, num_envs: int, steps: int, seed: int) -> None:
+    """The env-step graph against the physics-only graph: first steps and run statistics."""
+    graph = run(task, num_envs, steps, "env_step", seed)
+    plain = run(task, num_envs, steps, "physics", seed)
     for i, ((gp, gc, gr), (pp, pc, pr)) in enumerate(zip(graph["first"], plain["first"])):
         print(f"step {i + 1}: max |diff| policy obs {(gp - pp).abs().max():.2e}, critic obs {(gc - pc).abs().max():.2e}, "
               f"reward {(gr - pr).abs().max():.2e}")

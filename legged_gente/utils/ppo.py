@@ -5,11 +5,16 @@ adapt the learning rate in Python) and the three losses (``.item()``). Each read
 GPU has finished the mini-batch before it launches the next one, so the few hundred small kernels of a
 mini-batch are issued and executed one after the other instead of overlapping. ``GentePPO`` keeps the
 learning rate in a device tensor that the optimizer reads (adapted in place by the same rule), sums the
-losses on the device, and reads everything once per update. On a single GPU each mini-batch step (forward,
-loss, backward, gradient clipping, Adam) is then one CUDA graph (``StepGraph``), fed through a static
-mini-batch that each step's data is copied into. The loss is PPO's clipped surrogate with the
-clipped value loss and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to
-rsl-rl's for what it does not cover (recurrent models, RND, symmetry, optimizers other than Adam).
+losses on the device, and reads everything once per update. On a GPU each mini-batch step (forward, loss,
+backward, gradient clipping, Adam) then runs as CUDA graphs (``StepGraph``), fed through a static mini-batch
+that each step's data is copied into: one graph on a single GPU; under torchrun two, the gradients and the
+optimizer step, with one NCCL all-reduce launched between them. All gradients live in one flat buffer
+(``param.grad`` are views into it, which backward accumulates into in place) with one more element for the KL
+divergence, so that all-reduce averages the gradients and the KL at once, where rsl-rl issues one per gradient
+bucket plus one for the KL and a broadcast of the learning rate. The rollout's ``act`` (policy and value
+forward passes, sampling) is one more graph. The loss is PPO's clipped surrogate with the clipped value loss
+and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to rsl-rl's for what it does
+not cover (recurrent models, RND, symmetry, optimizers other than Adam).
 
 ``SyncFreeGaussianDistribution`` is rsl-rl's Gaussian policy distribution sampled as mean + std * N(0, 1):
 ``torch.normal(mean, std)``, which rsl-rl's ``sample`` calls, checks ``std >= 0`` on the host, a sync at
@@ -24,6 +29,7 @@ import torch
 from rsl_rl.algorithms import PPO
 from rsl_rl.modules.distribution import GaussianDistribution
 from rsl_rl.storage import RolloutStorage
+from tensordict import TensorDict
 from torch import nn
 
 from legged_gente.utils.cuda_graph import StepGraph
@@ -41,16 +47,48 @@ class GentePPO(PPO):
         super().__init__(actor, critic, storage, *args, optimizer=optimizer, **kwargs)
         self.device_side_update = (optimizer == "adam" and self.rnd is None and self.symmetry is None
                                    and not (actor.is_recurrent or critic.is_recurrent))
+        self._act_graph = None
         if self.device_side_update:
             # Adam reading its learning rate from a tensor: the adaptive schedule changes it on the device
             cuda = torch.device(self.device).type == "cuda"
+            self._parameters = list(chain(self.actor.parameters(), self.critic.parameters()))
             lr = torch.tensor(float(self.learning_rate), device=self.device)
-            self.optimizer = torch.optim.Adam(chain(self.actor.parameters(), self.critic.parameters()), lr=lr,
-                                              fused=True, capturable=cuda)
+            self.optimizer = torch.optim.Adam(self._parameters, lr=lr, fused=True, capturable=cuda)
+            sizes = [parameter.numel() for parameter in self._parameters]
+            self._gradients = torch.zeros(sum(sizes) + 1, device=self.device)  # all gradients, then the KL
+            self._gradient_views = [view.view_as(parameter) for parameter, view in
+                                    zip(self._parameters, self._gradients[:-1].split(sizes))]
             self._loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
-            self._batch: RolloutStorage.Batch | None = None  # the mini-batch _minibatch_step reads
-            self._minibatch_graph = (StepGraph(self, self._minibatch_step, (), self.device, warp=False)
-                                     if cuda and not self.is_multi_gpu else None)
+            self._batch: RolloutStorage.Batch | None = None  # the mini-batch _minibatch_gradients reads
+            self._graphed = cuda
+            if not cuda:
+                self._minibatch_stages = (self._minibatch_step,)
+            elif not self.is_multi_gpu:
+                self._minibatch_stages = (StepGraph(self, self._minibatch_step, (), self.device, warp=False),)
+            else:  # NCCL's all-reduce runs between the two graphs
+                self._minibatch_stages = (StepGraph(self, self._minibatch_gradients, (), self.device, warp=False),
+                                          self._all_reduce_gradients,
+                                          StepGraph(self, self._apply_gradients, (), self.device, warp=False))
+            if cuda:
+                self._act_graph = StepGraph(self, self._act_step, ("_act_transition",), self.device, warp=False)
+                self._act_observations: TensorDict | None = None  # what the act graph reads
+
+    def act(self, obs: TensorDict) -> torch.Tensor:
+        """rsl-rl's act (actions, values, log-probabilities, distribution parameters into ``self.transition``),
+        on a GPU replayed from a CUDA graph that reads a static copy of ``obs``."""
+        if self._act_graph is None:
+            return super().act(obs)
+        if self._act_observations is None:
+            self._act_observations = obs.clone()
+        else:
+            self._act_observations.copy_(obs)
+        self._act_graph()
+        vars(self.transition).update(self._act_transition)
+        return self.transition.actions
+
+    def _act_step(self) -> None:
+        super().act(self._act_observations)
+        self._act_transition = dict(vars(self.transition))
 
     def _learning_rate_tensor(self) -> torch.Tensor:
         """The optimizer's learning rate as a device tensor (a checkpoint of rsl-rl's PPO restores a float)."""
@@ -70,8 +108,8 @@ class GentePPO(PPO):
     """The mini-batch's plain tensors that the update reads (besides observations and distribution params)."""
 
     def _load_batch(self, batch: RolloutStorage.Batch) -> None:
-        """Make ``batch`` the one the next mini-batch step reads: copied into the static one under a graph."""
-        if self._minibatch_graph is None:
+        """Make ``batch`` the one the next mini-batch step reads: copied into the static one under graphs."""
+        if not self._graphed:
             self._batch = batch
         elif self._batch is None:
             self._batch = RolloutStorage.Batch(
@@ -87,7 +125,15 @@ class GentePPO(PPO):
                 mine.copy_(theirs)
 
     def _minibatch_step(self) -> None:
-        """PPO's loss on ``self._batch``, one Adam step, the losses added to ``self._loss_sums``."""
+        """One PPO mini-batch step on ``self._batch``: gradients, their average over the ranks, Adam."""
+        self._minibatch_gradients()
+        if self.is_multi_gpu:
+            self._all_reduce_gradients()
+        self._apply_gradients()
+
+    def _minibatch_gradients(self) -> None:
+        """PPO's loss on ``self._batch``, its gradients (and the KL divergence) into ``self._gradients``, the
+        losses added to ``self._loss_sums``."""
         batch = self._batch
         advantages = batch.advantages.squeeze(-1)
         if self.normalize_advantage_per_mini_batch:
@@ -100,14 +146,6 @@ class GentePPO(PPO):
             log_prob = self.actor.get_output_log_prob(batch.actions)
             entropy = self.actor.output_entropy.mean()
             values = self.critic(batch.observations)
-            if self.desired_kl is not None and self.schedule == "adaptive":
-                with torch.no_grad():
-                    kl = self.actor.get_kl_divergence(batch.old_distribution_params,
-                                                      self.actor.output_distribution_params).mean()
-                    if self.is_multi_gpu:  # every rank gets the same mean, so the same learning rate
-                        torch.distributed.all_reduce(kl, op=torch.distributed.ReduceOp.SUM)
-                        kl /= self.gpu_world_size
-                    self._adapt_learning_rate(self._learning_rate_tensor(), kl)
             ratio = torch.exp(log_prob - batch.old_actions_log_prob.squeeze(-1))
             clipped_ratio = ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
             surrogate_loss = torch.max(-advantages * ratio, -advantages * clipped_ratio).mean()
@@ -118,14 +156,33 @@ class GentePPO(PPO):
             else:
                 value_loss = (values - batch.returns).square().mean()
             loss = surrogate_loss + self.value_loss_coef * value_loss - self.entropy_coef * entropy
-        self.optimizer.zero_grad()
+        self._gradients.zero_()
+        for parameter, view in zip(self._parameters, self._gradient_views):
+            parameter.grad = view  # backward accumulates into the shared buffer (no kernel: Python only)
+        if self._adaptive_learning_rate:
+            with torch.no_grad():
+                self._gradients[-1] = self.actor.get_kl_divergence(batch.old_distribution_params,
+                                                                   self.actor.output_distribution_params).mean()
         loss.backward()
+        self._loss_sums += torch.stack([value_loss, surrogate_loss, entropy]).detach()
+
+    def _all_reduce_gradients(self) -> None:
+        """Sum the gradients and KL of all ranks: one NCCL all-reduce (gloo on the CPU), no host wait."""
+        torch.distributed.all_reduce(self._gradients, op=torch.distributed.ReduceOp.SUM)
+
+    def _apply_gradients(self) -> None:
+        """The rank-averaged gradients: adapt the learning rate to the KL, clip, one Adam step."""
         if self.is_multi_gpu:
-            self.reduce_parameters()
+            self._gradients /= self.gpu_world_size
+        if self._adaptive_learning_rate:  # every rank has the same mean KL, so the same learning rate
+            self._adapt_learning_rate(self._learning_rate_tensor(), self._gradients[-1])
         nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
         nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
         self.optimizer.step()
-        self._loss_sums += torch.stack([value_loss, surrogate_loss, entropy]).detach()
+
+    @property
+    def _adaptive_learning_rate(self) -> bool:
+        return self.desired_kl is not None and self.schedule == "adaptive"
 
     def _update_normalization(self) -> None:
         """The models' observation statistics from this rollout. rsl-rl's normaliser assigns a new std tensor;
@@ -146,10 +203,8 @@ class GentePPO(PPO):
         self._loss_sums.zero_()
         for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
             self._load_batch(batch)
-            if self._minibatch_graph is not None:
-                self._minibatch_graph()
-            else:
-                self._minibatch_step()
+            for stage in self._minibatch_stages:
+                stage()
         self._update_normalization()
         self.storage.clear()
         num_updates = self.num_learning_epochs * self.num_mini_batches
