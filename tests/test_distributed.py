@@ -117,3 +117,27 @@ def test_nccl_group_keeps_nvlink_multicast_off(monkeypatch):
     assert distributed.init_process_group(Launch(0, 0, 2), "cuda:0") == "nccl"
     assert seen == {"backend": "nccl", "rank": 0, "world_size": 2, "device_id": torch.device("cuda:0"), "nvls": "0"}
     assert os.environ["TORCH_SYMM_MEM_DISABLE_MULTICAST"] == "1"
+
+
+def test_multi_gpu_report_reads_rsl_rl_logs(tmp_path):
+    """tools/multi_gpu_report.py: mean steps/s after the skipped iterations, their ratio, the CSV."""
+    def log(path, steps_per_second, rewards):
+        lines = []
+        for i, (sps, reward) in enumerate(zip(steps_per_second, rewards)):
+            lines += [f"\x1b[1m   Learning iteration {i}/1000 \x1b[0m", f"   Steps per second: {sps}",
+                      f"   Mean reward: {reward}", "   Mean episode length: 100.0"]
+        path.write_text("\n".join(lines) + "\n")
+
+    log(tmp_path / "1.log", [10, 100, 100, 100], [0.1, 1.0, 2.0, 3.0])
+    log(tmp_path / "2.log", [10, 180, 200, 190], [0.2, 1.5, 2.5, 3.5])
+    out = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"), str(tmp_path / "2.log"),
+                          "--skip", "1", "--csv", str(tmp_path / "runs.csv")],
+                         cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert "throughput ratio 2gpu/1gpu: 1.900" in out.stdout
+    assert "common iteration 3: mean reward 3.50" in out.stdout
+    rows = (tmp_path / "runs.csv").read_text().splitlines()
+    assert rows[0] == "run,iteration,steps_per_second,mean_reward,mean_episode_length" and len(rows) == 9
+    short = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"),
+                            str(tmp_path / "2.log"), "--skip", "4"], cwd=REPO, capture_output=True, text=True)
+    assert short.returncode != 0 and "only 4 iterations logged" in short.stderr

@@ -1,0 +1,91 @@
+"""Throughput ratio and learning of a 1-GPU and a 2-GPU training run, from rsl-rl's console logs (rank 0).
+
+    python tools/multi_gpu_report.py 1gpu.log 2gpu.log [--skip 3] [--csv multi_gpu.csv]
+
+Mean "Steps per second" of each run (rsl-rl counts all ranks' steps: num_steps_per_env * num_envs * world_size /
+rank 0's iteration time) after the first --skip iterations (kernel loading, CUDA-graph capture), their ratio,
+and the mean reward / episode length at each run's last iteration and at the last iteration both reached.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import re
+import statistics
+
+FIELDS = ("Steps per second", "Mean reward", "Mean episode length")
+
+
+def parse(path: str) -> dict[int, dict[str, float]]:
+    """Per logged iteration: the FIELDS rsl-rl printed for it."""
+    rows, row = {}, None
+    for line in open(path, errors="replace"):
+        if m := re.search(r"Learning iteration (\d+)/", line):
+            row = rows.setdefault(int(m.group(1)), {})
+        elif row is not None and (m := re.match(r"\s*(" + "|".join(FIELDS) + r"):\s*(\S+)", line)):
+            row[m.group(1)] = float(m.group(2))
+    return rows
+
+
+def learning(rows: dict, iteration: int) -> str:
+    r = rows[iteration]
+    return (f"iteration {iteration}: mean reward {r.get('Mean reward', float('nan')):.2f}, "
+            f"mean episode length {r.get('Mean episode length', float('nan')):.1f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("one_gpu_log")
+    parser.add_argument("two_gpu_log")
+    parser.add_argument("--skip", type=int, default=3, help="first iterations left out of the mean steps/s")
+    parser.add_argument("--csv", help="write every iteration of both runs here")
+    parser.add_argument("--plot", help="save the mean reward of both runs per iteration here (PNG)")
+    args = parser.parse_args()
+    runs = {"1gpu": parse(args.one_gpu_log), "2gpu": parse(args.two_gpu_log)}
+    for name, rows in runs.items():
+        if len(rows) <= args.skip:
+            raise SystemExit(f"{name}: only {len(rows)} iterations logged (need > --skip {args.skip}); train "
+                             f"longer or see its log")
+    sps = {name: statistics.mean(r["Steps per second"] for i, r in rows.items() if i >= min(rows) + args.skip)
+           for name, rows in runs.items()}
+    common = min(max(rows) for rows in runs.values())
+    for name, rows in runs.items():
+        print(f"{name}: {len(rows)} iterations, mean steps/s {sps[name]:.0f} (iterations after the first "
+              f"{args.skip})")
+        print(f"      last   {learning(rows, max(rows))}")
+        print(f"      common {learning(rows, common)}")
+    print(f"throughput ratio 2gpu/1gpu: {sps['2gpu'] / sps['1gpu']:.3f}")
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(["run", "iteration", "steps_per_second", "mean_reward", "mean_episode_length"])
+            for name, rows in runs.items():
+                for iteration, r in sorted(rows.items()):
+                    writer.writerow([name, iteration, *(r.get(field, "") for field in FIELDS)])
+    if args.plot:
+        plot(runs, sps, args.plot)
+
+
+def plot(runs: dict, sps: dict, path: str) -> None:
+    """Mean reward per iteration of both runs (a 2-GPU iteration learns from twice the samples)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    for name, rows in runs.items():
+        iterations = sorted(i for i, r in rows.items() if "Mean reward" in r)
+        ax.plot(iterations, [rows[i]["Mean reward"] for i in iterations],
+                label=f"{name[0]} GPU{'s' if name[0] != '1' else ''}: {sps[name] / 1e6:.2f} M env-steps/s")
+    ax.set_xlabel("PPO iteration")
+    ax.set_ylabel("mean episode reward")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+if __name__ == "__main__":
+    main()
