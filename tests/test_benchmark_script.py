@@ -2,6 +2,9 @@
 
 import csv
 
+import pytest
+import torch
+
 from legged_gente.scripts import benchmark
 
 
@@ -29,7 +32,6 @@ def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):
 def test_raw_physics_measures_from_and_returns_to_the_settled_state():
     import argparse
 
-    import torch
 
     from legged_gente.envs.task_registry import task_registry
 
@@ -52,11 +54,12 @@ def test_profile_prints_the_costliest_operations_and_writes_a_trace(tmp_path, ca
     printed = capsys.readouterr().out
     assert "Self CPU" in printed and "aten::" in printed
     assert json.load(open(trace))["traceEvents"]
+    assert json.load(open(tmp_path / "trace_ppo.json"))["traceEvents"]  # the PPO iteration's
+    assert "profile: 10 env steps at 2 envs" in printed and "profile: 1 PPO iteration at 2 envs" in printed
 
 
 def test_cuda_graph_override_reaches_the_env_config(monkeypatch):
     """--cuda_graph sets cfg.sim.cuda_graph of the env it builds (on the CPU the graphs are off anyway)."""
-    import pytest
 
     from legged_gente.envs.task_registry import task_registry
 
@@ -72,3 +75,18 @@ def test_cuda_graph_override_reaches_the_env_config(monkeypatch):
     assert seen == ["physics"]
     with pytest.raises(SystemExit):
         benchmark.main(["--num_envs", "2", "--device", "cpu", "--cuda_graph", "always"])
+
+
+def test_gpu_time_split_sorts_kernels_into_warp_and_torch():
+    from types import SimpleNamespace
+
+    cuda, cpu = torch.autograd.DeviceType.CUDA, torch.autograd.DeviceType.CPU
+    events = [SimpleNamespace(name="ccd_hfield_kernel_builder__locals__ccd_hfield_kernel_3a0a_cuda_kernel_forward",
+                              device_type=cuda, device_time_total=400.0),
+              SimpleNamespace(name="_kinematics_branch_95f8028e_cuda_kernel_forward", device_type=cuda,
+                              device_time_total=100.0),
+              SimpleNamespace(name="void at::native::index_elementwise_kernel<128, 4>", device_type=cuda,
+                              device_time_total=50.0),
+              SimpleNamespace(name="aten::index", device_type=cpu, device_time_total=50.0)]  # its kernel's time
+    split = benchmark.gpu_time_split(SimpleNamespace(events=lambda: events))
+    assert split == {"total": 0.55, "warp": 0.5, "hfield": 0.4, "torch": pytest.approx(0.05)}

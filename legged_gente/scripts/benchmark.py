@@ -181,9 +181,24 @@ def ppo_steps(runner, train_cfg, iterations: int) -> tuple[float, float]:
     return iterations * train_cfg.runner.num_steps_per_env * env.num_envs / seconds, update_seconds / seconds
 
 
-def profile(runner, steps: int, out: str) -> None:
-    """torch.profiler over ``steps`` env steps and one PPO iteration: prints the operations that take the most
-    device (or CPU) time and writes a Chrome trace (chrome://tracing, ui.perfetto.dev) to ``out``."""
+def gpu_time_split(prof) -> dict[str, float]:
+    """Device time (ms) of the kernels a profile recorded: all, Warp's (MuJoCo-Warp's physics and the force
+    kernels; Warp names its kernels ``<name>_<hash>_cuda_kernel_forward``), of those the heightfield
+    collision, and the rest (torch: env logic, policy, update)."""
+    kernels = [e for e in prof.events() if e.device_type == torch.autograd.DeviceType.CUDA]
+    total = sum(e.device_time_total for e in kernels) / 1e3
+    warp_kernels = [e for e in kernels if "_cuda_kernel_" in e.name]
+    warp_ms = sum(e.device_time_total for e in warp_kernels) / 1e3
+    hfield = sum(e.device_time_total for e in warp_kernels if "hfield" in e.name) / 1e3
+    return {"total": total, "warp": warp_ms, "hfield": hfield, "torch": total - warp_ms}
+
+
+def profile(runner, steps: int, out: str, raw_substeps_per_s: float) -> None:
+    """torch.profiler over ``steps`` env steps, then over one PPO iteration: prints the operations that take
+    the most device (or CPU) time and, on GPU, how the device time splits between Warp and torch; writes a
+    Chrome trace of each (chrome://tracing, ui.perfetto.dev): ``out`` and ``out`` with ``_ppo`` added."""
+    from pathlib import Path
+
     from torch.profiler import ProfilerActivity, profile as torch_profile
 
     env = runner.env
@@ -191,18 +206,31 @@ def profile(runner, steps: int, out: str) -> None:
     cuda = env.device.startswith("cuda")
     activities = [ProfilerActivity.CPU] + ([ProfilerActivity.CUDA] if cuda else [])
     _sync(env.device)
-    with torch_profile(activities=activities) as prof:
+    with torch_profile(activities=activities) as env_prof:
         with torch.inference_mode():  # as in rsl-rl's rollouts (learn() left the env's buffers inference tensors)
             for _ in range(steps):
                 actions.uniform_(-1.0, 1.0)
                 env.step(actions)
         _sync(env.device)
+    with torch_profile(activities=activities) as ppo_prof:
         runner.learn(1)
         _sync(env.device)
-    for sort_by in (["self_cuda_time_total"] if cuda else []) + ["self_cpu_time_total"]:
-        print(prof.key_averages().table(sort_by=sort_by, row_limit=20, max_name_column_width=60))
-    prof.export_chrome_trace(out)
-    print(f"profile: {steps} env steps + 1 PPO iteration at {env.num_envs} envs -> {out}")
+    ppo_out = Path(out).with_name(Path(out).stem + "_ppo" + Path(out).suffix)
+    for prof, what, trace in ((env_prof, f"{steps} env steps", out), (ppo_prof, "1 PPO iteration", ppo_out)):
+        for sort_by in (["self_cuda_time_total"] if cuda else []) + ["self_cpu_time_total"]:
+            print(prof.key_averages().table(sort_by=sort_by, row_limit=15, max_name_column_width=60))
+        prof.export_chrome_trace(str(trace))
+        print(f"profile: {what} at {env.num_envs} envs -> {trace}")
+    if cuda:
+        step = {key: value / steps for key, value in gpu_time_split(env_prof).items()}
+        iteration = gpu_time_split(ppo_prof)
+        print(f"GPU time per env step at {env.num_envs} envs: {step['total']:.2f} ms = Warp (physics, force "
+              f"kernels) {step['warp']:.2f} ms, of which heightfield collision {step['hfield']:.2f} ms, + torch "
+              f"{step['torch']:.2f} ms; the raw ceiling's physics (standing robots, graph-timed): "
+              f"{1e3 * env.num_envs * env.cfg.control.decimation / raw_substeps_per_s:.2f} ms")
+        print(f"GPU time per PPO iteration ({runner.cfg['num_steps_per_env']} env steps + update): "
+              f"{iteration['total']:.1f} ms = Warp {iteration['warp']:.1f} ms + torch (env logic, policy, update) "
+              f"{iteration['torch']:.1f} ms")
 
 
 def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, check_sync: bool = False,
@@ -235,7 +263,7 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             if iterations > 0:
                 ppo, update_share = ppo_steps(runner, train_cfg, iterations)
             if profiled:
-                profile(runner, 10, profile_out)
+                profile(runner, 10, profile_out, raw)
         ceiling = raw / env.cfg.control.decimation
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
@@ -279,8 +307,9 @@ def main(argv=None) -> None:
                         help="CUDA: fail if LeggedRobot.step waits for the device anywhere (torch sync debug mode); "
                              "list where a PPO iteration does")
     parser.add_argument("--profile", metavar="TRACE_JSON",
-                        help="also profile 10 env steps + 1 PPO iteration (torch.profiler): print the costliest "
-                             "operations, write a Chrome trace here")
+                        help="also profile 10 env steps, then 1 PPO iteration (torch.profiler): print the costliest "
+                             "operations and, on GPU, the Warp / torch split of the device time; write the env "
+                             "steps' Chrome trace here, the PPO iteration's beside it (name + _ppo)")
     parser.add_argument("--cuda_graph", choices=["env_step", "physics", "off"],
                         help="override the task's cfg.sim.cuda_graph (what one CUDA graph records on GPU)")
     parser.add_argument("--profile_envs", type=int, help="the num_envs to profile at (default: the last of --num_envs)")
