@@ -32,7 +32,6 @@ def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):
 def test_raw_physics_measures_from_and_returns_to_the_settled_state():
     import argparse
 
-
     from legged_gente.envs.task_registry import task_registry
 
     cfg, _ = task_registry.get_cfgs("gente_biped_flat")
