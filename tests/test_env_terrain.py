@@ -195,7 +195,7 @@ def test_step_body_updates_carried_state_in_place(env):
     rebound = rebound_attributes(env, before)
     assert (env.episode_length_buf == 0).all(), "the step did not reset the robots"
     assert carried_state_rebound(rebound, env.step_outputs) == []
-    assert {"obs_buf", "rew_buf", "reset_buf"} <= set(rebound)
+    assert {"policy_obs", "critic_obs", "rew_buf", "reset_buf"} <= set(rebound)
     assert (env._stat_reward_sums == 0).all()
 
     class Rebinding(type(env)):

@@ -4,9 +4,10 @@
     NCCL_NVLS_ENABLE=0 torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only
     torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only --device cpu --ppo_envs 64
 
-Env step: two envs of the task with the same seed, one stepping through the whole-step graph
-(cfg.sim.cuda_graph = "env_step") and one with only the substeps captured ("physics"), get the same random
-actions. The first steps are compared value by value (the order of random draws differs, so resets and
+Env step: three envs of the task with the same seed get the same random actions: one stepping through the
+whole-step graph with its torch logic compiled (the default: cfg.sim.cuda_graph = "env_step",
+cfg.sim.torch_compile = True), one through the whole-step graph uncompiled, and one with only the substeps
+captured ("physics"). The first steps are compared value by value (the order of random draws differs, so resets and
 commands do), the whole run by its statistics: rewards, resets, terrain levels, episode length.
 
 PPO update: GentePPO with its mini-batch graphs and rsl-rl's PPO update the same networks on the same
@@ -30,10 +31,11 @@ from legged_gente.envs.task_registry import task_registry
 from legged_gente.utils.distributed import init_process_group, rank_device, torchrun_launch
 
 
-def run(task: str, num_envs: int, steps: int, mode: str, seed: int) -> dict:
+def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compile: bool) -> dict:
     env_cfg, _ = task_registry.get_cfgs(task)
     env_cfg.env.num_envs = num_envs
     env_cfg.sim.cuda_graph = mode
+    env_cfg.sim.torch_compile = torch_compile
     torch.manual_seed(seed)
     env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device="cuda"))
     actions = torch.Generator().manual_seed(seed)
@@ -192,18 +194,22 @@ def main() -> None:
 
 
 def env_steps(task: str, num_envs: int, steps: int, seed: int) -> None:
-    """The env-step graph against the physics-only graph: first steps and run statistics."""
-    graph = run(task, num_envs, steps, "env_step", seed)
-    plain = run(task, num_envs, steps, "physics", seed)
-    for i, ((gp, gc, gr), (pp, pc, pr)) in enumerate(zip(graph["first"], plain["first"])):
-        print(f"step {i + 1}: max |diff| policy obs {(gp - pp).abs().max():.2e}, critic obs {(gc - pc).abs().max():.2e}, "
-              f"reward {(gr - pr).abs().max():.2e}")
-    print(f"{'':>22} {'env_step graph':>15} {'physics graph':>15}")
-    for name, key, reduce in (("mean reward", "reward", torch.mean), ("resets (all steps)", "resets", torch.sum),
-                              ("final terrain level", "level", lambda x: x[-1])):
-        print(f"{name:>22} {float(reduce(graph[key])):>15.4f} {float(reduce(plain[key])):>15.4f}")
-    for name in ("episode_length", "time"):
-        print(f"{name:>22} {graph[name]:>15.4f} {plain[name]:>15.4f}")
+    """The env-step graph with the torch logic compiled (the default), without, and the physics-only graph
+    without: first steps and run statistics."""
+    runs = {"env_step+compile": run(task, num_envs, steps, "env_step", seed, True),
+            "env_step": run(task, num_envs, steps, "env_step", seed, False),
+            "physics": run(task, num_envs, steps, "physics", seed, False)}
+    reference = runs["physics"]
+    for name in ("env_step+compile", "env_step"):
+        for i, ((gp, gc, gr), (pp, pc, pr)) in enumerate(zip(runs[name]["first"], reference["first"])):
+            print(f"{name} vs physics, step {i + 1}: max |diff| policy obs {(gp - pp).abs().max():.2e}, critic obs "
+                  f"{(gc - pc).abs().max():.2e}, reward {(gr - pr).abs().max():.2e}")
+    print(f"{'':>22}" + "".join(f"{name:>18}" for name in runs))
+    for label, key, reduce in (("mean reward", "reward", torch.mean), ("resets (all steps)", "resets", torch.sum),
+                               ("final terrain level", "level", lambda x: x[-1])):
+        print(f"{label:>22}" + "".join(f"{float(reduce(r[key])):>18.4f}" for r in runs.values()))
+    for key in ("episode_length", "time"):
+        print(f"{key:>22}" + "".join(f"{r[key]:>18.4f}" for r in runs.values()))
 
 
 if __name__ == "__main__":

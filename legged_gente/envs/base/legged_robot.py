@@ -26,7 +26,7 @@ from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand
 
 
 class LeggedRobot(VecEnv):
-    step_outputs = ("actions", "obs_buf", "rew_buf", "reset_buf", "time_out_buf", "base_pos", "base_quat",
+    step_outputs = ("actions", "policy_obs", "critic_obs", "rew_buf", "reset_buf", "time_out_buf", "base_pos", "base_quat",
                     "base_lin_vel", "base_ang_vel", "projected_gravity", "dof_pos", "dof_vel", "feet_pos")
     """Tensors the step recomputes from scratch (may be rebound); all other state is updated in place."""
 
@@ -51,6 +51,10 @@ class LeggedRobot(VecEnv):
         self._init_origins()
         self._randomize_model()
         self.reset()
+        if self.sim.wp_device.is_cuda and cfg.sim.torch_compile:
+            # the step's torch logic (rewards, terminations, resets, curriculum, observations: a few hundred
+            # small operations) fused by TorchInductor into a few dozen kernels; compiled at the first step
+            self._post_physics_step = torch.compile(self._post_physics_step, fullgraph=False, dynamic=False)
         self._step_graph = (StepGraph(self, self._step_body, self.step_outputs, device)
                             if self.sim.wp_device.is_cuda and cfg.sim.cuda_graph == "env_step" else None)
 
@@ -86,8 +90,9 @@ class LeggedRobot(VecEnv):
     def _create_forces(self):
         """Terrain force fields (water, soil, friction) where the terrain has such materials. On a heightfield
         without any, the critic still gets the fields' observation as zeros, so a policy trained with forces
-        loads and runs on any terrain."""
-        self._no_force_obs = None
+        loads and runs on any terrain. ``self._force_obs``: that observation (a zero-copy view of the fields'
+        Warp array), or None without force fields."""
+        self._force_obs = None
         if self.terrain is None or not self.cfg.forces.enabled:
             return None
         material = self.terrain.material
@@ -95,7 +100,7 @@ class LeggedRobot(VecEnv):
                 (material.friction != self.cfg.terrain.static_friction).any()):
             from legged_gente.external_forces.field import privileged_obs_size
 
-            self._no_force_obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces),
+            self._force_obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces),
                                              device=self.device)
             return None
         if self.cfg.forces.friction_reference != self.cfg.terrain.static_friction:
@@ -108,6 +113,7 @@ class LeggedRobot(VecEnv):
                                seed=int(torch.randint(0, 2**31 - 1, ()).item()))  # follows torch's (per-rank) seed
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
+        self._force_obs = forces.privileged_obs()
         return forces
 
     def _init_buffers(self) -> None:
@@ -444,7 +450,12 @@ class LeggedRobot(VecEnv):
         self.episode_length_buf[:] = torch.where(mask, 0, self.episode_length_buf)
         self.episode_sums.masked_fill_(m, 0.0)
         if self.forces is not None:
-            self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
+            self._reset_forces(mask)
+
+    @torch.compiler.disable
+    def _reset_forces(self, mask: torch.Tensor) -> None:
+        """New force-field draws for the envs in ``mask`` (Warp kernels: left out of torch.compile)."""
+        self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
 
     def _resample_commands(self, mask: torch.Tensor) -> None:
         n, dev, ranges = self.num_envs, self.device, self.cfg.commands.ranges
@@ -502,15 +513,18 @@ class LeggedRobot(VecEnv):
         policy = clean + self._noise(clean) if self.cfg.noise.add_noise else clean
         feet_forces = self.contact_forces[:, self.feet].flatten(1) * 0.01
         privileged = [clean, self.friction_coeffs, self.added_base_mass, feet_forces]
-        if self.forces is not None:
-            privileged.append(self.forces.privileged_obs())
-        elif self._no_force_obs is not None:
-            privileged.append(self._no_force_obs)
+        if self._force_obs is not None:
+            privileged.append(self._force_obs)
         clip = self.cfg.normalization.clip_observations
         critic = torch.nan_to_num(torch.cat(privileged, dim=-1), nan=0.0)
-        self.obs_buf = TensorDict(
-            {"policy": torch.nan_to_num(policy, nan=0.0).clamp(-clip, clip), "critic": critic.clamp(-clip, clip)},
-            batch_size=[self.num_envs], device=self.device)
+        self.policy_obs = torch.nan_to_num(policy, nan=0.0).clamp(-clip, clip)
+        self.critic_obs = critic.clamp(-clip, clip)
+
+    @property
+    def obs_buf(self) -> TensorDict:
+        """The latest observations: the policy's and the critic's (privileged) groups, as rsl-rl takes them."""
+        return TensorDict({"policy": self.policy_obs, "critic": self.critic_obs}, batch_size=[self.num_envs],
+                          device=self.device)
 
     def _noise(self, clean: torch.Tensor) -> torch.Tensor:
         if not hasattr(self, "_noise_scale"):

@@ -160,6 +160,9 @@ class LeggedRobotCfg(BaseConfig):
         # into one CUDA graph; "physics" only the substep loop (for env code that branches on host values);
         # "off" launches everything one by one. Ignored on the CPU.
         cuda_graph = "env_step"
+        # on GPU: torch.compile the step's torch logic (rewards, terminations, resets, curriculum, observations),
+        # which fuses its few hundred small operations into a few dozen kernels; compiled at the first step
+        torch_compile = True
         max_qvel = 1000.0  # m/s or rad/s; a world moving faster has diverged (real ones reach 1e6+) and is reset
 
     class forces(ForcesConfig):
