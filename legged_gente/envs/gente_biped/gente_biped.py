@@ -14,7 +14,8 @@ class GenteBiped(LeggedRobot):
         """Per-foot phase in [0, 1): the two feet half a period apart."""
         t = self.episode_length_buf.float() * self.dt
         phase = torch.remainder(t / self.cfg.rewards.gait_period, 1.0)
-        offsets = torch.arange(len(self.layout.foot_bodies), device=self.device) / len(self.layout.foot_bodies)
+        num_feet = self.feet.shape[0]
+        offsets = torch.arange(num_feet, device=self.device) / num_feet
         return torch.remainder(phase[:, None] + offsets[None], 1.0)
 
     def _task_observations(self) -> torch.Tensor:
