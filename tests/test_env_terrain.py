@@ -1,5 +1,7 @@
 """The env on a heightfield: MuJoCo's hfield equals the numpy heights, curriculum levels move, forces act."""
 
+from unittest.mock import patch
+
 import mujoco
 import numpy as np
 import pytest
@@ -215,3 +217,36 @@ def test_unknown_cuda_graph_mode_is_rejected():
     cfg.sim.cuda_graph = "yes"
     with pytest.raises(ValueError, match="cuda_graph"):
         GenteBiped(cfg, device="cpu")
+
+
+def test_torch_compile_must_be_a_bool():
+    cfg = SmallCurriculum()
+    cfg.sim.torch_compile = "yes"
+    with pytest.raises(ValueError, match=r"cfg.sim.torch_compile='yes'; use True"):
+        GenteBiped(cfg, device="cpu")
+
+
+def test_the_step_logic_compiles_to_the_same_numbers():
+    """torch.compile of the step's torch logic (what cfg.sim.torch_compile turns on on GPU), here on the CPU with
+    the eager random numbers (inductor's fallback_random): the same observations, rewards and resets as eager."""
+    import torch._inductor.config as inductor_config
+
+    def rollout(compiled: bool):
+        cfg = SmallCurriculum()
+        torch.manual_seed(0)
+        env = GenteBiped(cfg, device="cpu")
+        if compiled:
+            env._post_physics_step = torch.compile(env._post_physics_step)
+        generator = torch.Generator().manual_seed(1)
+        out = []
+        with torch.inference_mode():
+            for _ in range(8):
+                obs, rew, done, _ = env.step(torch.rand(env.num_envs, env.num_actions, generator=generator) * 2 - 1)
+                out.append((obs["policy"], obs["critic"], rew, done))
+        return out
+
+    with patch.object(inductor_config, "fallback_random", True):
+        eager, compiled = rollout(False), rollout(True)
+    for (p, c, r, d), (pc, cc, rc, dc) in zip(eager, compiled):
+        assert torch.allclose(p, pc, atol=1e-4) and torch.allclose(c, cc, atol=1e-4)
+        assert torch.allclose(r, rc, atol=1e-6) and torch.equal(d, dc)

@@ -70,6 +70,9 @@ class LeggedRobot(VecEnv):
         if cfg.sim.cuda_graph not in ("env_step", "physics", "off"):
             raise ValueError(f"cfg.sim.cuda_graph={cfg.sim.cuda_graph!r}; use 'env_step' (the whole step in one "
                              f"CUDA graph), 'physics' (only the substeps) or 'off'.")
+        if not isinstance(cfg.sim.torch_compile, bool):
+            raise ValueError(f"cfg.sim.torch_compile={cfg.sim.torch_compile!r}; use True (compile the step's torch "
+                             f"logic on GPU) or False.")
         if cfg.terrain.solved_top_level not in ("random", "stay"):
             raise ValueError(f"cfg.terrain.solved_top_level={cfg.terrain.solved_top_level!r}; use 'random' "
                              f"(legged_gym) or 'stay'.")
