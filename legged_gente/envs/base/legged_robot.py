@@ -26,8 +26,8 @@ from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand
 
 
 class LeggedRobot(VecEnv):
-    step_outputs = ("actions", "policy_obs", "critic_obs", "rew_buf", "reset_buf", "time_out_buf", "base_pos", "base_quat",
-                    "base_lin_vel", "base_ang_vel", "projected_gravity", "dof_pos", "dof_vel", "feet_pos")
+    step_outputs = ("actions", "policy_obs", "critic_obs", "rew_buf", "reset_buf", "time_out_buf", "base_pos",
+                    "base_quat", "base_lin_vel", "base_ang_vel", "projected_gravity", "dof_pos", "dof_vel", "feet_pos")
     """Tensors the step recomputes from scratch (may be rebound); all other state is updated in place."""
 
     def __init__(self, cfg: LeggedRobotCfg, device: str = "cpu", train_cfg_steps_per_env: int = 24):
@@ -104,7 +104,7 @@ class LeggedRobot(VecEnv):
             from legged_gente.external_forces.field import privileged_obs_size
 
             self._force_obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces),
-                                             device=self.device)
+                                          device=self.device)
             return None
         if self.cfg.forces.friction_reference != self.cfg.terrain.static_friction:
             raise ValueError(f"cfg.forces.friction_reference={self.cfg.forces.friction_reference} differs from "
