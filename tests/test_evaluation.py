@@ -117,6 +117,8 @@ def test_one_evaluation_runs_several_times():
     from legged_gente.evaluation.evaluator import Evaluation
 
     evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[:1]), 1, "cpu", 0.2, "waypoints")
+    # its hooks branch on host values every step: no whole-step graph, no torch.compile (on a GPU)
+    assert evaluation.env_cfg.sim.cuda_graph == "physics" and evaluation.env_cfg.sim.torch_compile is False
 
     def still(obs):
         return torch.zeros(evaluation.env.num_envs, evaluation.env.num_actions)

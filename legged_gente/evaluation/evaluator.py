@@ -152,6 +152,7 @@ class Evaluation:
         env_cfg.env.episode_length_s = episode_length_s
         env_cfg.noise.add_noise = False
         env_cfg.sim.cuda_graph = "physics"  # the recorder's hooks branch on host values every step
+        env_cfg.sim.torch_compile = False  # and would be traced by torch.compile with the step's logic
         rand = env_cfg.domain_rand
         rand.push_robots = rand.randomize_friction = rand.randomize_base_mass = False
         env_cfg.commands.resampling_time = episode_length_s + 1.0  # one command (or task) per episode

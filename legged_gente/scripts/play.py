@@ -83,6 +83,7 @@ def play(args) -> dict:
     env_cfg.terrain.num_rows = min(env_cfg.terrain.num_rows, 5)
     env_cfg.terrain.num_cols = min(env_cfg.terrain.num_cols, 5)
     env_cfg.terrain.curriculum = False
+    env_cfg.sim.torch_compile = False  # for 16 robots the compile (~20 s) costs more than it saves
     apply_args(args, env_cfg, train_cfg)
     train_cfg.runner.resume = True
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
