@@ -6,7 +6,8 @@
 # num_steps_per_env * num_envs * world_size / rank 0's iteration time), skipping the first SKIP iterations
 # (kernel loading, CUDA-graph capture), their ratio, and the mean reward / episode length of each run at its
 # last iteration and at the last iteration both reached (each 2-GPU iteration learns from twice the samples);
-# every iteration of both runs goes to $OUT_DIR/multi_gpu.csv (tools/multi_gpu_report.py).
+# every iteration of both runs goes to $OUT_DIR/multi_gpu.csv, their reward curves to multi_gpu.png
+# (tools/multi_gpu_report.py).
 set -uo pipefail
 T=${T:-300}
 NUM_ENVS=${NUM_ENVS:-4096}
@@ -36,4 +37,5 @@ GENTE_LOG_ROOT="$OUT_DIR/warmup" python3 legged_gente/scripts/train.py --task="$
 train 1gpu python3 legged_gente/scripts/train.py --device cuda:0
 train 2gpu python3 -m torch.distributed.run --standalone --nproc_per_node=2 legged_gente/scripts/train.py
 
-python3 tools/multi_gpu_report.py "$OUT_DIR/1gpu.log" "$OUT_DIR/2gpu.log" --skip "$SKIP" --csv "$OUT_DIR/multi_gpu.csv"
+python3 tools/multi_gpu_report.py "$OUT_DIR/1gpu.log" "$OUT_DIR/2gpu.log" --skip "$SKIP" --csv "$OUT_DIR/multi_gpu.csv" \
+  --plot "$OUT_DIR/multi_gpu.png"
