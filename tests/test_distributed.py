@@ -131,13 +131,14 @@ def test_multi_gpu_report_reads_rsl_rl_logs(tmp_path):
     log(tmp_path / "1.log", [10, 100, 100, 100], [0.1, 1.0, 2.0, 3.0])
     log(tmp_path / "2.log", [10, 180, 200, 190], [0.2, 1.5, 2.5, 3.5])
     out = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"), str(tmp_path / "2.log"),
-                          "--skip", "1", "--csv", str(tmp_path / "runs.csv")],
+                          "--skip", "1", "--csv", str(tmp_path / "runs.csv"), "--plot", str(tmp_path / "runs.png")],
                          cwd=REPO, capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     assert "throughput ratio 2gpu/1gpu: 1.900" in out.stdout
     assert "common iteration 3: mean reward 3.50" in out.stdout
     rows = (tmp_path / "runs.csv").read_text().splitlines()
     assert rows[0] == "run,iteration,steps_per_second,mean_reward,mean_episode_length" and len(rows) == 9
+    assert (tmp_path / "runs.png").stat().st_size > 0
     short = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"),
                             str(tmp_path / "2.log"), "--skip", "4"], cwd=REPO, capture_output=True, text=True)
     assert short.returncode != 0 and "only 4 iterations logged" in short.stderr
