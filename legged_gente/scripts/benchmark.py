@@ -18,6 +18,7 @@ from collections import Counter
 import torch
 import warp as wp
 
+from legged_gente.envs.base.legged_robot import CUDA_GRAPH_MODES
 from legged_gente.envs.task_registry import task_registry
 from legged_gente.utils.args import default_device
 
@@ -310,7 +311,7 @@ def main(argv=None) -> None:
                         help="also profile 10 env steps, then 1 PPO iteration (torch.profiler): print the costliest "
                              "operations and, on GPU, the Warp / torch split of the device time; write the env "
                              "steps' Chrome trace here, the PPO iteration's beside it (name + _ppo)")
-    parser.add_argument("--cuda_graph", choices=["env_step", "physics", "off"],
+    parser.add_argument("--cuda_graph", choices=CUDA_GRAPH_MODES,
                         help="override the task's cfg.sim.cuda_graph (what one CUDA graph records on GPU)")
     parser.add_argument("--profile_envs", type=int, help="the num_envs to profile at (default: the last of --num_envs)")
     args = parser.parse_args(argv)

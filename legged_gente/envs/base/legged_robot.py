@@ -24,6 +24,8 @@ from legged_gente.sim.backend import Simulation
 from legged_gente.utils.cuda_graph import StepGraph
 from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
 
+CUDA_GRAPH_MODES = ("env_step", "physics", "off")  # the values of cfg.sim.cuda_graph
+
 
 class LeggedRobot(VecEnv):
     step_outputs = ("actions", "policy_obs", "critic_obs", "rew_buf", "reset_buf", "time_out_buf", "base_pos",
@@ -67,7 +69,7 @@ class LeggedRobot(VecEnv):
             raise ValueError(f"cfg.env.num_envs must be >= 1, got {self.num_envs}.")
         if cfg.control.decimation < 1:
             raise ValueError(f"cfg.control.decimation must be >= 1, got {cfg.control.decimation}.")
-        if cfg.sim.cuda_graph not in ("env_step", "physics", "off"):
+        if cfg.sim.cuda_graph not in CUDA_GRAPH_MODES:
             raise ValueError(f"cfg.sim.cuda_graph={cfg.sim.cuda_graph!r}; use 'env_step' (the whole step in one "
                              f"CUDA graph), 'physics' (only the substeps) or 'off'.")
         if not isinstance(cfg.sim.torch_compile, bool):
