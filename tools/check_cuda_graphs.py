@@ -62,6 +62,15 @@ def multi_gpu_cfg() -> dict | None:
     return {"global_rank": rank, "local_rank": rank, "world_size": torch.distributed.get_world_size()}
 
 
+def synthetic_observations(num_envs: int, device: str, generator: torch.Generator | None = None):
+    """Random policy (48) and critic (64) observations, as rsl-rl's runner passes them."""
+    from tensordict import TensorDict
+
+    return TensorDict({"policy": torch.randn(num_envs, 48, generator=generator, device=device),
+                       "critic": torch.randn(num_envs, 64, generator=generator, device=device)},
+                      batch_size=[num_envs], device=device)
+
+
 def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observations):
     from types import SimpleNamespace
 
@@ -79,15 +88,11 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
 def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24):
     """``updates`` PPO updates on seeded synthetic rollouts (each rank its own); the actor's parameters and
     losses after each."""
-    from tensordict import TensorDict
-
     rank = torch.distributed.get_rank() if torch.distributed.is_initialized() else 0
     generator = torch.Generator(device=device).manual_seed(rank)
 
     def observations():
-        return TensorDict({"policy": torch.randn(num_envs, 48, generator=generator, device=device),
-                           "critic": torch.randn(num_envs, 64, generator=generator, device=device)},
-                          batch_size=[num_envs], device=device)
+        return synthetic_observations(num_envs, device, generator)
 
     alg = ppo_algorithm(alg_class, device, num_envs, steps, observations)
     if hasattr(alg, "_act_graph"):
@@ -136,13 +141,11 @@ def check_act(device: str, num_envs: int) -> bool:
     """GentePPO's act graph against rsl-rl's act on the same observations, three calls (warm-up, capture,
     replay); True when values and distribution parameters agree and the sampled actions are plausible."""
     from rsl_rl.algorithms import PPO
-    from tensordict import TensorDict
 
     from legged_gente.utils.ppo import GentePPO
 
     def observations():
-        return TensorDict({"policy": torch.randn(num_envs, 48, device=device),
-                           "critic": torch.randn(num_envs, 64, device=device)}, batch_size=[num_envs], device=device)
+        return synthetic_observations(num_envs, device)
 
     alg = ppo_algorithm(GentePPO, device, num_envs, 24, observations)
     agree = True
