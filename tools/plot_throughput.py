@@ -16,8 +16,11 @@ def main() -> None:
     parser.add_argument("csvs", nargs="+", help="LABEL=PATH")
     parser.add_argument("--skip_raw", nargs="*", default=[], help="labels whose raw column is not plotted")
     args = parser.parse_args()
+    styles = ("-", "--", ":")  # one line style per CSV
+    if len(args.csvs) > len(styles):
+        parser.error(f"{len(args.csvs)} CSVs given; at most {len(styles)} (one line style each) fit one plot")
     fig, ax = plt.subplots(figsize=(10, 4))
-    for style, item in zip(("-", "--", ":"), args.csvs):
+    for style, item in zip(styles, args.csvs):
         label, path = item.split("=", 1)
         rows = list(csv.DictReader(open(Path(path))))
         n = [int(r["num_envs"]) for r in rows]
