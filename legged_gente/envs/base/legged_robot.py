@@ -57,6 +57,8 @@ class LeggedRobot(VecEnv):
             # the step's torch logic (rewards, terminations, resets, curriculum, observations: a few hundred
             # small operations) fused by TorchInductor into a few dozen kernels; compiled at the first step
             self._post_physics_step = torch.compile(self._post_physics_step, fullgraph=False, dynamic=False)
+            print("[legged_gente] the step's torch logic is compiled (torch.compile) at the first step: about 20 s "
+                  "once per num_envs, cached afterwards; --set sim.torch_compile=False turns it off", flush=True)
         self._step_graph = (StepGraph(self, self._step_body, self.step_outputs, device)
                             if self.sim.wp_device.is_cuda and cfg.sim.cuda_graph == "env_step" else None)
 
