@@ -54,14 +54,6 @@ def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compil
             "time": env.sim.time.mean().item()}
 
 
-def multi_gpu_cfg() -> dict | None:
-    """rsl-rl's multi_gpu keys for this torchrun rank, or None outside torchrun."""
-    if not torch.distributed.is_initialized():
-        return None
-    rank = torch.distributed.get_rank()
-    return {"global_rank": rank, "local_rank": rank, "world_size": torch.distributed.get_world_size()}
-
-
 def synthetic_observations(num_envs: int, device: str, generator: torch.Generator | None = None):
     """Random policy (48) and critic (64) observations, as rsl-rl's runner passes them."""
     from tensordict import TensorDict
@@ -79,7 +71,8 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO, rsl_rl_train_cfg
 
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
-    cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, multi_gpu_cfg()
+    launch = torchrun_launch()
+    cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, launch.rsl_rl_multi_gpu() if launch else None
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
     torch.manual_seed(0)  # the same initial networks on every rank (rsl-rl's runner broadcasts rank 0's)
     return PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)

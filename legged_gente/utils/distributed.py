@@ -42,6 +42,11 @@ class Launch:
     local_rank: int  # rank on this host: the CUDA device index
     world_size: int
 
+    def rsl_rl_multi_gpu(self) -> dict:
+        """The train config's ``multi_gpu`` keys that rsl-rl's PPO reads (all-reduce of the gradients and KL,
+        broadcast of the learning rate)."""
+        return {"global_rank": self.rank, "local_rank": self.local_rank, "world_size": self.world_size}
+
 
 def torchrun_launch(environ=None) -> Launch | None:
     """The torchrun ranks from the environment, or None when the process was not started by torchrun."""
@@ -145,9 +150,7 @@ class GenteOnPolicyRunner(OnPolicyRunner):
             self.gpu_world_size, self.gpu_local_rank, self.gpu_global_rank = (
                 launch.world_size, launch.local_rank, launch.rank)
             self.is_distributed = True
-            # the keys rsl-rl's PPO reads (all-reduce of gradients and KL, broadcast of the learning rate)
-            self.cfg["multi_gpu"] = {"global_rank": launch.rank, "local_rank": launch.local_rank,
-                                     "world_size": launch.world_size}
+            self.cfg["multi_gpu"] = launch.rsl_rl_multi_gpu()
             backend = init_process_group(launch, str(self.device))
         # rsl-rl seeds nothing itself: one seed per rank, or every rank would draw the same actions
         self.cfg["seed"] = int(self.cfg["seed"]) + self.gpu_global_rank
