@@ -24,7 +24,14 @@ from typing import Any
 
 import numpy as np
 
-from legged_gente.generation.validation import SPEC_VERSION, ToolCall, ValidationError, validate_spec_dict
+from legged_gente.generation.validation import (
+    MAX_SPEC_BYTES,
+    SPEC_VERSION,
+    ToolCall,
+    ValidationError,
+    parse_json,
+    validate_spec_dict,
+)
 from legged_gente.terrain.materials import MaterialMap
 
 
@@ -98,14 +105,16 @@ class TerrainSpec:
 
     @classmethod
     def load(cls, path: str | Path, registry: Any = None) -> "TerrainSpec":
+        """Read and validate a spec file; a bad file raises ValidationError naming the file and the problem."""
         path = Path(path)
         try:
-            data = json.loads(path.read_text())
+            size = path.stat().st_size
         except FileNotFoundError:
             raise FileNotFoundError(f"terrain spec {path} does not exist; pass the spec.json that gente-generate wrote.") from None
-        except json.JSONDecodeError as exc:
-            raise ValidationError([f"spec {path}: not valid JSON ({exc})."]) from None
+        if size > MAX_SPEC_BYTES:
+            raise ValidationError([f"spec {path}: the file is {size} bytes; a spec is at most {MAX_SPEC_BYTES} bytes."])
         try:
+            data = parse_json(path.read_bytes(), "the file's contents", MAX_SPEC_BYTES)
             return cls.from_dict(data, registry)
         except ValidationError as exc:
             raise ValidationError([f"{path}: {m}" for m in exc.messages]) from None

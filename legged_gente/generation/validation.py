@@ -5,31 +5,127 @@ stored in a spec JSON). Every rejection is a :class:`ValidationError` whose mess
 argument, the value and what is allowed, so it can be shown to a user or sent back to a model as the tool
 result. Overlapping regions are allowed on purpose: calls apply in order, later "set" calls replace earlier
 heights in the overlap and "add" calls stack, which is how a scene is layered.
+
+Every accepted call builds: the terrain's own parameter rules (``AtomicTerrain.check_params``, the same check
+the tile builder runs), a region that holds at least one cell, and stacked heights within the builder's bound
+(:func:`check_height_stack`). Input is bounded before it is parsed (lengths, nesting, counts, finite numbers,
+integers a float can hold), and only :class:`ValidationError` leaves this module, its messages truncated.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import math
+import numbers
 from typing import Any, Iterable, Mapping
 
 import jsonschema
+import numpy as np
 from jsonschema import Draft202012Validator
 
 from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_regions
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT, SEAM_BAND, Region
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 SPEC_VERSION = 1
 
 Rect = tuple[float, float, float, float]
 
+# Input limits: everything a model or a spec file sends is bounded before it is parsed or built.
+MAX_CALLS = 64
+"""Most tool calls in one spec (GenTe's prompts ask for 3-20)."""
+MAX_CELLS = 4_000_000
+"""Most heightfield cells of one tile: 200 m x 200 m at 0.1 m, or 40 m x 40 m at 0.02 m (~1 s to build)."""
+MAX_ARGUMENT_CHARS = 16_000
+"""Longest JSON text of one tool call's arguments."""
+MAX_SPEC_BYTES = 1_000_000
+"""Largest spec file."""
+MAX_STRING_CHARS = 10_000
+"""Longest string anywhere in a call or a spec (a prompt kept as provenance included)."""
+MAX_DEPTH = 8
+"""Deepest nesting of objects and arrays (a spec needs 5)."""
+MAX_INT = 2**53
+"""Largest |integer| accepted: beyond it a float no longer holds every integer."""
+MAX_MESSAGES = 20
+MAX_MESSAGE_CHARS = 400
+
+
+def _clip_text(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    return text if len(text) <= limit else f"{text[:limit - 30]}... ({len(text)} characters in all)"
+
 
 class ValidationError(ValueError):
-    """A rejected tool call or spec; ``messages`` holds one precise sentence per problem."""
+    """A rejected tool call or spec; ``messages`` holds one precise sentence per problem.
+
+    Messages are cut to :data:`MAX_MESSAGE_CHARS` characters and at most :data:`MAX_MESSAGES` are kept, so a
+    huge input is never echoed whole to a user or back to a model.
+    """
 
     def __init__(self, messages: Iterable[str]):
-        self.messages = list(messages)
+        messages = [_clip_text(str(m)) for m in messages]
+        if len(messages) > MAX_MESSAGES:
+            messages = messages[:MAX_MESSAGES] + [f"... and {len(messages) - MAX_MESSAGES} more problem(s)."]
+        self.messages = messages
         super().__init__("\n".join(self.messages))
+
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not a number JSON allows; send a finite number")
+
+
+def parse_json(text: str | bytes, what: str, limit: int) -> Any:
+    """``json.loads`` with bounds: at most ``limit`` characters, no NaN/Infinity; errors are ValidationError."""
+    if len(text) > limit:
+        raise ValidationError([f"{what} are {len(text)} characters long; the limit is {limit}."])
+    try:
+        return json.loads(text, parse_constant=_reject_constant)
+    except RecursionError:
+        raise ValidationError([f"{what} are nested too deeply to parse; the limit is {MAX_DEPTH} levels."]) from None
+    except ValueError as exc:  # JSONDecodeError, NaN/Infinity, integers with too many digits, bad UTF-8
+        raise ValidationError([f"{what} are not valid JSON ({_clip_text(str(exc), 160)}); send a JSON object."]) from None
+
+
+def plain_json_problem(value: Any, max_depth: int = MAX_DEPTH) -> str | None:
+    """Why ``value`` is not plain, bounded JSON data (None if it is): nesting, types, finiteness, sizes.
+
+    The answer names the place, e.g. "step_height must be finite, got nan; send a finite number".
+
+    Iterative, so a deeply nested input cannot exhaust the stack; ``jsonschema`` only sees what passes.
+    """
+    stack = [(value, "", 0)]
+    count = 0
+    while stack:
+        node, where, depth = stack.pop()
+        count += 1
+        if count > 100_000:
+            return "the data hold more than 100000 values; send less"
+        at = where or "the data"
+        if isinstance(node, dict):
+            if depth >= max_depth:
+                return f"{at} is nested more than {max_depth} levels deep"
+            for k, v in node.items():
+                if not isinstance(k, str):
+                    return f"{at} has a non-string key {_clip_text(repr(k), 40)}"
+                stack.append((v, f"{where}.{k[:40]}" if where else k[:40], depth + 1))
+        elif isinstance(node, (list, tuple)):
+            if depth >= max_depth:
+                return f"{at} is nested more than {max_depth} levels deep"
+            stack.extend((v, f"{where}[{i}]", depth + 1) for i, v in enumerate(node))
+        elif isinstance(node, str):
+            if len(node) > MAX_STRING_CHARS:
+                return f"{at} is a string of {len(node)} characters; the limit is {MAX_STRING_CHARS}"
+        elif isinstance(node, bool) or node is None:
+            pass
+        elif isinstance(node, numbers.Integral):
+            if abs(int(node)) > MAX_INT:
+                return f"{at} is an integer of {len(str(abs(int(node))))} digits; use a number below 2**53"
+        elif isinstance(node, numbers.Real):
+            if not math.isfinite(float(node)):
+                return f"{at} must be finite, got {float(node)!r}; send a finite number"
+        else:
+            return f"{at} is a {type(node).__name__}, which is not JSON data"
+    return None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,7 +187,13 @@ _TYPE_NAMES = {"number": "a number", "integer": "a whole number", "string": "a s
 
 
 def _fmt(value: Any) -> str:
-    text = json.dumps(value) if not isinstance(value, float) else repr(value)
+    """A short JSON-ish rendering of a value for a message (never the whole of a huge or odd value)."""
+    if isinstance(value, str):
+        value = value[:100]
+    try:
+        text = json.dumps(value) if not isinstance(value, float) else repr(value)
+    except (TypeError, ValueError, RecursionError):
+        text = f"<{type(value).__name__}>"
     return text if len(text) <= 80 else text[:77] + "..."
 
 
@@ -139,47 +241,94 @@ def validate_call(
     size_x: float = 20.0,
     size_y: float = 20.0,
     registry: Mapping[str, AtomicTerrain] | None = None,
+    resolution: float | None = None,
 ) -> ToolCall:
     """Validate one tool call (``arguments`` a dict or the model's JSON string); return it normalised.
 
-    Raises :class:`ValidationError` listing every problem found.
+    With ``resolution`` (m) the region must also hold at least one cell. Raises :class:`ValidationError`
+    listing every problem found, and nothing else.
     """
     registry = ATOMIC_TERRAINS if registry is None else registry
     if not isinstance(tool, str) or tool not in registry:
         raise ValidationError([f"unknown tool {_fmt(tool)}; available tools are {sorted(registry)}."])
     if isinstance(arguments, str):
-        try:
-            arguments = json.loads(arguments) if arguments.strip() else {}
-        except json.JSONDecodeError as exc:
-            raise ValidationError([f"{tool}: arguments are not valid JSON ({exc}); send a JSON object."]) from None
+        arguments = parse_json(arguments, f"{tool}: arguments", MAX_ARGUMENT_CHARS) if arguments.strip() else {}
+    problem = plain_json_problem(arguments)
+    if problem:
+        raise ValidationError([f"{tool}: {problem}."])
     terrain = registry[tool]
     schema = _validation_schema(terrain, size_x, size_y)
     errors = sorted(_Validator(schema).iter_errors(arguments), key=lambda e: (list(map(str, e.absolute_path)), e.validator))
     if errors:
-        raise ValidationError([m for e in errors for m in _describe(tool, e, schema)])
+        raise ValidationError([m for e in errors[:MAX_MESSAGES] for m in _describe(tool, e, schema)])
     params = {k: v for k, v in arguments.items() if k not in LAYOUT_ARGS}
     try:
-        params = terrain.check_params(params)  # the registry has the last word (finiteness, whole numbers)
+        params = terrain.check_params(params)  # the builder's own check: ranges, whole numbers, cross-field rules
     except ValueError as exc:
         raise ValidationError([str(exc)]) from None
     region = arguments["region"]
     if isinstance(region, dict):
         region = tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
     mode = arguments.get("mode", "set") if terrain.kind == "geometric" else None
-    return ToolCall(tool, params, region, mode)
+    call = ToolCall(tool, params, region, mode)
+    if resolution is not None:
+        try:
+            Region(*call.rect(size_x, size_y)).cells(resolution)
+        except ValueError as exc:
+            raise ValidationError([f"{tool}: {exc}"]) from None
+    return call
+
+
+def check_height_stack(
+    calls: list[ToolCall], size_x: float, size_y: float, registry: Mapping[str, AtomicTerrain] | None = None
+) -> None:
+    """Raise ValidationError if the calls, in order, can make |height| exceed the builder's ``MAX_ABS_HEIGHT``.
+
+    Interval arithmetic per region of the tile, from flat ground at 0 m: the tile is cut at every call's
+    rectangle and its seam band (``SEAM_BAND`` m wide); inside a rectangle a ``set`` call gives the atomic's
+    declared range (``height_bounds`` on the rectangle widened by the band, as the builder generates it) and
+    an ``add`` call shifts the current range by it; in the band the builder blends old and new heights
+    convexly, so the range is the union of both. This bounds every height the builder can make.
+    """
+    registry = ATOMIC_TERRAINS if registry is None else registry
+    geometric = [(i, c) for i, c in enumerate(calls) if registry[c.tool].kind == "geometric"]
+    if not geometric:
+        return
+    rects = [c.rect(size_x, size_y) for _, c in geometric]
+    band = SEAM_BAND
+    cut_x = sorted({0.0, float(size_x)} | {min(max(v, 0.0), size_x) for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)})
+    cut_y = sorted({0.0, float(size_y)} | {min(max(v, 0.0), size_y) for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)})
+    cx = (np.array(cut_x[:-1]) + np.array(cut_x[1:]))[:, None] / 2.0
+    cy = (np.array(cut_y[:-1]) + np.array(cut_y[1:]))[None, :] / 2.0
+    lo = np.zeros((cx.shape[0], cy.shape[1]))
+    hi = np.zeros_like(lo)
+    for (i, call), (x0, y0, x1, y1) in zip(geometric, rects):
+        a, b = registry[call.tool].height_bounds(dict(call.params), x1 - x0 + 2 * band, y1 - y0 + 2 * band)
+        new_lo, new_hi = (np.full_like(lo, a), np.full_like(hi, b)) if call.mode == "set" else (lo + a, hi + b)
+        inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+        near = (cx > x0 - band) & (cx < x1 + band) & (cy > y0 - band) & (cy < y1 + band)
+        lo = np.where(inside, new_lo, np.where(near, np.minimum(lo, new_lo), lo))
+        hi = np.where(inside, new_hi, np.where(near, np.maximum(hi, new_hi), hi))
+        peak = max(-float(lo.min()), float(hi.max()))
+        if peak > MAX_ABS_HEIGHT:
+            raise ValidationError([
+                f"calls[{i}] ({call.tool} with mode {call.mode!r}) can make |height| reach {peak:.2f} m > "
+                f"{MAX_ABS_HEIGHT} m where regions stack; lower its heights, use mode 'set', or move it."
+            ])
 
 
 SPEC_SCHEMA: dict[str, Any] = {
     "type": "object",
     "properties": {
         "version": {"const": SPEC_VERSION, "description": f"spec format version; this code reads {SPEC_VERSION}"},
-        "name": {"type": "string", "pattern": "^[A-Za-z][A-Za-z0-9_]*$"},
+        "name": {"type": "string", "pattern": "^[A-Za-z][A-Za-z0-9_]*$", "maxLength": 64},
         "size_x": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile length along x [m]"},
         "size_y": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile width along y [m]"},
         "resolution": {"type": "number", "minimum": 0.02, "maximum": 1.0, "description": "cell size [m]"},
         "seed": {"type": "integer", "minimum": 0, "maximum": 2**32 - 1},
         "calls": {
             "type": "array",
+            "maxItems": MAX_CALLS,
             "items": {
                 "type": "object",
                 "properties": {
@@ -192,33 +341,61 @@ SPEC_SCHEMA: dict[str, Any] = {
                 "additionalProperties": False,
             },
         },
-        "source": {"type": "object"},
-        "backend": {"type": "string"},
-        "model": {"type": ["string", "null"]},
+        "source": {"type": "object", "maxProperties": 16},
+        "backend": {"type": "string", "maxLength": 64},
+        "model": {"type": ["string", "null"], "maxLength": 256},
     },
     "required": ["version", "name", "size_x", "size_y", "resolution", "seed", "calls", "source", "backend", "model"],
     "additionalProperties": False,
 }
 
 
+def _tile_problem(size_x: float, size_y: float, resolution: float) -> str | None:
+    """Why the builder cannot make a tile of this size and resolution (None if it can)."""
+    n = (size_x / resolution, size_y / resolution)
+    if any(abs(v - round(v)) > 1e-6 for v in n):
+        return (f"the {size_x:g} m x {size_y:g} m tile is not a whole number of {resolution:g} m cells; "
+                f"pick sizes that are multiples of the resolution")
+    cells = round(n[0]) * round(n[1])
+    if cells > MAX_CELLS:
+        return (f"the {size_x:g} m x {size_y:g} m tile at {resolution:g} m has {cells} cells; the limit is {MAX_CELLS} "
+                f"(e.g. 200 m x 200 m at 0.1 m): use a coarser resolution or a smaller tile")
+    return None
+
+
 def validate_spec_dict(
     data: Any, registry: Mapping[str, AtomicTerrain] | None = None
 ) -> tuple[dict[str, Any], list[ToolCall]]:
-    """Validate a spec document (see :class:`legged_gente.generation.spec.TerrainSpec`); return it and its calls."""
+    """Validate a spec document (see :class:`legged_gente.generation.spec.TerrainSpec`); return it and its calls.
+
+    Accepts only what builds: the document's schema and limits, every call, the tile's cell grid and the
+    stacked heights. Raises :class:`ValidationError`, and nothing else.
+    """
+    problem = plain_json_problem(data)
+    if problem:
+        raise ValidationError([f"spec: {problem}."])
     errors = sorted(Draft202012Validator(SPEC_SCHEMA).iter_errors(data), key=lambda e: list(map(str, e.absolute_path)))
     if errors:
         raise ValidationError(
-            [f"spec: field {'.'.join(map(str, e.absolute_path)) or '(document)'!r}: {e.message}." for e in errors]
+            [f"spec: field {'.'.join(map(str, e.absolute_path))[:60] or '(document)'!r}: {_clip_text(e.message, 160)}."
+             for e in errors[:MAX_MESSAGES]]
         )
+    problem = _tile_problem(data["size_x"], data["size_y"], data["resolution"])
+    if problem:
+        raise ValidationError([f"spec: {problem}."])
     calls, messages = [], []
     for i, c in enumerate(data["calls"]):
         args = {**c["params"], "region": c["region"]}
         if "mode" in c:
             args["mode"] = c["mode"]
         try:
-            calls.append(validate_call(c["tool"], args, data["size_x"], data["size_y"], registry))
+            calls.append(validate_call(c["tool"], args, data["size_x"], data["size_y"], registry, data["resolution"]))
         except ValidationError as exc:
             messages += [f"spec: calls[{i}]: {m}" for m in exc.messages]
     if messages:
         raise ValidationError(messages)
+    try:
+        check_height_stack(calls, data["size_x"], data["size_y"], registry)
+    except ValidationError as exc:
+        raise ValidationError([f"spec: {m}" for m in exc.messages]) from None
     return data, calls

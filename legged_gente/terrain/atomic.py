@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .registry import Param, atomic_terrain
+from .registry import Param, atomic_terrain, min_le_max
 
 F32 = np.float32
 
@@ -296,11 +296,6 @@ def _boxes(h: np.ndarray, resolution: float, centres: np.ndarray, half_sizes: np
         h[i0:i1, j0:j1] = z
 
 
-def _min_le_max(terrain: str, low_name: str, low: float, high_name: str, high: float) -> None:
-    if low > high:
-        raise ValueError(f"{terrain}: {low_name}={low} must not exceed {high_name}={high}; swap or change them.")
-
-
 @atomic_terrain(
     "discrete_obstacles",
     "geometric",
@@ -314,9 +309,9 @@ def _min_le_max(terrain: str, low_name: str, low: float, high_name: str, high: f
     },
     difficulty=lambda d: {"max_height": _lerp(0.05, 0.2, d)},
     bounds=lambda p, sx, sy: (-p["max_height"], p["max_height"]),
+    rules=min_le_max("discrete_obstacles", "min_size", "max_size"),
 )
 def discrete_obstacles(shape, resolution, rng, max_height, min_size, max_size, density, platform):
-    _min_le_max("discrete_obstacles", "min_size", min_size, "max_size", max_size)
     n = _count(density, shape, resolution)
     extent = np.array(shape) * resolution
     centres = rng.uniform(0.0, 1.0, (n, 2)) * extent
@@ -427,9 +422,9 @@ def _discs(shape, resolution, centres, radii, heights) -> np.ndarray:
     PILLAR_PARAMS,
     difficulty=lambda d: {"density": _lerp(0.02, 0.15, d)},
     bounds=lambda p, sx, sy: (0.0, p["height"]),
+    rules=min_le_max("pillars", "min_radius", "max_radius"),
 )
 def pillars(shape, resolution, rng, height, min_radius, max_radius, density, platform):
-    _min_le_max("pillars", "min_radius", min_radius, "max_radius", max_radius)
     n_max, centres, radii = _scatter(rng, PILLAR_PARAMS["density"].high, shape, resolution, min_radius, max_radius)
     n = _count(density, shape, resolution)
     h = _discs(shape, resolution, centres[:n], radii[:n], np.full(n, height))
@@ -452,9 +447,9 @@ ROCK_PARAMS = {
     ROCK_PARAMS,
     difficulty=lambda d: {"max_height": _lerp(0.03, 0.25, d), "density": _lerp(0.2, 0.8, d)},
     bounds=lambda p, sx, sy: (0.0, p["max_height"]),
+    rules=min_le_max("rocks", "min_radius", "max_radius"),
 )
 def rocks(shape, resolution, rng, max_height, min_radius, max_radius, density, platform):
-    _min_le_max("rocks", "min_radius", min_radius, "max_radius", max_radius)
     n_max, centres, radii = _scatter(rng, ROCK_PARAMS["density"].high, shape, resolution, min_radius, max_radius)
     tops = max_height * rng.uniform(0.3, 1.0, n_max)
     n = _count(density, shape, resolution)
@@ -472,6 +467,12 @@ def rocks(shape, resolution, rng, max_height, min_radius, max_radius, density, p
 
 
 # ----------------------------------------------------------------------------------------------------- river
+def _river_rules(p) -> None:
+    if p["bank_width"] > p["width"] / 2.0:
+        raise ValueError(f"river: bank_width={p['bank_width']} m exceeds half the width ({p['width'] / 2.0} m); "
+                         f"narrow the banks or widen the river.")
+
+
 @atomic_terrain(
     "river",
     "geometric",
@@ -487,10 +488,9 @@ def rocks(shape, resolution, rng, max_height, min_radius, max_radius, density, p
     },
     difficulty=lambda d: {"depth": _lerp(0.1, 0.6, d), "width": _lerp(2.0, 4.0, d)},
     bounds=lambda p, sx, sy: (-p["depth"], 0.0),
+    rules=_river_rules,
 )
 def river(shape, resolution, rng, width, depth, bank_width, direction, offset, meander_amplitude, meander_wavelength):
-    if bank_width > width / 2.0:
-        raise ValueError(f"river: bank_width={bank_width} m exceeds half the width ({width / 2.0} m); narrow the banks.")
     x, y = _axes(shape, resolution)
     along = x * np.cos(direction) + y * np.sin(direction)
     across = -x * np.sin(direction) + y * np.cos(direction)

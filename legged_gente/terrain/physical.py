@@ -51,6 +51,15 @@ SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
 """Built-in presets of ``legged_gente.external_forces.soil`` plus "custom" (register it there first)."""
 
 
+def _soil_rules(p) -> None:
+    if p["preset"] not in SOIL_PRESETS:
+        raise ValueError(
+            f"soil: preset {p['preset']!r} is not registered; call legged_gente.external_forces.soil."
+            f"register_custom_soil({p['preset']!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
+            f"first or use one of {sorted(SOIL_PRESETS)}."
+        )
+
+
 @atomic_terrain(
     "soil",
     "physical",
@@ -62,14 +71,9 @@ SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
             choices=SOIL_CHOICES,
         )
     },
+    rules=_soil_rules,
 )
 def soil(shape, resolution, rng, heights, preset):
-    if preset not in SOIL_PRESETS:
-        raise ValueError(
-            f"soil: preset {preset!r} is not registered; call legged_gente.external_forces.soil."
-            f"register_custom_soil({preset!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
-            f"first or use one of {sorted(SOIL_PRESETS)}."
-        )
     return MaterialPatch(shape=shape, soil=preset)
 
 

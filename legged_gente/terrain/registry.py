@@ -3,6 +3,9 @@
 Every atomic terrain is a plain function registered with :func:`atomic_terrain`. Its parameters, their SI
 units, ranges and docs live here, on the function's registration, and nowhere else: the curriculum, the
 LLM tool schemas, the offline planner's vocabulary and the validator all read :data:`ATOMIC_TERRAINS`.
+Rules that tie several parameters together (``min_radius <= max_radius``) are declared on the registration
+too, as ``rules``; :meth:`AtomicTerrain.check_params` applies them, and both the validator and the tile
+builder call it, so a call the validator accepts is one the builder can build.
 
 Two kinds exist:
 
@@ -70,6 +73,8 @@ class AtomicTerrain:
     fn: Callable[..., Any]
     difficulty: Callable[[float], dict[str, Any]] | None = None
     bounds: Callable[[dict[str, Any], float, float], tuple[float, float]] | None = None
+    rules: Callable[[dict[str, Any]], None] | None = None
+    """Cross-field rules: ``rules(params)`` raises ValueError (naming the terrain and the fix) or returns None."""
 
     def height_bounds(self, params: dict[str, Any], size_x: float, size_y: float) -> tuple[float, float]:
         """Declared (min, max) height in metres of this terrain on a ``size_x`` x ``size_y`` m region.
@@ -81,13 +86,17 @@ class AtomicTerrain:
         return self.bounds(params, size_x, size_y)
 
     def check_params(self, params: dict[str, Any]) -> dict[str, Any]:
-        """Validate ``params`` (unknown or out-of-range keys raise) and fill defaults."""
+        """Validate ``params`` (unknown or out-of-range keys, broken cross-field rules raise) and fill defaults."""
         unknown = sorted(set(params) - set(self.params))
         if unknown:
             raise ValueError(
-                f"{self.name}: unknown parameter(s) {unknown}; valid parameters are {sorted(self.params)}."
+                f"{self.name}: unknown parameter(s) {[str(k)[:40] for k in unknown[:10]]}; "
+                f"valid parameters are {sorted(self.params)}."
             )
-        return {k: p.check(k, params.get(k, p.default), self.name) for k, p in self.params.items()}
+        checked = {k: p.check(k, params.get(k, p.default), self.name) for k, p in self.params.items()}
+        if self.rules is not None:
+            self.rules(checked)
+        return checked
 
     def params_for_difficulty(self, difficulty: float) -> dict[str, Any]:
         """Parameters for a curriculum difficulty in [0, 1] (defaults where the terrain has no mapping)."""
@@ -107,10 +116,12 @@ def atomic_terrain(
     params: dict[str, Param],
     difficulty: Callable[[float], dict[str, Any]] | None = None,
     bounds: Callable[[dict[str, Any], float, float], tuple[float, float]] | None = None,
+    rules: Callable[[dict[str, Any]], None] | None = None,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Register ``fn`` as the atomic terrain ``name``; the function's keyword arguments must equal ``params``.
 
     ``bounds(params, size_x, size_y) -> (min, max)`` declares the heights (m) a geometric terrain can produce.
+    ``rules(params)`` checks the rules between parameters (raises ValueError); see :func:`min_le_max`.
     """
 
     def register(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -120,7 +131,17 @@ def atomic_terrain(
             raise TypeError(f"atomic terrain {name!r}: function keywords {sig} differ from declared params {list(params)}")
         if name in ATOMIC_TERRAINS:
             raise ValueError(f"atomic terrain {name!r} is registered twice")
-        ATOMIC_TERRAINS[name] = AtomicTerrain(name, kind, description, dict(params), fn, difficulty, bounds)
+        ATOMIC_TERRAINS[name] = AtomicTerrain(name, kind, description, dict(params), fn, difficulty, bounds, rules)
         return fn
 
     return register
+
+
+def min_le_max(terrain: str, low: str, high: str) -> Callable[[dict[str, Any]], None]:
+    """A ``rules`` check that parameter ``low`` does not exceed parameter ``high``."""
+
+    def rule(params: dict[str, Any]) -> None:
+        if params[low] > params[high]:
+            raise ValueError(f"{terrain}: {low}={params[low]!r} must not exceed {high}={params[high]!r}; swap or change them.")
+
+    return rule
