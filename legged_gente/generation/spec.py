@@ -30,6 +30,7 @@ from legged_gente.generation.validation import (
     ToolCall,
     ValidationError,
     parse_json,
+    tile_spec,
     validate_spec_dict,
 )
 from legged_gente.terrain.materials import MaterialMap
@@ -121,13 +122,7 @@ class TerrainSpec:
 
     def to_tile_spec(self):
         """The terrain library's ``TileSpec``: one ``Part`` per call, in call order."""
-        from legged_gente.terrain.composition import Operation, Part, Region, TileSpec
-
-        parts = []
-        for c in self.calls:
-            x0, y0, x1, y1 = c.rect(self.size_x, self.size_y)
-            parts.append(Part(Region(x0, y0, x1, y1), [Operation(c.tool, dict(c.params), c.mode or "set")]))
-        return TileSpec(self.size_x, self.size_y, self.resolution, int(self.seed), parts)
+        return tile_spec(self.calls, self.size_x, self.size_y, self.resolution, self.seed)
 
     def build(self) -> tuple[np.ndarray, MaterialMap]:
         """Heights (float32 ``(nx, ny)``, metres) and the aligned MaterialMap; deterministic."""

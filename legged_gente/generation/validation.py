@@ -8,7 +8,7 @@ heights in the overlap and "add" calls stack, which is how a scene is layered.
 
 Every accepted call builds: the terrain's own parameter rules (``AtomicTerrain.check_params``, the same check
 the tile builder runs), a region that holds at least one cell, and stacked heights within the builder's bound
-(:func:`check_height_stack`). Input is bounded before it is parsed (lengths, nesting, counts, finite numbers,
+(:func:`check_height_stack`, a worst-case bound; a spec beyond it is built once to decide). Input is bounded before it is parsed (lengths, nesting, counts, finite numbers,
 integers a float can hold), and only :class:`ValidationError` leaves this module, its messages truncated.
 """
 
@@ -25,7 +25,7 @@ import numpy as np
 from jsonschema import Draft202012Validator
 
 from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_regions
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT, SEAM_BAND, Region
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT, SEAM_BAND, Operation, Part, Region, TileSpec
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 SPEC_VERSION = 1
@@ -52,7 +52,10 @@ MAX_MESSAGE_CHARS = 400
 
 
 def _clip_text(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
-    return text if len(text) <= limit else f"{text[:limit - 30]}... ({len(text)} characters in all)"
+    if len(text) <= limit:
+        return text
+    tail = f"... ({len(text)} characters in all)"
+    return text[: max(limit - len(tail), 0)] + tail
 
 
 class ValidationError(ValueError):
@@ -342,7 +345,7 @@ SPEC_SCHEMA: dict[str, Any] = {
             },
         },
         "source": {"type": "object", "maxProperties": 16},
-        "backend": {"type": "string", "maxLength": 64},
+        "backend": {"type": "string", "maxLength": 256},
         "model": {"type": ["string", "null"], "maxLength": 256},
     },
     "required": ["version", "name", "size_x", "size_y", "resolution", "seed", "calls", "source", "backend", "model"],
@@ -363,6 +366,15 @@ def _tile_problem(size_x: float, size_y: float, resolution: float) -> str | None
     return None
 
 
+def _describe_spec_error(err: jsonschema.ValidationError) -> str:
+    field = ".".join(map(str, err.absolute_path))[:60] or "(document)"
+    limits = {"maxItems": "items", "maxLength": "characters", "maxProperties": "entries"}
+    if err.validator in limits:
+        return (f"spec: field {field!r} has {len(err.instance)} {limits[err.validator]}; "
+                f"at most {err.validator_value} are allowed.")
+    return f"spec: field {field!r}: {_clip_text(err.message, 160)}."
+
+
 def validate_spec_dict(
     data: Any, registry: Mapping[str, AtomicTerrain] | None = None
 ) -> tuple[dict[str, Any], list[ToolCall]]:
@@ -376,10 +388,7 @@ def validate_spec_dict(
         raise ValidationError([f"spec: {problem}."])
     errors = sorted(Draft202012Validator(SPEC_SCHEMA).iter_errors(data), key=lambda e: list(map(str, e.absolute_path)))
     if errors:
-        raise ValidationError(
-            [f"spec: field {'.'.join(map(str, e.absolute_path))[:60] or '(document)'!r}: {_clip_text(e.message, 160)}."
-             for e in errors[:MAX_MESSAGES]]
-        )
+        raise ValidationError([_describe_spec_error(e) for e in errors[:MAX_MESSAGES]])
     problem = _tile_problem(data["size_x"], data["size_y"], data["resolution"])
     if problem:
         raise ValidationError([f"spec: {problem}."])
@@ -397,5 +406,17 @@ def validate_spec_dict(
     try:
         check_height_stack(calls, data["size_x"], data["size_y"], registry)
     except ValidationError as exc:
-        raise ValidationError([f"spec: {m}" for m in exc.messages]) from None
+        # The interval bound is a worst case; this spec's own seed may stay within the bound: build to know.
+        try:
+            tile_spec(calls, data["size_x"], data["size_y"], data["resolution"], data["seed"]).build()
+        except ValueError as build_exc:
+            raise ValidationError([f"spec: {build_exc}"] + [f"spec: {m}" for m in exc.messages]) from None
     return data, calls
+
+
+def tile_spec(calls: list[ToolCall], size_x: float, size_y: float, resolution: float, seed: int):
+    """The terrain library's ``TileSpec`` of validated calls: one ``Part`` per call, in call order."""
+    parts = []
+    for c in calls:
+        parts.append(Part(Region(*c.rect(size_x, size_y)), [Operation(c.tool, dict(c.params), c.mode or "set")]))
+    return TileSpec(size_x, size_y, resolution, int(seed), parts)
