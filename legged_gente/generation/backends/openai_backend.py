@@ -7,19 +7,31 @@ model first describes the image as terrain, then a language model calls the tool
 Every tool call is validated; rejected calls go back to the model as tool results carrying the validation
 message, and the model gets at most ``max_retries`` correction rounds after its first answer. The run ends
 at the first round whose calls are all valid; if calls are still invalid after the last round, a
-:class:`GenerationError` names them. The client's own hidden retries are switched off, so the number of
-requests is bounded and visible.
+:class:`GenerationError` names them. There are no hidden retries, so the number of requests is bounded.
+
+Every request is bounded whatever the server does: ``timeout`` is the deadline of the whole request
+(connection, headers and body, not of each read: a server dripping one byte at a time cannot hold it
+longer), an answer is at most :data:`MAX_RESPONSE_BYTES`, and an answer that is not a chat completion (an
+HTML page, a proxy's error, truncated JSON) is a :class:`GenerationError` naming the server. The request
+runs in a worker thread so that the deadline holds even while the server drips its headers; the JSON is
+read into the ``openai`` package's ``ChatCompletion`` type, which checks its structure.
 """
 
 from __future__ import annotations
 
 import base64
 import io
+import json
 import os
+import threading
+import time
+import urllib.error
+import urllib.request
 from pathlib import Path
 from typing import Any, Mapping
 
-import openai
+import pydantic
+from openai.types.chat import ChatCompletion
 from PIL import Image
 
 from legged_gente.generation.backends import GenerationError, GenerationResult
@@ -28,6 +40,10 @@ from legged_gente.generation.validation import ToolCall, ValidationError, valida
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 DEFAULT_API_KEY_ENV = "GENTE_API_KEY"
+MAX_RESPONSE_BYTES = 8 * 2**20
+"""Largest answer read from the server (a chat completion with tool calls is a few kB)."""
+MAX_TOOL_CALLS_PER_ANSWER = 64
+"""Most tool calls one answer may carry (a spec holds at most ``validation.MAX_CALLS``)."""
 
 DESCRIBE_PROMPT = (
     "Describe the ground in this image as terrain a legged robot would walk on, seen from above: which "
@@ -88,26 +104,84 @@ class OpenAIBackend:
         self.tool_choice, self.temperature = tool_choice, temperature
         self.size_x, self.size_y = size_x, size_y
         self.registry = ATOMIC_TERRAINS if registry is None else registry
-        self.client = openai.OpenAI(
-            base_url=base_url, api_key=os.environ.get(api_key_env, "none"), timeout=timeout, max_retries=0
-        )
+        self.api_key = os.environ.get(api_key_env, "none")
 
-    def _create(self, **kwargs: Any):
-        """One chat-completions request; server failures become GenerationError with the cause and a fix."""
+    def _post(self, payload: dict[str, Any], deadline: float) -> tuple[int, str, bytes]:
+        """(Worker thread) POST ``payload`` to ``{base_url}/chat/completions``; (status, content type, body up to the cap + 1 byte)."""
+        request = urllib.request.Request(
+            self.base_url.rstrip("/") + "/chat/completions", data=json.dumps(payload).encode(), method="POST",
+            headers={"Content-Type": "application/json", "Authorization": f"Bearer {self.api_key}"},
+        )
         try:
-            return self.client.chat.completions.create(temperature=self.temperature, **kwargs)
-        except openai.APITimeoutError:
+            response = urllib.request.urlopen(request, timeout=self.timeout)
+        except urllib.error.HTTPError as err:  # 4xx/5xx: the body explains, read it like any other
+            response = err
+        with response:
+            read = getattr(response, "read1", response.read)
+            body = bytearray()
+            while len(body) <= MAX_RESPONSE_BYTES:
+                if time.monotonic() > deadline:
+                    raise TimeoutError("deadline passed while reading the answer")
+                chunk = read(65536)
+                if not chunk:
+                    break
+                body += chunk
+            return response.status, response.headers.get("Content-Type", ""), bytes(body)
+
+    def _create(self, **payload: Any) -> ChatCompletion:
+        """One chat-completions request within the deadline; every failure is a GenerationError naming the server."""
+        deadline = time.monotonic() + self.timeout
+        box: dict[str, Any] = {}
+
+        def run() -> None:
+            try:
+                box["answer"] = self._post({"temperature": self.temperature, **payload}, deadline)
+            except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+                box["error"] = exc
+
+        worker = threading.Thread(target=run, name="gente-openai-request", daemon=True)
+        worker.start()
+        worker.join(max(deadline - time.monotonic(), 0.0) + 0.05)
+        timed_out = GenerationError(
+            f"the request to {self.base_url} timed out after {self.timeout:g} s (the whole request); raise "
+            f"--timeout or check that the server is serving model {payload.get('model')!r}."
+        )
+        if worker.is_alive() or isinstance(box.get("error"), TimeoutError):
+            raise timed_out
+        error = box.get("error")
+        if isinstance(error, urllib.error.URLError):
+            if isinstance(error.reason, TimeoutError):
+                raise timed_out
+            raise GenerationError(f"could not reach {self.base_url} ({error.reason}); check --base-url and that the server runs.")
+        if isinstance(error, (OSError, ValueError)):  # connection reset, malformed HTTP, bad URL
+            raise GenerationError(f"the request to {self.base_url} failed ({type(error).__name__}: {str(error)[:200]}); "
+                                  f"check --base-url and that the server runs.")
+        if error is not None:
+            raise error
+        status, content_type, body = box["answer"]
+        if len(body) > MAX_RESPONSE_BYTES:
+            raise GenerationError(f"the server at {self.base_url} sent more than {MAX_RESPONSE_BYTES} bytes; a chat "
+                                  f"completion is a few kB: check --base-url.")
+        text = body.decode("utf-8", errors="replace")
+        try:
+            data = json.loads(text)
+        except (ValueError, RecursionError):
+            data = None
+        if status != 200:
+            detail = data.get("error", {}).get("message") if isinstance(data, dict) and isinstance(data.get("error"), dict) else None
+            raise GenerationError(f"the server at {self.base_url} answered HTTP {status}: {str(detail or text)[:300]}")
+        if data is None:
             raise GenerationError(
-                f"the request to {self.base_url} timed out after {self.timeout:g} s; raise --timeout or check "
-                f"that the server is serving model {kwargs.get('model')!r}."
-            ) from None
-        except openai.APIStatusError as exc:
+                f"the server at {self.base_url} answered HTTP 200 with a body that is not JSON (Content-Type "
+                f"{content_type[:60]!r}, starting {text[:80]!r}); point --base-url at its OpenAI-compatible API, "
+                f"e.g. http://localhost:8000/v1."
+            )
+        try:
+            return ChatCompletion.model_validate(data)
+        except pydantic.ValidationError as exc:
             raise GenerationError(
-                f"the server at {self.base_url} answered HTTP {exc.status_code}: {exc.message}"
-            ) from None
-        except openai.APIConnectionError as exc:
-            raise GenerationError(
-                f"could not reach {self.base_url} ({exc}); check --base-url and that the server runs."
+                f"the server at {self.base_url} answered JSON that is not a chat completion ({str(exc).splitlines()[0][:120]}; "
+                f"starting {text[:80]!r}); check --base-url and --model."
             ) from None
 
     def describe(self, image: str | Path | bytes, text: str | None = None) -> str:

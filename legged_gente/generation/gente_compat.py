@@ -1,0 +1,584 @@
+"""GenTe compatibility: GenTe's tool set, its published transcripts and its heightmaps, in this project's terms.
+
+GenTe (Gao et al. 2025, github.com/HaronW/GenTe) has models call terrain functions on a 200 x 200 grid of
+0.1 m cells (a 20 m x 20 m tile) with int16 heights of 0.005 m. Its multi-part prompts split the tile into
+four parts (argument ``part`` 1-4); its single-part prompts apply every call to the whole tile. Every GenTe
+height function adds to the current heights, so translated geometric calls use mode ``add``.
+
+:data:`GENTE_TOOLS` is our own description of the tool schema GenTe serves (names, arguments, their types and
+what GenTe's code does with them), written from GenTe's code and schema; :func:`gente_tool_schemas` serves
+it to a model (``gente-generate --toolset gente``) so prompts written for GenTe work unchanged, and
+:func:`translate_call` maps one GenTe call to validated calls of ours. Nothing is dropped silently: a tool
+GenTe never declared, a GenTe tool we cannot express, an argument we ignore and a value moved into our
+range are all reported as :class:`Issue` s. The mapping table is in docs/generation.md ("GenTe tool set").
+
+Models wrote GenTe's arguments as Python literals (``.5``, implicit string concatenation), which GenTe ran
+with ``eval``; here they are parsed as JSON or, failing that, with ``ast.literal_eval`` (literals only,
+never executed), after a length bound.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import json
+import math
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from legged_gente.generation.spec import TerrainSpec
+from legged_gente.generation.validation import (
+    MAX_ARGUMENT_CHARS,
+    ToolCall,
+    ValidationError,
+    plain_json_problem,
+    validate_call,
+    validate_spec_dict,
+)
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT
+from legged_gente.terrain.materials import MaterialMap
+from legged_gente.terrain.registry import ATOMIC_TERRAINS
+
+GENTE_CELL = 0.1
+"""m, GenTe's horizontal cell size (``horizontal_scale``)."""
+GENTE_VERTICAL = 0.005
+"""m per int16 unit of GenTe's heightmaps (``vertical_scale``)."""
+GENTE_TILE = 20.0
+"""m, side of GenTe's tile (200 cells)."""
+PART_REGIONS = {1: "back_right", 2: "front_right", 3: "back_left", 4: "front_left"}
+"""GenTe's ``part`` -> our named region (GenTe's part 2 is the second half along x, part 3 along y)."""
+
+WRAP_JUMP = 2**15
+"""int16 units: a jump between neighbouring cells larger than half the int16 range can only be a wrap-around."""
+
+BLOCKING = ("invented_tool", "no_equivalent", "unreadable_arguments", "bad_value", "rejected")
+"""Issue kinds that leave a GenTe call without any translated call."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Issue:
+    """Something a translation reports: ``kind`` (see :data:`BLOCKING` and the notes kinds) and a sentence."""
+
+    kind: str
+    message: str
+
+
+@dataclasses.dataclass(frozen=True)
+class GenteArg:
+    """One argument of a GenTe tool: JSON type, our description of it, whether GenTe's schema requires it."""
+
+    type: str
+    doc: str
+    required: bool = False
+    enum: tuple[str, ...] | None = None
+
+
+Translate = Callable[[dict[str, Any], float, float, list[Issue]], list[tuple[str, dict[str, Any]]]]
+
+
+@dataclasses.dataclass(frozen=True)
+class GenteTool:
+    """A GenTe tool: its arguments, which of GenTe's schemas declare it, our translation and its one-line summary."""
+
+    name: str
+    doc: str
+    args: dict[str, GenteArg]
+    schemas: tuple[str, ...]
+    translate: Translate | None
+    mapping: str
+
+
+# ------------------------------------------------------------------------------------------ translation helpers
+def _fit(tool: str, param: str, value: float, source: str, issues: list[Issue]) -> float:
+    """``value`` inside our parameter's range; a value moved into it is reported (never a silent clamp)."""
+    p = ATOMIC_TERRAINS[tool].params[param]
+    lo = -math.inf if p.low is None else p.low
+    hi = math.inf if p.high is None else p.high
+    fitted = min(max(value, lo), hi)
+    if fitted != value:
+        issues.append(Issue("clamped", f"{source}={value:g} gives {tool}.{param}={value:g} {p.unit}, outside our range "
+                                       f"[{p.low}, {p.high}]; imported as {fitted:g}."))
+    return int(round(fitted)) if p.integer else float(fitted)
+
+
+def _ignored(args: Mapping[str, Any], names: tuple[str, ...], why: str, issues: list[Issue]) -> None:
+    for name in names:
+        if name in args:
+            issues.append(Issue("ignored_argument", f"{name}={_short(args[name])} is not imported: {why}."))
+
+
+def _short(value: Any) -> str:
+    text = json.dumps(value) if isinstance(value, (list, dict, str)) else repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _offset(height: float, source: str, issues: list[Issue]) -> list[tuple[str, dict[str, Any]]]:
+    """A ``flat`` call that lifts the region by ``height`` m (GenTe's shapes start at 0 where ours are centred)."""
+    if abs(height) < 1e-9:
+        return []
+    return [("flat", {"height": _fit("flat", "height", height, source, issues)})]
+
+
+def _slope(args, sx, sy, issues, name):
+    """GenTe's slopes rise ``slope`` m per m towards the centre (peak slope * d_max); ours fall from 0 there."""
+    slope = float(args["slope"])
+    d_max = (sx + sy) / 2.0 if name == "sloped_terrain" else sx / 2.0  # GenTe: Manhattan vs along-x half extent
+    calls = _offset(slope * d_max, f"{name}.slope (peak slope*{d_max:g} m)", issues)
+    params = {"slope": _fit("pyramid_slope", "slope", math.atan(abs(slope)), f"atan(|slope|) of {name}.slope", issues),
+              "direction": "down" if slope >= 0 else "up", "platform": 0.0}
+    if "platform_size" in args:
+        params["platform"] = _fit("pyramid_slope", "platform", float(args["platform_size"]), "platform_size", issues)
+    return calls + [("pyramid_slope", params)]
+
+
+def _flat(args, sx, sy, issues):
+    return [("flat", {"height": _fit("flat", "height", float(args["height"]), "height", issues)})]
+
+
+def _natural(args, sx, sy, issues):
+    # GenTe samples Perlin noise at cell / scale: features of ``scale`` cells; heights noise * height_multiplier m.
+    _ignored({k: v for k, v in args.items() if k == "lacunarity" and float(v) != 2.0}, ("lacunarity",),
+             "our natural_ground doubles the frequency per octave (lacunarity 2)", issues)
+    params = {"amplitude": _fit("natural_ground", "amplitude", abs(float(args.get("height_multiplier", 5.0))), "height_multiplier", issues),
+              "wavelength": _fit("natural_ground", "wavelength", float(args.get("scale", 10.0)) * GENTE_CELL, "scale*0.1 m", issues),
+              "octaves": _fit("natural_ground", "octaves", int(args.get("octaves", 6)), "octaves", issues),
+              "persistence": _fit("natural_ground", "persistence", float(args.get("persistence", 0.5)), "persistence", issues),
+              "platform": 0.0}
+    return [("natural_ground", params)]
+
+
+def _river(args, sx, sy, issues):
+    width = float(args["river_width"])
+    params = {"width": _fit("river", "width", width, "river_width", issues),
+              "depth": _fit("river", "depth", abs(float(args["river_depth"])), "river_depth", issues)}
+    params["bank_width"] = min(0.5, params["width"] / 2.0)
+    path = args.get("river_path")
+    if isinstance(path, str):  # some models sent the path as a string of a list
+        try:
+            path = ast.literal_eval(path[:2000])
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+            path = None
+    try:
+        (x0, y0), (x1, y1) = path[0], path[-1]
+        params["direction"] = math.atan2(float(y1) - float(y0), float(x1) - float(x0))
+        issues.append(Issue("simplified", f"river_path {_short(args.get('river_path'))} is imported as a straight river "
+                                          f"through the region's centre along its end-to-end direction."))
+    except (TypeError, ValueError, IndexError, KeyError):
+        issues.append(Issue("ignored_argument", f"river_path={_short(args.get('river_path'))} is not a list of (x, y) "
+                                                f"points; the river runs along y."))
+    _ignored(args, ("bank_height", "smoothness"), "our river has cosine banks of fixed shape and no raised levee", issues)
+    return [("river", params)]
+
+
+def _uniform(args, sx, sy, issues):
+    lo, hi = sorted((float(args["min_height"]), float(args["max_height"])))
+    step = float(args.get("step", 0.1))
+    # GenTe converts step with the horizontal scale: int(step / 0.1) height units of 0.005 m.
+    step_m = int(step / GENTE_CELL) * GENTE_VERTICAL
+    spacing = float(args["downsampled_scale"]) * GENTE_CELL if args.get("downsampled_scale") else GENTE_CELL
+    params = {"amplitude": _fit("random_uniform", "amplitude", (hi - lo) / 2.0, "(max_height-min_height)/2", issues),
+              "spacing": _fit("random_uniform", "spacing", spacing, "downsampled_scale*0.1 m", issues),
+              "step": _fit("random_uniform", "step", step_m, "step (GenTe: int(step/0.1)*0.005 m)", issues),
+              "platform": 0.0}
+    return _offset((hi + lo) / 2.0, "(min_height+max_height)/2", issues) + [("random_uniform", params)]
+
+
+def _obstacles(args, sx, sy, issues):
+    lo, hi = float(args["min_size"]), float(args["max_size"])
+    if lo > hi:
+        issues.append(Issue("clamped", f"min_size={lo:g} > max_size={hi:g}; imported swapped."))
+        lo, hi = hi, lo
+    params = {"max_height": _fit("discrete_obstacles", "max_height", abs(float(args["max_height"])), "max_height", issues),
+              "min_size": _fit("discrete_obstacles", "min_size", lo, "min_size", issues),
+              "max_size": _fit("discrete_obstacles", "max_size", hi, "max_size", issues),
+              "density": _fit("discrete_obstacles", "density", float(args["num_rects"]) / (sx * sy), "num_rects/area", issues),
+              "platform": _fit("discrete_obstacles", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
+    if params["min_size"] > params["max_size"]:
+        params["min_size"] = params["max_size"]
+    return [("discrete_obstacles", params)]
+
+
+def _waves(args, sx, sy, issues):
+    n = float(args["num_waves"])
+    if n <= 0:
+        issues.append(Issue("no_effect", f"num_waves={n:g}: GenTe draws no waves; nothing to import."))
+        return []
+    # GenTe: amplitude/2 * (cos(y) + sin(x)) with num_waves periods across the region.
+    params = {"amplitude": _fit("waves", "amplitude", abs(float(args.get("amplitude", 1.0))), "amplitude", issues),
+              "wavelength": _fit("waves", "wavelength", sy / n, "region side/num_waves", issues),
+              "pattern": "grid", "platform": 0.0}
+    return [("waves", params)]
+
+
+def _stairs(args, sx, sy, issues, name):
+    tool = "stairs" if name == "stairs_terrain" else "pyramid_stairs"
+    params = {"step_width": _fit(tool, "step_width", float(args["step_width"]), "step_width", issues),
+              "step_height": _fit(tool, "step_height", abs(float(args["step_height"])), "step_height", issues),
+              "direction": "up" if tool == "stairs" else "down",  # GenTe's pyramid rises towards its centre
+              "platform": 0.0 if tool == "stairs" else _fit(tool, "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
+    return [(tool, params)]
+
+
+def _stones(args, sx, sy, issues):
+    params = {"stone_size": _fit("stepping_stones", "stone_size", float(args["stone_size"]), "stone_size", issues),
+              "stone_distance": _fit("stepping_stones", "stone_distance", float(args["stone_distance"]), "stone_distance", issues),
+              "height_noise": _fit("stepping_stones", "height_noise", abs(float(args["max_height"])), "max_height", issues),
+              "depth": _fit("stepping_stones", "depth", abs(float(args.get("depth", 0.5))), "depth", issues),
+              "platform": _fit("stepping_stones", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
+    return [("stepping_stones", params)]
+
+
+def _pillars(args, sx, sy, issues):
+    size = float(args["max_pillar_size"])  # GenTe: rectangles of 0.5-1 times this side, 1.5 m tall
+    params = {"height": 1.5,
+              "max_radius": _fit("pillars", "max_radius", size / 2.0, "max_pillar_size/2", issues),
+              "min_radius": _fit("pillars", "min_radius", size / 4.0, "max_pillar_size/4", issues),
+              "density": _fit("pillars", "density", float(args["num_pillars"]) / (sx * sy), "num_pillars/area", issues),
+              "platform": 1.5}
+    params["min_radius"] = min(params["min_radius"], params["max_radius"])
+    _ignored(args, ("pillar_gap", "step_height"), "our pillars are round, scattered without a minimum gap, with no ridges "
+                                                  "between them", issues)
+    return [("pillars", params)]
+
+
+def _gap(args, sx, sy, issues):
+    depth = float(args.get("depth", 1000)) * GENTE_VERTICAL  # GenTe: height units, default 1000 (5 m)
+    params = {"gap_width": _fit("gap", "gap_width", float(args["gap_size"]), "gap_size", issues),
+              "depth": _fit("gap", "depth", abs(depth), "depth*0.005 m", issues),
+              "platform": _fit("gap", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
+    return [("gap", params)]
+
+
+def _pit(args, sx, sy, issues):
+    params = {"depth": _fit("pit", "depth", abs(float(args["depth"])), "depth", issues),
+              "width": _fit("pit", "width", min(sx, sy) / 2.0, "half the region side", issues)}
+    _ignored(args, ("platform_size",), "our pit has no platform; it is half the region wide", issues)
+    return [("pit", params)]
+
+
+def _water(args, sx, sy, issues):
+    return [("water", {"depth": _fit("water", "depth", abs(float(args["depth"])), "depth", issues), "flow": "still"})]
+
+
+WAVE_SPEEDS = {"current": 0.5, "tide": 0.3}
+"""m/s of the flow a ``water_wave_terrain`` call imports as (GenTe gives no speed): a walking-pace stream, a gentle tide."""
+
+
+def _water_wave(args, sx, sy, issues):
+    kind = args["water_type"]
+    issues.append(Issue("defaulted", f"water_type={kind!r} has no depth or speed in GenTe; imported as 0.3 m of water "
+                                     f"flowing at {WAVE_SPEEDS[kind]} m/s."))
+    return [("water", {"depth": 0.3, "flow": kind, "speed": WAVE_SPEEDS[kind]})]
+
+
+SOIL_TYPES = {"sand": "dry_sand", "wet soil": "mud", "dry soil": "clay_loam"}
+"""GenTe's ``terrain_type`` -> our soil preset."""
+
+
+def _soil(args, sx, sy, issues):
+    _ignored(args, ("singkage",), "sinkage is an outcome of our pressure-sinkage soil model, not an input", issues)
+    return [("soil", {"preset": SOIL_TYPES[args["terrain_type"]]})]
+
+
+HANDLE = GenteArg("string", "GenTe's terrain handle ('init_terrain' or 'previous_terrain'); it carries no meaning here")
+PLATFORM = GenteArg("number", "side of the flat square at the centre [m]")
+BOTH, MULTI = ("single", "multi"), ("multi",)
+
+GENTE_TOOLS: dict[str, GenteTool] = {t.name: t for t in [
+    GenteTool("flat_ground_terrain", "Raise the part by a constant height.",
+              {"terrain": HANDLE, "height": GenteArg("number", "height added to the part [m]", True)},
+              BOTH, _flat, "flat(height), mode add"),
+    GenteTool("natural_ground_terrain", "Perlin-noise relief.",
+              {"terrain": HANDLE, "scale": GenteArg("number", "feature size in cells (0.1 m)"),
+               "octaves": GenteArg("integer", "noise octaves"), "persistence": GenteArg("number", "amplitude ratio per octave"),
+               "lacunarity": GenteArg("number", "frequency ratio per octave"),
+               "height_multiplier": GenteArg("number", "height scale of the noise [m]")},
+              ("single",), _natural, "natural_ground(amplitude=height_multiplier, wavelength=0.1*scale, octaves, persistence); lacunarity fixed at 2"),
+    GenteTool("random_gaussian_terrain", "Gaussian-noise heights.",
+              {"terrain": HANDLE, "mean_height": GenteArg("number", "mean height [m]", True),
+               "std_dev": GenteArg("number", "standard deviation of the heights", True),
+               "step": GenteArg("number", "height quantum"), "downsampled_scale": GenteArg("number", "sampling distance")},
+              MULTI, None, "no equivalent (GenTe declares it but has no implementation; ours has no Gaussian noise): reported"),
+    GenteTool("generate_river_terrain", "A river channel lower than its surroundings.",
+              {"terrain": HANDLE, "river_width": GenteArg("number", "river width [m]", True),
+               "river_depth": GenteArg("number", "depth below the surroundings [m]", True),
+               "river_path": GenteArg("array", "centre line as a list of (x, y) points"),
+               "bank_height": GenteArg("number", "bank height above the river bed [m]", True),
+               "smoothness": GenteArg("number", "smoothness of the bank transition")},
+              BOTH, _river, "river(width, depth, direction of the path's ends); bank_height, smoothness ignored"),
+    GenteTool("random_uniform_terrain", "Uniformly random heights.",
+              {"terrain": HANDLE, "min_height": GenteArg("number", "lowest height [m]", True),
+               "max_height": GenteArg("number", "highest height [m]", True),
+               "step": GenteArg("number", "height quantum"), "downsampled_scale": GenteArg("number", "sampling distance in cells")},
+              BOTH, _uniform, "flat((min+max)/2) + random_uniform(amplitude=(max-min)/2, spacing=0.1*downsampled_scale, step=int(step/0.1)*0.005)"),
+    GenteTool("sloped_terrain", "A four-sided pyramid, peak at the part's centre.",
+              {"terrain": HANDLE, "slope": GenteArg("number", "rise per metre towards the centre (negative: a hollow)", True)},
+              BOTH, lambda a, sx, sy, i: _slope(a, sx, sy, i, "sloped_terrain"),
+              "flat(slope*d_max) + pyramid_slope(atan|slope|, direction down for slope > 0); GenTe's diamond becomes our square pyramid"),
+    GenteTool("pyramid_sloped_terrain", "A pyramid rising to a flat top at the centre.",
+              {"terrain": HANDLE, "slope": GenteArg("number", "rise per metre towards the centre", True), "platform_size": PLATFORM},
+              BOTH, lambda a, sx, sy, i: _slope(a, sx, sy, i, "pyramid_sloped_terrain"),
+              "flat(slope*side/2) + pyramid_slope(atan|slope|, direction, platform)"),
+    GenteTool("discrete_obstacles_terrain", "Random rectangular blocks.",
+              {"terrain": HANDLE, "max_height": GenteArg("number", "largest block height [m]", True),
+               "min_size": GenteArg("number", "smallest block side [m]", True), "max_size": GenteArg("number", "largest block side [m]", True),
+               "num_rects": GenteArg("integer", "number of blocks", True), "platform_size": PLATFORM},
+              BOTH, _obstacles, "discrete_obstacles(max_height, min_size, max_size, density=num_rects/area, platform)"),
+    GenteTool("wave_terrain", "Sine waves along both axes.",
+              {"terrain": HANDLE, "num_waves": GenteArg("integer", "periods across the part", True),
+               "amplitude": GenteArg("number", "peak-to-peak height of one axis' wave [m]")},
+              BOTH, _waves, "waves(amplitude, wavelength=side/num_waves, pattern grid)"),
+    GenteTool("stairs_terrain", "A flight of steps along x.",
+              {"terrain": HANDLE, "step_width": GenteArg("number", "tread depth [m]", True),
+               "step_height": GenteArg("number", "rise of one step [m]", True)},
+              BOTH, lambda a, sx, sy, i: _stairs(a, sx, sy, i, "stairs_terrain"), "stairs(step_width, step_height, up), centred on a landing"),
+    GenteTool("pyramid_stairs_terrain", "Square rings of steps rising to the centre.",
+              {"terrain": HANDLE, "step_width": GenteArg("number", "tread depth [m]", True),
+               "step_height": GenteArg("number", "rise of one step [m]", True), "platform_size": PLATFORM},
+              MULTI, lambda a, sx, sy, i: _stairs(a, sx, sy, i, "pyramid_stairs_terrain"), "pyramid_stairs(step_width, step_height, down, platform)"),
+    GenteTool("stepping_stones_terrain", "Stones separated by holes.",
+              {"terrain": HANDLE, "stone_size": GenteArg("number", "stone side [m]", True),
+               "stone_distance": GenteArg("number", "hole width [m]", True),
+               "max_height": GenteArg("number", "largest stone height [m]", True), "platform_size": PLATFORM,
+               "depth": GenteArg("number", "depth of the holes [m]")},
+              MULTI, _stones, "stepping_stones(stone_size, stone_distance, height_noise=max_height, depth, platform)"),
+    GenteTool("pillars_terrain", "Tall rectangular pillars.",
+              {"terrain": HANDLE, "num_pillars": GenteArg("integer", "number of pillars", True),
+               "max_pillar_size": GenteArg("number", "largest pillar side [m]", True),
+               "pillar_gap": GenteArg("number", "free space around a pillar [m]"),
+               "step_height": GenteArg("number", "height of ridges between the pillars [m]")},
+              BOTH, _pillars, "pillars(height 1.5 m, radii size/4..size/2, density=num_pillars/area); pillar_gap, step_height ignored"),
+    GenteTool("gap_terrain", "A trench around a central platform.",
+              {"terrain": HANDLE, "gap_size": GenteArg("number", "trench width [m]", True), "platform_size": PLATFORM,
+               "depth": GenteArg("number", "trench depth in 0.005 m units (default 1000)")},
+              BOTH, _gap, "gap(gap_width=gap_size, depth=0.005*depth, platform)"),
+    GenteTool("pit_terrain", "A pit at the centre.",
+              {"terrain": HANDLE, "depth": GenteArg("number", "pit depth [m]", True), "platform_size": PLATFORM},
+              MULTI, _pit, "pit(depth, width = half the region); platform_size ignored"),
+    GenteTool("water_resistance_terrain", "Still water.",
+              {"terrain": HANDLE, "depth": GenteArg("number", "water depth [m]", True)},
+              MULTI, _water, "water(depth, still)"),
+    GenteTool("water_wave_terrain", "Flowing water: a current or a tide.",
+              {"terrain": HANDLE, "water_type": GenteArg("string", "kind of flow", True, ("current", "tide"))},
+              MULTI, _water_wave, "water(0.3 m, flow=water_type, 0.5 m/s current or 0.3 m/s tide)"),
+    GenteTool("deformable_terrain", "Soil the feet sink into.",
+              {"terrain": HANDLE, "singkage": GenteArg("number", "expected foot sinkage [m]", True),
+               "terrain_type": GenteArg("string", "kind of soil", True, ("wet soil", "dry soil", "sand"))},
+              MULTI, _soil, "soil(sand -> dry_sand, wet soil -> mud, dry soil -> clay_loam); singkage ignored"),
+]}
+"""GenTe's tools (schemas ``single`` and ``multi``: the two tool lists its dataset was generated with)."""
+
+PART_ARG = GenteArg("integer", "which quarter of the map the terrain goes in: 1, 2, 3 or 4 (default 1)", enum=None)
+
+
+def gente_tool_schemas(schema: str = "multi") -> list[dict[str, Any]]:
+    """OpenAI ``tools`` in GenTe's names and arguments: exactly the tools of GenTe's ``single`` or ``multi`` list
+    (``multi`` adds ``part``), described in our words from :data:`GENTE_TOOLS`."""
+    if schema not in ("single", "multi"):
+        raise ValueError(f"schema {schema!r}: use 'single' or 'multi'.")
+    tools = []
+    for tool in GENTE_TOOLS.values():
+        if schema not in tool.schemas:
+            continue
+        args = dict(tool.args) | ({"part": PART_ARG} if schema == "multi" else {})
+        props = {}
+        for name, arg in args.items():
+            prop: dict[str, Any] = {"type": arg.type, "description": arg.doc}
+            if arg.enum:
+                prop["enum"] = list(arg.enum)
+            if arg.type == "array":
+                prop["items"] = {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}
+            props[name] = prop
+        required = [n for n, a in args.items() if a.required]
+        tools.append({"type": "function", "function": {"name": tool.name, "description": tool.doc,
+                                                       "parameters": {"type": "object", "properties": props, "required": required}}})
+    return tools
+
+
+# ------------------------------------------------------------------------------------------------- translation
+@dataclasses.dataclass
+class Translation:
+    """One GenTe call translated: the validated calls of ours (maybe none) and what is reported about it."""
+
+    gente_tool: str
+    calls: list[ToolCall]
+    issues: list[Issue]
+
+    @property
+    def blocked(self) -> bool:
+        return any(i.kind in BLOCKING for i in self.issues)
+
+
+class UnreadableArguments(ValueError):
+    """A GenTe call's arguments that are neither JSON nor a Python literal, or not bounded plain data."""
+
+
+def parse_arguments(arguments: Any) -> dict[str, Any]:
+    """A GenTe call's arguments as a dict: JSON, else a Python literal (never executed); ValueError if neither."""
+    if isinstance(arguments, str):
+        if len(arguments) > MAX_ARGUMENT_CHARS:
+            raise UnreadableArguments(f"the arguments are {len(arguments)} characters long; the limit is {MAX_ARGUMENT_CHARS}")
+        try:
+            arguments = json.loads(arguments) if arguments.strip() else {}
+        except (ValueError, RecursionError):
+            try:
+                arguments = ast.literal_eval(arguments)
+            except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError) as exc:
+                raise UnreadableArguments(f"the arguments are neither JSON nor a Python literal ({type(exc).__name__})") from None
+    problem = plain_json_problem(arguments)
+    if problem:
+        raise UnreadableArguments(f"the arguments: {problem}")
+    if not isinstance(arguments, dict):
+        raise UnreadableArguments(f"the arguments are a {type(arguments).__name__}, not an object")
+    return arguments
+
+
+def _region(args: dict[str, Any], schema: str | None, issues: list[Issue]) -> str:
+    if schema == "single":
+        if "part" in args:
+            issues.append(Issue("ignored_argument", f"part={_short(args['part'])} in a single-part transcript; the call covers the whole tile."))
+        return "full"
+    part = args.get("part")
+    if part is None:
+        issues.append(Issue("defaulted", "no part given; GenTe's default part 1 (back right)."))
+        return PART_REGIONS[1]
+    if isinstance(part, str) and part.strip().isdigit():
+        issues.append(Issue("coerced", f"part={part!r} is a string; imported as part {int(part)}."))
+        part = int(part)
+    if isinstance(part, bool) or not isinstance(part, (int, float)) or part not in PART_REGIONS:
+        raise ValueError(f"part={_short(part)} is not 1, 2, 3 or 4")
+    return PART_REGIONS[int(part)]
+
+
+def translate_call(
+    name: Any, arguments: Any, schema: str | None = "multi", size_x: float = GENTE_TILE, size_y: float = GENTE_TILE,
+) -> Translation:
+    """Translate one GenTe call (``schema``: the tool list it was served, ``single`` or ``multi``; None: either).
+
+    Never raises for bad input: everything is reported in ``issues``; blocked calls have no ``calls``.
+    """
+    tool_name = name if isinstance(name, str) else repr(name)
+    tool_name = tool_name[:80]
+    issues: list[Issue] = []
+    tool = GENTE_TOOLS.get(name) if isinstance(name, str) else None
+    if tool is None:
+        issues.append(Issue("invented_tool", f"{tool_name!r} is not a tool GenTe declares; GenTe's tools are {sorted(GENTE_TOOLS)}."))
+        return Translation(tool_name, [], issues)
+    if schema is not None and schema not in tool.schemas:
+        issues.append(Issue("outside_schema", f"{tool.name} is not in GenTe's {schema}-part tool list (only in its "
+                                              f"{'/'.join(tool.schemas)}-part list); translated anyway."))
+    if tool.translate is None:
+        issues.append(Issue("no_equivalent", f"{tool.name}: {tool.mapping}."))
+        return Translation(tool.name, [], issues)
+    missing: list[str] = []
+    try:
+        args = parse_arguments(arguments)
+        region = _region(args, schema, issues)
+        undeclared = sorted(set(args) - set(tool.args) - {"part"})
+        if undeclared:
+            issues.append(Issue("ignored_argument", f"{tool.name} declares no argument(s) {[u[:40] for u in undeclared[:8]]}; ignored."))
+        missing = [n for n, a in tool.args.items() if a.required and n not in args and n != "terrain"]
+        args = {k: v for k, v in args.items() if k in tool.args and k != "terrain"}
+        for n, a in tool.args.items():
+            if n in args and a.type in ("number", "integer") and (isinstance(args[n], bool) or not isinstance(args[n], (int, float))):
+                raise ValueError(f"{n}={_short(args[n])} is not a number")
+            if n in args and a.enum and args[n] not in a.enum:
+                raise ValueError(f"{n}={_short(args[n])} is not one of {list(a.enum)}")
+        ours = tool.translate(args, size_x / (2.0 if region != "full" else 1.0), size_y / (2.0 if region != "full" else 1.0), issues)
+    except KeyError as exc:
+        issues.append(Issue("bad_value", f"{tool.name}: required argument {exc} is missing (missing: {missing})."))
+        return Translation(tool.name, [], issues)
+    except (ValueError, TypeError, OverflowError) as exc:
+        kind = "unreadable_arguments" if isinstance(exc, UnreadableArguments) else "bad_value"
+        issues.append(Issue(kind, f"{tool.name}: {str(exc)[:200]}."))
+        return Translation(tool.name, [], issues)
+    calls = []
+    for our_tool, params in ours:
+        layout = {"region": region} | ({"mode": "add"} if ATOMIC_TERRAINS[our_tool].kind == "geometric" else {})
+        try:
+            calls.append(validate_call(our_tool, {**params, **layout}, size_x, size_y))
+        except ValidationError as exc:
+            issues.append(Issue("rejected", f"{tool.name} -> {our_tool}: {exc}"))
+            return Translation(tool.name, [], issues)
+    return Translation(tool.name, calls, issues)
+
+
+# ------------------------------------------------------------------------------------------------- transcripts
+@dataclasses.dataclass
+class TranscriptImport:
+    """A GenTe ``data.json`` imported: the spec (None if it does not validate), every translation, and why not."""
+
+    spec: TerrainSpec | None
+    translations: list[Translation]
+    error: str | None = None
+
+    @property
+    def issues(self) -> list[Issue]:
+        return [i for t in self.translations for i in t.issues]
+
+
+def import_transcript(
+    data: Any, name: str, schema: str, seed: int = 0, resolution: float = GENTE_CELL,
+) -> TranscriptImport:
+    """GenTe's ``{"tool_calls": [...]}`` (its scene text is not read) -> a validated :class:`TerrainSpec`.
+
+    The spec is a 20 m x 20 m tile at ``resolution``; its source names GenTe's schema, not the scene text.
+    """
+    tool_calls = data.get("tool_calls") if isinstance(data, dict) else None
+    if not isinstance(tool_calls, list) or not tool_calls:
+        return TranscriptImport(None, [], "the transcript has no tool_calls list")
+    translations = []
+    for tc in tool_calls[:256]:
+        fn = tc.get("function") if isinstance(tc, dict) else None
+        if not isinstance(fn, dict):
+            translations.append(Translation("?", [], [Issue("unreadable_arguments", "a tool call without a function object.")]))
+            continue
+        translations.append(translate_call(fn.get("name"), fn.get("arguments", ""), schema))
+    calls = [c for t in translations for c in t.calls]
+    doc = TerrainSpec(calls=calls, name=name, size_x=GENTE_TILE, size_y=GENTE_TILE, resolution=resolution, seed=seed,
+                      source={"gente_schema": schema, "gente_calls": str(len(tool_calls))}, backend="gente_import").to_dict()
+    try:
+        _, validated = validate_spec_dict(doc)
+    except ValidationError as exc:
+        return TranscriptImport(None, translations, str(exc))
+    if not validated:
+        return TranscriptImport(None, translations, "no call could be translated")
+    return TranscriptImport(TerrainSpec.from_dict(doc), translations)
+
+
+# -------------------------------------------------------------------------------------------------- heightmaps
+@dataclasses.dataclass
+class GenteHeightmap:
+    """A GenTe ``array.npy`` in metres, with where it wrapped around the int16 range (``overflowed``)."""
+
+    heights: np.ndarray
+    overflowed: bool
+    wrap_edges: int
+    raw_range: tuple[int, int]
+
+
+def import_heightmap(array: Any) -> GenteHeightmap:
+    """GenTe's int16 heightmap -> float32 metres (x along axis 0, 0.005 m per unit) and overflow detection.
+
+    GenTe adds heights in int16 without checks, so a tall stack wraps from +32767 to -32768. A wrap shows as a
+    jump of more than half the int16 range between neighbouring cells (no real terrain of 0.1 m cells jumps
+    164 m); ``wrap_edges`` counts those neighbour pairs.
+    """
+    a = np.asarray(array)
+    if a.ndim != 2 or a.dtype != np.int16:
+        raise ValueError(f"a GenTe heightmap is a 2-D int16 array; got {a.dtype} of shape {a.shape}.")
+    a32 = a.astype(np.int32)
+    edges = int((np.abs(np.diff(a32, axis=0)) > WRAP_JUMP).sum() + (np.abs(np.diff(a32, axis=1)) > WRAP_JUMP).sum())
+    return GenteHeightmap((a32 * GENTE_VERTICAL).astype(np.float32), edges > 0, edges, (int(a32.min()), int(a32.max())))
+
+
+def heightmap_tile(heightmap: GenteHeightmap) -> tuple[np.ndarray, MaterialMap]:
+    """A GenTe heightmap as a tile (heights, rigid MaterialMap) like ``TerrainSpec.build``; refuses broken maps."""
+    if heightmap.overflowed:
+        raise ValueError(f"the heightmap wrapped around int16 at {heightmap.wrap_edges} cell edges; its heights are "
+                         f"garbage there: import its transcript instead.")
+    peak = float(np.abs(heightmap.heights).max())
+    if peak > MAX_ABS_HEIGHT:
+        raise ValueError(f"the heightmap reaches |height| {peak:.1f} m > {MAX_ABS_HEIGHT} m; import its transcript instead.")
+    return heightmap.heights.copy(), MaterialMap.rigid(heightmap.heights.shape)
