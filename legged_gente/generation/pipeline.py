@@ -27,8 +27,14 @@ def generate_spec(
     timeout: float = 60.0,
     max_retries: int = 3,
     api_key_env: str = "GENTE_API_KEY",
+    toolset: str = "ours",
 ) -> tuple[TerrainSpec, GenerationResult]:
-    """Run ``backend`` on the inputs and return the validated spec and the backend's result (warnings, notes)."""
+    """Run ``backend`` on the inputs and return the validated spec and the backend's result (warnings, notes).
+
+    ``toolset="gente"`` (openai backend) serves GenTe's original tool list and translates its calls.
+    """
+    if toolset != "ours" and backend != "openai":
+        raise ValueError(f"toolset {toolset!r} is for the openai backend; the planner calls our tools.")
     if not text and image is None:
         raise ValueError("give a text description, an image, or both.")
     if backend not in BACKENDS:
@@ -55,7 +61,8 @@ def generate_spec(
 
         client = OpenAIBackend(
             base_url, model, api_key_env=api_key_env, timeout=timeout, max_retries=max_retries,
-            two_phase=two_phase, vision_model=vision_model, size_x=size_x, size_y=size_y,
+            two_phase=two_phase, vision_model=vision_model, size_x=size_x, size_y=size_y, resolution=resolution,
+            toolset=toolset,
         )
         result = client.generate(text=text, image=image_bytes)
     if image_bytes is not None:
@@ -64,6 +71,8 @@ def generate_spec(
             source["text"] = text
     else:
         source = text_source(text)
+    if backend == "openai" and toolset != "ours":
+        source["toolset"] = toolset
     default_name = spec_name(text) if text else (spec_name(Path(image).stem) if isinstance(image, (str, Path)) else "generated_terrain")
     spec = TerrainSpec(
         calls=result.calls, name=name or default_name, size_x=size_x, size_y=size_y, resolution=resolution,

@@ -54,6 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--model", help="model name on that server (openai backend)")
     p.add_argument("--vision-model", help="model that describes the image in --two-phase (default: --model)")
     p.add_argument("--two-phase", action="store_true", help="VLM describes the image, then the LLM calls the tools")
+    p.add_argument("--toolset", choices=("ours", "gente"), default="ours",
+                   help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
     p.add_argument("--api-key-env", default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
     p.add_argument("--timeout", type=_positive(float), default=60.0, help="request timeout in seconds (default 60)")
     p.add_argument("--max-retries", type=int, default=3, help="correction rounds for invalid tool calls (default 3)")
@@ -75,8 +77,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--image {args.image} is not a file.")
     if args.backend == "openai" and not (args.base_url and args.model):
         parser.error("--backend openai needs --base-url and --model.")
-    if args.backend == "planner" and (args.base_url or args.model or args.two_phase):
-        parser.error("--base-url/--model/--two-phase are for --backend openai.")
+    if args.backend == "planner" and (args.base_url or args.model or args.two_phase or args.toolset != "ours"):
+        parser.error("--base-url/--model/--two-phase/--toolset are for --backend openai.")
     if args.max_retries < 0:
         parser.error("--max-retries must be >= 0.")
     if args.name is not None and not (args.name.isidentifier() and args.name[0].isalpha()):
@@ -86,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
             args.text, args.image, args.backend, seed=args.seed, size_x=args.size, size_y=args.size,
             resolution=args.resolution, name=args.name, base_url=args.base_url, model=args.model,
             two_phase=args.two_phase, vision_model=args.vision_model, timeout=args.timeout,
-            max_retries=args.max_retries, api_key_env=args.api_key_env,
+            max_retries=args.max_retries, api_key_env=args.api_key_env, toolset=args.toolset,
         )
         for note in result.notes:
             print(f"note: {note}")

@@ -36,12 +36,14 @@ from PIL import Image
 
 from legged_gente.generation.backends import GenerationError, GenerationResult
 from legged_gente.generation.tools import named_regions, tool_schemas
-from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
+from legged_gente.generation.validation import MAX_CALLS, ToolCall, ValidationError, check_height_stack, validate_call
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 DEFAULT_API_KEY_ENV = "GENTE_API_KEY"
 MAX_RESPONSE_BYTES = 8 * 2**20
 """Largest answer read from the server (a chat completion with tool calls is a few kB)."""
+TOOLSETS = ("ours", "gente")
+"""``ours``: the registry's tools; ``gente``: GenTe's original tool list, translated (see gente_compat)."""
 MAX_TOOL_CALLS_PER_ANSWER = 64
 """Most tool calls one answer may carry (a spec holds at most ``validation.MAX_CALLS``)."""
 
@@ -93,11 +95,18 @@ class OpenAIBackend:
         size_x: float = 20.0,
         size_y: float = 20.0,
         registry: Mapping[str, AtomicTerrain] | None = None,
+        resolution: float = 0.1,
+        toolset: str = "ours",
     ):
         if max_retries < 0:
             raise ValueError(f"max_retries must be >= 0, got {max_retries}.")
         if timeout <= 0:
             raise ValueError(f"timeout must be > 0 seconds, got {timeout}.")
+        if toolset not in TOOLSETS:
+            raise ValueError(f"unknown toolset {toolset!r}; use one of {list(TOOLSETS)}.")
+        if toolset == "gente" and registry is not None:
+            raise ValueError("the gente toolset translates into the global terrain registry; pass no registry.")
+        self.toolset, self.resolution = toolset, resolution
         self.base_url, self.model = base_url, model
         self.vision_model = vision_model or model
         self.max_retries, self.two_phase, self.timeout = max_retries, two_phase, timeout
@@ -184,6 +193,27 @@ class OpenAIBackend:
                 f"starting {text[:80]!r}); check --base-url and --model."
             ) from None
 
+    def _accept(self, name: Any, arguments: Any, accepted: list[ToolCall]) -> tuple[list[ToolCall], list[str]]:
+        """Validate (``ours``) or translate (``gente``) one call against those accepted so far; (calls, notes).
+
+        Raises ValidationError with what the model must change (including stacked heights and the call count).
+        """
+        notes: list[str] = []
+        if self.toolset == "gente":
+            from legged_gente.generation.gente_compat import translate_call
+
+            translation = translate_call(name, arguments, "multi", self.size_x, self.size_y)
+            if translation.blocked:
+                raise ValidationError([i.message for i in translation.issues])
+            new = translation.calls
+            notes = [f"{translation.gente_tool}: {i.message}" for i in translation.issues]
+        else:
+            new = [validate_call(name, arguments, self.size_x, self.size_y, self.registry, self.resolution)]
+        if len(accepted) + len(new) > MAX_CALLS:
+            raise ValidationError([f"a terrain holds at most {MAX_CALLS} calls; stop calling tools or merge regions."])
+        check_height_stack(accepted + new, self.size_x, self.size_y, self.registry)
+        return new, notes
+
     def describe(self, image: str | Path | bytes, text: str | None = None) -> str:
         """Phase one of two: the vision model's description of the image as terrain."""
         content: list[dict[str, Any]] = [{"type": "text", "text": DESCRIBE_PROMPT + (f" Context: {text}" if text else "")}]
@@ -203,17 +233,23 @@ class OpenAIBackend:
             description = self.describe(image, text)
             notes.append(f"image description ({self.vision_model}): {description}")
             content.append({"type": "text", "text": f"Build this terrain: {description}"})
+        elif self.toolset == "gente" and text:  # GenTe sent its prompts as they are
+            content.append({"type": "text", "text": text})
         else:
             if text:
                 content.append({"type": "text", "text": f"Build this terrain: {text}"})
             if image is not None:
                 content.append({"type": "text", "text": "Build the terrain shown in this image."})
                 content.append({"type": "image_url", "image_url": {"url": image_data_url(image)}})
-        messages: list[dict[str, Any]] = [
-            {"role": "system", "content": system_prompt(self.size_x, self.size_y)},
-            {"role": "user", "content": content},
-        ]
-        tools = tool_schemas(self.size_x, self.size_y, self.registry)
+        if self.toolset == "gente":
+            from legged_gente.generation.gente_compat import gente_tool_schemas
+
+            messages: list[dict[str, Any]] = [{"role": "user", "content": content}]
+            tools = gente_tool_schemas("multi")
+        else:
+            messages = [{"role": "system", "content": system_prompt(self.size_x, self.size_y)},
+                        {"role": "user", "content": content}]
+            tools = tool_schemas(self.size_x, self.size_y, self.registry)
         calls: list[ToolCall] = []
         warnings: list[str] = []
         rejected: list[str] = []
@@ -223,6 +259,11 @@ class OpenAIBackend:
                 raise GenerationError(f"the server at {self.base_url} returned no choices.")
             msg = resp.choices[0].message
             tool_calls = msg.tool_calls or []
+            if len(tool_calls) > MAX_TOOL_CALLS_PER_ANSWER:
+                rejected = [f"round {round_ + 1}: the model sent {len(tool_calls)} tool calls in one answer; at most "
+                            f"{MAX_TOOL_CALLS_PER_ANSWER} are read"]
+                messages.append({"role": "user", "content": f"Send at most {MAX_TOOL_CALLS_PER_ANSWER} tool calls."})
+                continue
             messages.append(msg.model_dump(exclude_none=True))
             if not tool_calls:
                 rejected = [f"round {round_ + 1}: the model answered without calling a tool ({(msg.content or '')[:200]!r})"]
@@ -230,14 +271,19 @@ class OpenAIBackend:
                 continue
             rejected = []
             for tc in tool_calls:
+                function = getattr(tc, "function", None)
                 try:
-                    call = validate_call(tc.function.name, tc.function.arguments, self.size_x, self.size_y, self.registry)
+                    if function is None:
+                        raise ValidationError([f"tool call {tc.id!r} is not a function call; call the terrain functions."])
+                    new, notes_ = self._accept(function.name, function.arguments, calls)
                 except ValidationError as exc:
                     rejected.append(str(exc))
                     result = f"REJECTED: {exc} Re-issue this call corrected."
                 else:
-                    calls.append(call)
-                    result = f"OK: {call.tool} applied on {call.region_json()}."
+                    calls += new
+                    warnings += notes_
+                    result = f"OK: {', '.join(f'{c.tool} on {c.region_json()}' for c in new) or 'nothing to apply'}." + (
+                        f" Notes: {' '.join(notes_)}" if notes_ else "")
                 messages.append({"role": "tool", "tool_call_id": tc.id, "content": result})
             if not rejected:
                 return GenerationResult(calls, warnings, notes, self.model)

@@ -1,0 +1,212 @@
+"""GenTe compatibility: tool translation (values by hand), reporting, heightmap overflow, the toolset, the benchmark.
+
+The transcripts here are made up in GenTe's format; GenTe's own scene texts are not used in tests.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_generation_openai import FakeServer, _completion, ok
+
+from legged_gente.generation.backends import GenerationError
+from legged_gente.generation.backends.openai_backend import OpenAIBackend
+from legged_gente.generation.gente_compat import (
+    GENTE_TOOLS,
+    gente_tool_schemas,
+    heightmap_tile,
+    import_heightmap,
+    import_transcript,
+    translate_call,
+)
+from legged_gente.generation.spec import TerrainSpec
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _gcall(name, args, i=0):
+    return {"id": f"g{i}", "type": "function", "function": {"name": name, "arguments": args if isinstance(args, str) else json.dumps(args)}}
+
+
+def test_parts_and_additive_heights():
+    t = translate_call("flat_ground_terrain", {"terrain": "previous_terrain", "height": 0.3, "part": 4})
+    assert not t.issues and len(t.calls) == 1
+    c = t.calls[0]
+    # GenTe's part 4 is the second half along both x and y: our front-left quadrant; GenTe adds heights
+    assert (c.tool, c.region, c.mode, c.params["height"]) == ("flat", "front_left", "add", 0.3)
+    assert translate_call("flat_ground_terrain", {"height": 0.1, "part": 2}).calls[0].region == "front_right"
+    assert translate_call("flat_ground_terrain", {"height": 0.1}, schema="single").calls[0].region == "full"
+    defaulted = translate_call("flat_ground_terrain", {"height": 0.1})
+    assert defaulted.calls[0].region == "back_right" and defaulted.issues[0].kind == "defaulted"
+
+
+def test_unit_conversions_by_hand():
+    # waves: 2 periods across a 10 m part -> 5 m wavelength; amplitude kept (GenTe: amp/2 * (cos + sin))
+    w = translate_call("wave_terrain", {"num_waves": 2, "amplitude": 0.2, "part": 1}).calls[0].params
+    assert w["wavelength"] == pytest.approx(10.0 / 2) and w["amplitude"] == pytest.approx(0.2)
+    # 20 blocks on a 10 m x 10 m part -> 0.2 blocks per m^2
+    o = translate_call("discrete_obstacles_terrain", {"max_height": 0.2, "min_size": 0.4, "max_size": 1.0,
+                                                      "num_rects": 20, "part": 3}).calls[0].params
+    assert o["density"] == pytest.approx(20 / (10.0 * 10.0))
+    # a slope of 0.1 m/m to the centre of a 10 m part: peak 0.1 * (5 + 5) = 1.0 m; our slope atan(0.1) falls away
+    flat, pyr = translate_call("sloped_terrain", {"slope": 0.1, "part": 1}).calls
+    assert flat.params["height"] == pytest.approx(1.0)
+    assert pyr.params["slope"] == pytest.approx(math.atan(0.1)) and pyr.params["direction"] == "down"
+    # uniform heights in [0, 0.2] m -> 0.1 m offset + +-0.1 m; step 1 -> int(1 / 0.1) * 0.005 = 0.05 m
+    off, uni = translate_call("random_uniform_terrain", {"min_height": 0.0, "max_height": 0.2, "step": 1,
+                                                         "downsampled_scale": 5, "part": 1}).calls
+    assert off.params["height"] == pytest.approx(0.1) and uni.params["amplitude"] == pytest.approx(0.1)
+    assert uni.params["step"] == pytest.approx(0.05) and uni.params["spacing"] == pytest.approx(0.5)
+    # gap depth in 0.005 m units: 200 -> 1.0 m
+    assert translate_call("gap_terrain", {"gap_size": 0.5, "depth": 200, "part": 1}).calls[0].params["depth"] == pytest.approx(1.0)
+
+
+def test_physical_tools_map_to_water_and_soil():
+    (w,) = translate_call("water_resistance_terrain", {"depth": 0.4, "part": 2}).calls
+    assert (w.tool, w.params["depth"], w.params["flow"], w.mode) == ("water", 0.4, "still", None)
+    t = translate_call("water_wave_terrain", {"water_type": "tide", "part": 2})
+    assert t.calls[0].params["flow"] == "tide" and t.issues[0].kind == "defaulted"
+    s = translate_call("deformable_terrain", {"singkage": 0.05, "terrain_type": "sand", "part": 1})
+    assert s.calls[0].params["preset"] == "dry_sand" and s.issues[0].kind == "ignored_argument"
+
+
+def test_nothing_is_dropped_silently():
+    clamped = translate_call("stairs_terrain", {"step_width": 0.3, "step_height": 30, "part": 1})
+    assert clamped.calls[0].params["step_height"] == 0.3
+    assert [i.kind for i in clamped.issues] == ["clamped"] and "step_height=30" in clamped.issues[0].message
+    invented = translate_call("lava_terrain", {"heat": 3})
+    assert invented.blocked and not invented.calls and invented.issues[0].kind == "invented_tool"
+    missing = translate_call("random_gaussian_terrain", {"mean_height": 0, "std_dev": 1})
+    assert missing.blocked and missing.issues[0].kind == "no_equivalent"
+    outside = translate_call("natural_ground_terrain", {"height_multiplier": 0.1, "part": 1}, schema="multi")
+    assert outside.calls and outside.issues[0].kind == "outside_schema"
+    extra = translate_call("flat_ground_terrain", {"height": 0.1, "part": 1, "colour": "red"})
+    assert extra.calls and extra.issues[0].kind == "ignored_argument" and "colour" in extra.issues[0].message
+    bad = translate_call("flat_ground_terrain", {"height": "high", "part": 1})
+    assert bad.blocked and bad.issues[-1].kind == "bad_value"
+
+
+def test_python_literal_arguments_are_parsed_never_run(tmp_path):
+    # GenTe's models wrote Python (".5", implicit string concatenation); GenTe eval'd it
+    t = translate_call("gap_terrain", '{"gap_size": .5, "platform_size": 1.5, "part": "4"}')
+    assert t.calls[0].params["gap_width"] == 0.5 and t.calls[0].region == "front_left"
+    assert [i.kind for i in t.issues] == ["coerced", "clamped"]  # and the default depth 1000 units = 5 m > 2 m
+    t = translate_call("flat_ground_terrain", '{"height": 0.2, "" "part": 2}')
+    assert t.calls[0].region == "front_right"
+    marker = tmp_path / "ran"
+    for payload in (f'__import__("pathlib").Path({str(marker)!r}).touch()', '{"height": (lambda: 1)(), "part": 1}',
+                    "[" * 5000 + "]" * 5000, "x" * 100_000):
+        t = translate_call("flat_ground_terrain", payload)
+        assert t.blocked and t.issues[0].kind == "unreadable_arguments"
+    assert not marker.exists()
+
+
+def test_transcript_import_reports_and_validates():
+    data = {"scene_description": "not read", "tool_calls": [
+        _gcall("flat_ground_terrain", {"terrain": "init_terrain", "height": 0.2, "part": 1}, 0),
+        _gcall("lava_terrain", {"part": 2}, 1),
+        _gcall("generate_river_terrain", {"river_width": 3, "river_depth": 0.4, "river_path": [[0, 0], [0, 50]],
+                                          "bank_height": 0.2, "part": 3}, 2),
+    ]}
+    result = import_transcript(data, "made_up", "multi")
+    assert [c.tool for c in result.spec.calls] == ["flat", "river"]
+    river = result.spec.calls[1].params
+    assert river["direction"] == pytest.approx(math.pi / 2)  # the path runs along +y
+    kinds = [i.kind for i in result.issues]
+    assert "invented_tool" in kinds and "simplified" in kinds and "ignored_argument" in kinds
+    assert "made_up" == result.spec.name and "scene" not in json.dumps(result.spec.to_dict())
+    heights, _ = result.spec.build()
+    assert heights.shape == (200, 200)
+    assert import_transcript({"tool_calls": []}, "x", "multi").spec is None
+
+
+def test_heightmap_overflow_detection():
+    ramp = np.arange(200, dtype=np.int32)[:, None] * np.ones((1, 200), np.int32)
+    fine = (ramp * 10).astype(np.int16)  # at most 1990 units = 9.95 m
+    hm = import_heightmap(fine)
+    assert not hm.overflowed and hm.heights[199, 0] == pytest.approx(1990 * 0.005)
+    heights, material = heightmap_tile(hm)
+    assert heights.dtype == np.float32 and material.shape == (200, 200)
+    wrapped = (ramp * 200).astype(np.int16)  # 199 * 200 = 39800 > 32767: wraps once, between rows 163 and 164
+    hm = import_heightmap(wrapped)
+    assert hm.overflowed and hm.wrap_edges == 200
+    with pytest.raises(ValueError, match="wrapped around int16"):
+        heightmap_tile(hm)
+    tall = np.full((200, 200), 4000, np.int16)  # 20 m
+    with pytest.raises(ValueError, match="20.0 m > 10.0 m"):
+        heightmap_tile(import_heightmap(tall))
+    with pytest.raises(ValueError, match="2-D int16"):
+        import_heightmap(np.zeros((4, 4), np.float32))
+
+
+def test_gente_schemas_are_gentes_tool_lists():
+    multi = {t["function"]["name"]: t["function"] for t in gente_tool_schemas("multi")}
+    single = {t["function"]["name"]: t["function"] for t in gente_tool_schemas("single")}
+    assert set(multi) == {n for n, t in GENTE_TOOLS.items() if "multi" in t.schemas}
+    assert "natural_ground_terrain" in single and "natural_ground_terrain" not in multi
+    assert "part" in multi["sloped_terrain"]["parameters"]["properties"]
+    assert "part" not in single["sloped_terrain"]["parameters"]["properties"]
+    assert multi["deformable_terrain"]["parameters"]["properties"]["terrain_type"]["enum"] == ["wet soil", "dry soil", "sand"]
+
+
+def test_openai_backend_serves_gentes_tools_and_translates():
+    prompt = "A made-up GenTe-style prompt: a stream by a slope. Use part 1 to 4."
+    first = _completion([_gcall("flat_ground_terrain", {"terrain": "init_terrain", "height": 0.2, "part": 2}, 0),
+                         _gcall("volcano_terrain", {"part": 1}, 1)])
+    second = _completion([_gcall("water_resistance_terrain", {"terrain": "previous_terrain", "depth": 0.3, "part": 1}, 2)])
+    with FakeServer([ok(first), ok(second)]) as srv:
+        result = OpenAIBackend(srv.url, "m", toolset="gente", timeout=5.0).generate(text=prompt)
+    assert [(c.tool, c.region) for c in result.calls] == [("flat", "front_right"), ("water", "back_right")]
+    req = srv.requests[0]
+    assert {t["function"]["name"] for t in req["tools"]} == {t["function"]["name"] for t in gente_tool_schemas("multi")}
+    assert req["messages"] == [{"role": "user", "content": [{"type": "text", "text": prompt}]}]  # the prompt unchanged
+    rejection = [m for m in srv.requests[1]["messages"] if m["role"] == "tool" and m["tool_call_id"] == "g1"][0]
+    assert "REJECTED" in rejection["content"] and "volcano_terrain" in rejection["content"]
+    with pytest.raises(ValueError, match="unknown toolset"):
+        OpenAIBackend("http://127.0.0.1:9", "m", toolset="genty")
+
+
+def test_gente_toolset_rejects_stacks_beyond_the_bound():
+    calls = [_gcall("flat_ground_terrain", {"height": 2.0, "part": 1}, i) for i in range(6)]  # 12 m on one part
+    with FakeServer([ok(_completion(calls))]) as srv:
+        with pytest.raises(GenerationError, match=r"reach 12.00 m > 10.0 m"):
+            OpenAIBackend(srv.url, "m", toolset="gente", timeout=5.0, max_retries=0).generate(text="x")
+
+
+def test_converter_on_a_made_up_clone(tmp_path):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "benchmarks/gente_original/build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    for i, (part, kind) in enumerate([("single_part", "txt"), ("multi_parts", "image")], start=1):
+        folder = tmp_path / "GenTe" / "dataset" / part / kind / str(i)
+        folder.mkdir(parents=True)
+        calls = [_gcall("flat_ground_terrain", {"height": 0.1, "part": 2}), _gcall("made_up_terrain", {})]
+        (folder / "data.json").write_text(json.dumps({"scene_description": "SECRET SCENE", "tool_calls": calls}))
+        np.save(folder / "array.npy", (np.arange(200)[:, None] * np.full((1, 200), 300)).astype(np.int16))
+    summary = build.build(tmp_path / "GenTe", tmp_path / "out")
+    assert summary["transcripts"] == 2 and summary["imported"] == 2 and summary["invented_tools"] == ["made_up_terrain"]
+    assert len(summary["heightmaps_overflowed"]) == 2
+    written = "".join(p.read_text() for p in (tmp_path / "out").rglob("*.*"))
+    assert "SECRET SCENE" not in written
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert [i["id"] for i in manifest["items"]] == ["single_text_01", "multi_image_02"]
+
+
+def test_the_shipped_benchmark_loads():
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    root = ROOT / "benchmarks" / "gente_original"
+    items = load_benchmark(root)
+    summary = json.loads((root / "report.json").read_text())["summary"]
+    assert len(items) == summary["imported"] == 200 and {i.kind for i in items} == {"text", "image"}
+    assert all(i.prompt is None and i.image is None for i in items)  # no GenTe scene text or photo in the project
+    for item in items[::25]:
+        heights, _ = item.spec().build()
+        assert np.isfinite(heights).all() and np.abs(heights).max() <= 10.0
+    assert isinstance(TerrainSpec.load(items[0].spec_path), TerrainSpec)
