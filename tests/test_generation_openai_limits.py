@@ -1,0 +1,124 @@
+"""The openai backend against misbehaving servers on 127.0.0.1: every request ends, in time, with a clear error."""
+
+from __future__ import annotations
+
+import json
+import socket
+import socketserver
+import threading
+import time
+
+import pytest
+from test_generation_openai import FakeServer, _completion, _tool_call, ok
+
+from legged_gente.generation.backends import GenerationError
+from legged_gente.generation.backends import openai_backend
+from legged_gente.generation.backends.openai_backend import OpenAIBackend
+
+
+class RawServer:
+    """Answers every connection with ``respond(write, stop)``: raw bytes, at the pace the test wants."""
+
+    def __init__(self, respond):
+        self.stop = threading.Event()
+        outer = self
+
+        class Handler(socketserver.BaseRequestHandler):
+            def handle(self):
+                self.request.recv(65536)  # the request (small: the tests send short prompts)
+                try:
+                    respond(self.request.sendall, outer.stop)
+                except OSError:  # the client gave up and closed the connection
+                    pass
+
+        socketserver.ThreadingTCPServer.allow_reuse_address = True
+        self.server = socketserver.ThreadingTCPServer(("127.0.0.1", 0), Handler)
+        self.server.daemon_threads = True
+        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
+
+    @property
+    def url(self):
+        return f"http://127.0.0.1:{self.server.server_address[1]}/v1"
+
+    def __enter__(self):
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.stop.set()
+        self.server.shutdown()
+        self.server.server_close()
+
+
+def _headers(length, content_type="application/json"):
+    return (f"HTTP/1.1 200 OK\r\nContent-Type: {content_type}\r\nContent-Length: {length}\r\n\r\n").encode()
+
+
+def _drip(data, stop, write, period=0.5):
+    for i in range(len(data)):
+        if stop.wait(period):
+            return
+        write(data[i:i + 1])
+
+
+def test_html_body_names_the_server():
+    page = b"<html><body>Welcome to nginx!</body></html>"
+    with RawServer(lambda write, stop: write(_headers(len(page), "text/html") + page)) as srv:
+        with pytest.raises(GenerationError, match=rf"server at {srv.url} answered HTTP 200 with a body that is not JSON.*<html>"):
+            OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
+
+
+def test_json_that_is_not_a_completion():
+    body = json.dumps({"status": "ok", "choices": "none"}).encode()
+    with RawServer(lambda write, stop: write(_headers(len(body)) + body)) as srv:
+        with pytest.raises(GenerationError, match="answered JSON that is not a chat completion"):
+            OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
+
+
+@pytest.mark.parametrize("where", ["body", "headers"])
+def test_a_dripping_server_cannot_outlast_the_deadline(where):
+    body = json.dumps(_completion(content="late")).encode()
+
+    def respond(write, stop):
+        if where == "body":
+            write(_headers(len(body)))
+            _drip(body, stop, write)
+        else:
+            _drip(_headers(len(body)), stop, write)
+
+    with RawServer(respond) as srv:
+        t0 = time.monotonic()
+        with pytest.raises(GenerationError, match="timed out after 2 s"):
+            OpenAIBackend(srv.url, "m", timeout=2.0).generate(text="x")
+        elapsed = time.monotonic() - t0
+    assert elapsed < 3.0, f"a 2 s request took {elapsed:.1f} s"  # one byte per 0.5 s: per-read timeouts never fire
+
+
+def test_response_size_is_capped(monkeypatch):
+    monkeypatch.setattr(openai_backend, "MAX_RESPONSE_BYTES", 10_000)
+    body = b"{" + b" " * 50_000 + b"}"
+    with RawServer(lambda write, stop: write(_headers(len(body)) + body)) as srv:
+        with pytest.raises(GenerationError, match="sent more than 10000 bytes"):
+            OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
+
+
+def test_error_status_with_a_huge_text_is_shortened():
+    with FakeServer([(503, {"error": {"message": "overloaded " * 10_000}}, 0.0)]) as srv:
+        with pytest.raises(GenerationError, match="HTTP 503: overloaded") as info:
+            OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
+    assert len(str(info.value)) < 500
+
+
+def test_too_many_tool_calls_in_one_answer_are_not_read():
+    calls = [_tool_call("flat", {"height": 0.0, "region": "full"}, i) for i in range(65)]
+    with FakeServer([ok(_completion(calls))]) as srv:
+        with pytest.raises(GenerationError, match="65 tool calls in one answer; at most 64"):
+            OpenAIBackend(srv.url, "m", timeout=5.0, max_retries=0).generate(text="x")
+
+
+def test_unreachable_server():
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(GenerationError, match="could not reach"):
+        OpenAIBackend(f"http://127.0.0.1:{port}/v1", "m", timeout=2.0).generate(text="x")
