@@ -30,7 +30,6 @@ import urllib.request
 from pathlib import Path
 from typing import Any, Mapping
 
-import pydantic
 from openai.types.chat import ChatCompletion
 from PIL import Image
 
@@ -187,7 +186,7 @@ class OpenAIBackend:
             )
         try:
             return ChatCompletion.model_validate(data)
-        except pydantic.ValidationError as exc:
+        except ValueError as exc:  # pydantic's ValidationError is a ValueError
             raise GenerationError(
                 f"the server at {self.base_url} answered JSON that is not a chat completion ({str(exc).splitlines()[0][:120]}; "
                 f"starting {text[:80]!r}); check --base-url and --model."
