@@ -16,6 +16,7 @@ import traceback
 
 import numpy as np
 
+from legged_gente.generation.gente_compat import GENTE_TOOLS, translate_call
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.generation.tools import named_regions
 from legged_gente.generation.validation import ValidationError, validate_call
@@ -105,6 +106,31 @@ def random_call(rng, size):
     return tool, args
 
 
+def random_gente_call(rng):
+    """A GenTe-format call: GenTe's tools (or invented ones) with numbers from typical to absurd, often as Python text."""
+    name = _pick(rng, sorted(GENTE_TOOLS) + ["lava_terrain", "", "__import__"])
+    declared = GENTE_TOOLS[name].args if name in GENTE_TOOLS else {"x": None}
+    args = {}
+    for arg_name, arg in declared.items():
+        if rng.random() < 0.15:
+            continue
+        if arg is not None and arg.enum:
+            args[arg_name] = _pick(rng, list(arg.enum) + ["lava"])
+        elif arg_name == "river_path":
+            args[arg_name] = _pick(rng, [[[0, 0], [5, 9]], "[[10, 15], [15, 20]]", [[1]], "x", []])
+        elif arg_name == "terrain":
+            args[arg_name] = "previous_terrain"
+        else:
+            args[arg_name] = float(rng.choice([rng.uniform(-1, 1), rng.uniform(-60, 60), 0.0])) if rng.random() < 0.9 else _pick(rng, WEIRD)
+    args["part"] = _pick(rng, [1, 2, 3, 4, 1, 2, 3, 4, "4", 0, 5, None, "x", 2.5])
+    r = rng.random()
+    if r < 0.3:
+        return name, json.dumps(args, default=str).replace("0.", ".")  # Python-style literals such as .5
+    if r < 0.35:
+        return name, _pick(rng, ["__import__('os')", "{'height': 1}", "{" * 3000, "", "[1, 2]"])
+    return name, args
+
+
 def random_spec_dict(rng, accepted, size, resolution):
     """A spec document from accepted calls (stacked, so heights may exceed the bound) with broken fields."""
     calls = [c.to_dict() for c in accepted[-int(rng.integers(1, 8)):]] if accepted else []
@@ -148,13 +174,13 @@ def _fuzz_spec(rng, accepted, size, resolution, counts, failures) -> None:
 def fuzz(seed: int = SEED, n: int = CALLS) -> dict:
     rng = np.random.default_rng(seed)
     counts = {"calls": 0, "rejected": 0, "accepted_and_built": 0, "specs": 0, "specs_rejected": 0,
-              "specs_built": 0, "crashes": 0}
+              "specs_built": 0, "gente_calls": 0, "gente_blocked": 0, "gente_built": 0, "crashes": 0}
     failures: list[str] = []
     accepted = []
     geometry = (4.0, 0.1)
     for k in range(n):
         if k % 50 == 0:  # a new tile geometry now and then
-            geometry = (float(rng.choice([1.0, 2.0, 4.0, 6.0])), float(rng.choice([0.05, 0.1, 0.2])))
+            geometry = (float(rng.choice([1.0, 2.0, 4.0, 6.0, 20.0])), float(rng.choice([0.05, 0.1, 0.2])))
             accepted = []
         size, resolution = geometry
         if k % 3 == 0:  # a spec document made of the calls accepted so far, stacked and broken
@@ -178,6 +204,29 @@ def fuzz(seed: int = SEED, n: int = CALLS) -> dict:
         except Exception:  # noqa: BLE001
             counts["crashes"] += 1
             failures.append(f"build {call}: {traceback.format_exc(limit=3)}")
+    for k in range(n // 4):  # GenTe-format calls through the translator
+        name, args = random_gente_call(rng)
+        counts["gente_calls"] += 1
+        try:
+            translation = translate_call(name, args, str(rng.choice(["single", "multi"])))
+        except Exception:  # noqa: BLE001
+            counts["crashes"] += 1
+            failures.append(f"translate {name} {str(args)[:200]}: {traceback.format_exc(limit=3)}")
+            continue
+        if translation.blocked or not translation.calls:
+            counts["gente_blocked"] += 1
+            continue
+        try:
+            spec = TerrainSpec(translation.calls, seed=k, resolution=0.2).validated()
+        except ValidationError:
+            counts["gente_blocked"] += 1
+            continue
+        try:
+            spec.build()
+            counts["gente_built"] += 1
+        except Exception:  # noqa: BLE001
+            counts["crashes"] += 1
+            failures.append(f"gente build {translation.calls}: {traceback.format_exc(limit=3)}")
     counts["failures"] = failures
     return counts
 
@@ -192,6 +241,7 @@ def test_fuzzed_calls_and_specs_are_rejected_or_build():
     assert counts["rejected"] > 0.2 * counts["calls"] and counts["accepted_and_built"] > 0.2 * counts["calls"]
     assert counts["specs_rejected"] > 0.1 * counts["specs"] and counts["specs_built"] > 0.1 * counts["specs"]
     assert counts["rejected"] + counts["accepted_and_built"] == counts["calls"]
+    assert counts["gente_blocked"] > 0.1 * counts["gente_calls"] and counts["gente_built"] > 0.3 * counts["gente_calls"]
     assert math.isfinite(counts["calls"])
 
 

@@ -274,6 +274,7 @@ def validate_call(
         region = tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
     mode = arguments.get("mode", "set") if terrain.kind == "geometric" else None
     call = ToolCall(tool, params, region, mode)
+    check_height_stack([call], size_x, size_y, registry)  # a call that alone exceeds the bound never builds
     if resolution is not None:
         try:
             Region(*call.rect(size_x, size_y)).cells(resolution)
