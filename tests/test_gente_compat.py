@@ -210,3 +210,20 @@ def test_the_shipped_benchmark_loads():
         heights, _ = item.spec().build()
         assert np.isfinite(heights).all() and np.abs(heights).max() <= 10.0
     assert isinstance(TerrainSpec.load(items[0].spec_path), TerrainSpec)
+
+
+def test_cli_toolset_gente(tmp_path, capsys):
+    from legged_gente.scripts.generate import main
+
+    reply = _completion([_gcall("flat_ground_terrain", {"height": 0.2, "part": 4}, 0),
+                         _gcall("stairs_terrain", {"step_width": 0.3, "step_height": 30, "part": 1}, 1)])
+    with FakeServer([ok(reply)]) as srv:
+        code = main(["--text", "made-up prompt", "--backend", "openai", "--base-url", srv.url, "--model", "m",
+                     "--toolset", "gente", "--out", str(tmp_path / "g")])
+    captured = capsys.readouterr()
+    assert code == 0 and "flat(" in captured.out and "stairs(" in captured.out
+    assert "step_height=30" in captured.err  # the clamp is a printed warning
+    spec = TerrainSpec.load(tmp_path / "g" / "spec.json")
+    assert spec.source["toolset"] == "gente" and [c.region for c in spec.calls] == ["front_left", "back_right"]
+    with pytest.raises(SystemExit):
+        main(["--text", "x", "--toolset", "gente", "--out", str(tmp_path / "p")])  # the planner has our tools only
