@@ -151,11 +151,11 @@ def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "
 # ------------------------------------------------------------------------------ (d) success over training
 def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], out: str | Path,
                           benchmark: str = "benchmarks/gente100", max_checkpoints: int = 8, robots_per_terrain: int = 16,
-                          device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float = 0.5) -> Path:
+                          device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float | None = None) -> Path:
     """Evaluate up to ``max_checkpoints`` evenly spaced checkpoints of a run on ``item_ids``; plot success vs iteration."""
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation
-    from legged_gente.evaluation.report import success
+    from legged_gente.evaluation.report import TRACKING_THRESHOLD, success
     from legged_gente.scripts.evaluate import load_policy
     from legged_gente.utils.checkpoints import _iteration
 
@@ -168,8 +168,9 @@ def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], o
     iterations, rates = [], []
     for k in pick:
         result = evaluation.run(load_policy(evaluation, checkpoint=str(checkpoints[k])), progress=False)
-        ok = success(result.metrics, "velocity", tracking_threshold)
-        rates.append([ok[result.tile == t].mean() for t in range(len(items))])
+        ok = success(result.metrics, "velocity", tracking_threshold or TRACKING_THRESHOLD)
+        moving = ~result.metrics["standing"].astype(bool)
+        rates.append([ok[(result.tile == t) & moving].mean() for t in range(len(items))])
         iterations.append(_iteration(checkpoints[k]))
     rates = np.array(rates)
     plt = _plt()

@@ -62,8 +62,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mode", choices=("velocity", "waypoints"), default="velocity", help="evaluation task")
     p.add_argument("--episode_s", type=float, default=None,
                    help="episode length in s (default: 10 for velocity, 20 for waypoints)")
-    p.add_argument("--tracking_threshold", type=float, default=0.5,
+    p.add_argument("--tracking_threshold", type=float, default=0.25,
                    help="m/s; velocity-task success needs a mean tracking error below it")
+    p.add_argument("--min_progress", type=float, default=0.7,
+                   help="velocity-task success needs this share of the commanded distance covered along the command")
+    p.add_argument("--min_speed", type=float, default=0.3, help="m/s; the slowest moving command of the velocity task")
+    p.add_argument("--stand_fraction", type=float, default=0.1,
+                   help="share of robots commanded to stand still (scored as the group stand_still)")
     p.add_argument("--settle_s", type=float, default=1.0, help="s at the start not counted in the tracking error")
     p.add_argument("--reach_distance", type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
@@ -89,11 +94,12 @@ def evaluate(args) -> dict:
     episode_s = args.episode_s or (20.0 if args.mode == "waypoints" else 10.0)
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     policy = load_policy(evaluation, args.checkpoint, args.exported, args.baseline)
-    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed)
+    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
+                                stand_fraction=args.stand_fraction)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress)
     meta = {"task": args.task, "benchmark": str(args.benchmark), "policy": args.checkpoint or args.exported or args.baseline,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed}
-    report = build_report(result, items, args.tracking_threshold, meta)
+    report = build_report(result, items, args.tracking_threshold, meta, args.min_progress)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
