@@ -112,6 +112,8 @@ class TerrainSpec:
             size = path.stat().st_size
         except FileNotFoundError:
             raise FileNotFoundError(f"terrain spec {path} does not exist; pass the spec.json that gente-generate wrote.") from None
+        if not path.is_file():
+            raise ValidationError([f"spec {path} is not a file; pass the spec.json that gente-generate wrote."])
         if size > MAX_SPEC_BYTES:
             raise ValidationError([f"spec {path}: the file is {size} bytes; a spec is at most {MAX_SPEC_BYTES} bytes."])
         try:

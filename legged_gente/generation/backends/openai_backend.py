@@ -41,6 +41,8 @@ from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 DEFAULT_API_KEY_ENV = "GENTE_API_KEY"
 MAX_RESPONSE_BYTES = 8 * 2**20
 """Largest answer read from the server (a chat completion with tool calls is a few kB)."""
+MAX_DESCRIPTION_CHARS = 4000
+"""Longest image description passed on to the language model in a two-phase run (the rest is cut)."""
 TOOLSETS = ("ours", "gente")
 """``ours``: the registry's tools; ``gente``: GenTe's original tool list, translated (see gente_compat)."""
 MAX_TOOL_CALLS_PER_ANSWER = 64
@@ -227,9 +229,14 @@ class OpenAIBackend:
         if not text and image is None:
             raise ValueError("give a text description, an image, or both.")
         notes: list[str] = []
+        early_warnings: list[str] = []
         content: list[dict[str, Any]] = []
         if image is not None and self.two_phase:
             description = self.describe(image, text)
+            if len(description) > MAX_DESCRIPTION_CHARS:
+                early_warnings.append(f"the image description has {len(description)} characters; only the first "
+                                      f"{MAX_DESCRIPTION_CHARS} are passed on.")
+                description = description[:MAX_DESCRIPTION_CHARS]
             notes.append(f"image description ({self.vision_model}): {description}")
             content.append({"type": "text", "text": f"Build this terrain: {description}"})
         elif self.toolset == "gente" and text:  # GenTe sent its prompts as they are
@@ -250,7 +257,7 @@ class OpenAIBackend:
                         {"role": "user", "content": content}]
             tools = tool_schemas(self.size_x, self.size_y, self.registry)
         calls: list[ToolCall] = []
-        warnings: list[str] = []
+        warnings: list[str] = early_warnings
         rejected: list[str] = []
         for round_ in range(self.max_retries + 1):
             resp = self._create(model=self.model, messages=messages, tools=tools, tool_choice=self.tool_choice)
