@@ -239,11 +239,9 @@ class OpenAIBackend:
                 description = description[:MAX_DESCRIPTION_CHARS]
             notes.append(f"image description ({self.vision_model}): {description}")
             content.append({"type": "text", "text": f"Build this terrain: {description}"})
-        elif self.toolset == "gente" and text:  # GenTe sent its prompts as they are
-            content.append({"type": "text", "text": text})
         else:
-            if text:
-                content.append({"type": "text", "text": f"Build this terrain: {text}"})
+            if text:  # GenTe's prompts go as they are, so prompts written for GenTe work unchanged
+                content.append({"type": "text", "text": text if self.toolset == "gente" else f"Build this terrain: {text}"})
             if image is not None:
                 content.append({"type": "text", "text": "Build the terrain shown in this image."})
                 content.append({"type": "image_url", "image_url": {"url": image_data_url(image)}})
@@ -296,5 +294,5 @@ class OpenAIBackend:
             warnings += [f"round {round_ + 1}: rejected: {r}" for r in rejected]
         raise GenerationError(
             f"the model's tool calls were still invalid after {self.max_retries} correction round(s): "
-            + " | ".join(rejected)
+            + " | ".join(rejected[:5]) + (f" | ... and {len(rejected) - 5} more" if len(rejected) > 5 else "")
         )
