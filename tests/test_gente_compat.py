@@ -227,3 +227,8 @@ def test_cli_toolset_gente(tmp_path, capsys):
     assert spec.source["toolset"] == "gente" and [c.region for c in spec.calls] == ["front_left", "back_right"]
     with pytest.raises(SystemExit):
         main(["--text", "x", "--toolset", "gente", "--out", str(tmp_path / "p")])  # the planner has our tools only
+
+
+def test_every_gente_tool_is_in_the_documented_mapping_table():
+    docs = (ROOT / "docs" / "generation.md").read_text()
+    assert all(f"| `{name}(" in docs or f"`{name}(" in docs for name in GENTE_TOOLS)
