@@ -30,7 +30,7 @@ case "$phase" in
     cp "$GENTE_LOG_ROOT/$task/exported/velocity_tracking.png" "$OUT/${task}_velocity_tracking.png"
     ls -t "$(latest_run)"/model_*.pt | head -1 | xargs -I{} cp {} "$OUT/${task}_last.pt" ;;
   eval)
-    python3 -m legged_gente.scripts.evaluate --task "$task" --checkpoint "$(latest_run)" --benchmark benchmarks/gente100 \
+    python3 -m legged_gente.scripts.evaluate --task "$task" --checkpoint "$(latest_run)" --benchmark gente100 \
       --robots_per_terrain "${ROBOTS:-16}" --out "$OUT/eval" --device cuda --no_progress 2>&1 | grep -v "^Module" | tail -12
     # figure (d): success over training on $FIG_ITEMS, from the checkpoints of all runs (resumed runs included)
     if [ -n "${FIG_ITEMS:-}" ]; then

@@ -1,7 +1,7 @@
 """gente-evaluate: a policy on the benchmark's terrains -> per-terrain, per-category and overall metrics.
 
     gente-evaluate --task gente_biped --checkpoint logs/gente_biped/RUN/model_1500.pt \\
-        --benchmark benchmarks/gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
+        --benchmark gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
 
 Writes ``report.json``, ``report.csv`` and ``traces.npz`` (the first robot of every terrain: commands,
 velocities, positions, waypoints) to ``--out``. See docs/evaluation.md for the metrics' definitions.
@@ -55,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, or a run folder (its latest checkpoint)")
     src.add_argument("--exported", help="TorchScript policy.pt exported by gente-play")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
-    p.add_argument("--benchmark", default="benchmarks/gente100", help="benchmark folder with manifest.json")
+    p.add_argument("--benchmark", default="gente100", help="a shipped benchmark (gente100) or a folder with a manifest.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
     p.add_argument("--robots_per_terrain", type=int, default=16)
