@@ -132,8 +132,7 @@ def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "
                     distances=(0.1, 1.0, 5.0, 20.0), device: str = "cpu", episode_s: float = 20.0, **policy) -> Path:
     """Run the waypoint task on one terrain once per reach distance d (one robot) and plot the trajectories."""
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation
-    from legged_gente.scripts.evaluate import load_policy
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
 
     item = load_benchmark(benchmark, [item_id])[0]
     evaluation = Evaluation(task, [item], 1, device, episode_s, "waypoints")
@@ -154,9 +153,8 @@ def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], o
                           device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float | None = None) -> Path:
     """Evaluate up to ``max_checkpoints`` evenly spaced checkpoints of a run on ``item_ids``; plot success vs iteration."""
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
     from legged_gente.evaluation.report import TRACKING_THRESHOLD, success
-    from legged_gente.scripts.evaluate import load_policy
     from legged_gente.utils.checkpoints import _iteration
 
     items = load_benchmark(benchmark, item_ids)

@@ -244,7 +244,7 @@ def main(argv=None) -> int:
     if not args.check:
         return 0
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.checker import check_item
+    from legged_gente.generation.checker import check_item
 
     failed = 0
     for item in load_benchmark(ROOT):
