@@ -12,7 +12,7 @@ import torch
 from legged_gente.evaluation.evaluator import grid_shape
 from legged_gente.evaluation.tasks import WaypointTask, zigzag_waypoints
 
-BENCHMARK = Path(__file__).resolve().parents[1] / "benchmarks" / "gente100"
+BENCHMARK = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks" / "gente100"
 ITEMS = ["text_02_wide_river_strong_current", "image_05_sketch_blocks"]
 
 

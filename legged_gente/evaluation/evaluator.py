@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -230,3 +231,33 @@ class Evaluation:
             traces["waypoints"] = task.waypoints[first].cpu().numpy()
             params |= {"reach_distance": task.reach_distance, "speed": task.speed}
         return RunResult(self.tile.cpu().numpy(), out, traces, self.mode, params)
+
+
+def load_policy(evaluation, checkpoint: str | None = None, exported: str | None = None, baseline: str | None = None):
+    """obs TensorDict -> actions from an rsl-rl checkpoint (file or run folder), a TorchScript file, or a baseline."""
+    env = evaluation.env
+    given = [x for x in (checkpoint, exported, baseline) if x]
+    if len(given) != 1:
+        raise ValueError("give exactly one of --checkpoint (rsl-rl model_N.pt or its run folder), --exported "
+                         "(TorchScript policy.pt from gente-play) or --baseline (zero | random).")
+    if baseline:
+        if baseline == "zero":
+            return lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)
+        if baseline == "random":
+            return lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)
+        raise ValueError(f"--baseline {baseline!r}: use 'zero' or 'random'.")
+    if exported:
+        model = torch.jit.load(exported, map_location=env.device)
+        model.eval()
+        return lambda obs: model(obs["policy"])
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.utils.checkpoints import find_checkpoint
+
+    path = Path(checkpoint)
+    if path.is_dir():
+        path = find_checkpoint(path.parent, path.name)
+    if not path.is_file():
+        raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
+    runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
+    runner.load(str(path), map_location=env.device)
+    return runner.get_inference_policy(device=env.device)
