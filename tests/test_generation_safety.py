@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from legged_gente.external_forces.soil import SOIL_PRESETS
+from legged_gente.terrain.soil import SOIL_PRESETS
 from legged_gente.generation.emit import emit, load_module
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.generation.validation import (

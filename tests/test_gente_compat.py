@@ -180,7 +180,7 @@ def test_gente_toolset_rejects_stacks_beyond_the_bound():
 def test_converter_on_a_made_up_clone(tmp_path):
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "benchmarks/gente_original/build.py")
+    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "legged_gente/benchmarks/gente_original/build.py")
     build = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(build)
     for i, (part, kind) in enumerate([("single_part", "txt"), ("multi_parts", "image")], start=1):
@@ -201,8 +201,9 @@ def test_converter_on_a_made_up_clone(tmp_path):
 def test_the_shipped_benchmark_loads():
     from legged_gente.evaluation.benchmark import load_benchmark
 
-    root = ROOT / "benchmarks" / "gente_original"
-    items = load_benchmark(root)
+    root = ROOT / "legged_gente" / "benchmarks" / "gente_original"
+    items = load_benchmark("gente_original")  # shipped: found by name from any directory
+    assert all(i.spec_path.is_relative_to(root) for i in items)
     summary = json.loads((root / "report.json").read_text())["summary"]
     assert len(items) == summary["imported"] == 200 and {i.kind for i in items} == {"text", "image"}
     assert all(i.prompt is None and i.image is None for i in items)  # no GenTe scene text or photo in the project

@@ -30,7 +30,6 @@ from legged_gente.generation.validation import (
     ToolCall,
     ValidationError,
     parse_json,
-    tile_spec,
     validate_spec_dict,
 )
 from legged_gente.terrain.materials import MaterialMap
@@ -123,15 +122,10 @@ class TerrainSpec:
             raise ValidationError([f"{path}: {m}" for m in exc.messages]) from None
 
     def to_tile_spec(self):
-<<<<<<< HEAD
-        """The terrain library's ``TileSpec``: one ``Part`` per call, in call order."""
-        return tile_spec(self.calls, self.size_x, self.size_y, self.resolution, self.seed)
-=======
         """The terrain library's ``TileSpec``: one ``Part`` per call, in call order (read as training reads it)."""
         from legged_gente.terrain.composition import tile_spec_from_document
 
         return tile_spec_from_document(self.to_dict())
->>>>>>> main
 
     def build(self) -> tuple[np.ndarray, MaterialMap]:
         """Heights (float32 ``(nx, ny)``, metres) and the aligned MaterialMap; deterministic."""

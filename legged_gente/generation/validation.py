@@ -25,7 +25,7 @@ import numpy as np
 from jsonschema import Draft202012Validator
 
 from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_regions
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT, SEAM_BAND, Operation, Part, Region, TileSpec
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT, SEAM_BAND, Region, tile_spec_from_document
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 SPEC_VERSION = 1
@@ -409,15 +409,7 @@ def validate_spec_dict(
     except ValidationError as exc:
         # The interval bound is a worst case; this spec's own seed may stay within the bound: build to know.
         try:
-            tile_spec(calls, data["size_x"], data["size_y"], data["resolution"], data["seed"]).build()
+            tile_spec_from_document(data).build()
         except ValueError as build_exc:
             raise ValidationError([f"spec: {build_exc}"] + [f"spec: {m}" for m in exc.messages]) from None
     return data, calls
-
-
-def tile_spec(calls: list[ToolCall], size_x: float, size_y: float, resolution: float, seed: int):
-    """The terrain library's ``TileSpec`` of validated calls: one ``Part`` per call, in call order."""
-    parts = []
-    for c in calls:
-        parts.append(Part(Region(*c.rect(size_x, size_y)), [Operation(c.tool, dict(c.params), c.mode or "set")]))
-    return TileSpec(size_x, size_y, resolution, int(seed), parts)

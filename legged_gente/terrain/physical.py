@@ -54,7 +54,7 @@ SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
 def _soil_rules(p) -> None:
     if p["preset"] not in SOIL_PRESETS:
         raise ValueError(
-            f"soil: preset {p['preset']!r} is not registered; call legged_gente.external_forces.soil."
+            f"soil: preset {p['preset']!r} is not registered; call legged_gente.terrain.soil."
             f"register_custom_soil({p['preset']!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
             f"first or use one of {sorted(SOIL_PRESETS)}."
         )
@@ -74,15 +74,6 @@ def _soil_rules(p) -> None:
     rules=_soil_rules,
 )
 def soil(shape, resolution, rng, heights, preset):
-<<<<<<< HEAD
-=======
-    if preset not in SOIL_PRESETS:
-        raise ValueError(
-            f"soil: preset {preset!r} is not registered; call legged_gente.terrain.soil."
-            f"register_custom_soil({preset!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
-            f"first or use one of {sorted(SOIL_PRESETS)}."
-        )
->>>>>>> main
     return MaterialPatch(shape=shape, soil=preset)
 
 

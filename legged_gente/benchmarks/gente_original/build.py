@@ -1,7 +1,7 @@
 """Rebuild the gente_original benchmark from a clone of GenTe's repository (github.com/HaronW/GenTe).
 
     git clone https://github.com/HaronW/GenTe /tmp/GenTe
-    python benchmarks/gente_original/build.py --gente /tmp/GenTe
+    python legged_gente/benchmarks/gente_original/build.py --gente /tmp/GenTe
 
 GenTe publishes ``dataset/{single_part,multi_parts}/{txt|text,image}/N/`` with ``data.json`` (the tool calls
 its language/vision models made, in GenTe's tool schema) and ``array.npy`` (the int16 heightmap GenTe built).
