@@ -4,8 +4,9 @@
     python -m legged_gente.generation.score --set DIR --kind photo --split held_out
 
 The set is a folder with ``texts.json`` (``{"items": [{"text", "labels"}]}``) and ``photos/manifest.json``
-(``{"items": [{"file", "labels"}]}``, files relative to ``photos/``). Items alternate between the two halves:
-the 1st, 3rd, ... item is ``tune`` (rules may be adjusted while looking at it), the 2nd, 4th, ... ``held_out``.
+(``{"items": [{"file", "labels"}]}``, files relative to ``photos/``). An item's ``split`` says which half it is
+in: ``tune`` (rules may be adjusted while looking at it) or ``held_out`` (only scored); items without one
+alternate, the 1st, 3rd, ... being ``tune``.
 
 Each item's planner calls are reduced to the terrain *features* a walking robot meets (:data:`FEATURES`,
 defined on the calls by :func:`features`), compared with the item's hand labels, and reported as per-feature
@@ -78,7 +79,9 @@ def load_items(root: Path, kind: str) -> list[dict]:
         bad = sorted(set(item["labels"]) - set(FEATURES))
         if bad:
             raise ValueError(f"{path}: item {i} has unknown label(s) {bad}; labels are {list(FEATURES)}.")
-        item["split"] = "tune" if i % 2 == 0 else "held_out"
+        item.setdefault("split", "tune" if i % 2 == 0 else "held_out")
+        if item["split"] not in ("tune", "held_out"):
+            raise ValueError(f"{path}: item {i} has split {item['split']!r}; use 'tune' or 'held_out'.")
         if kind == "photo":
             item["path"] = path.parent / item["file"]
     return items
@@ -144,7 +147,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--kind", choices=("text", "photo", "all"), default="all")
     parser.add_argument("--split", choices=("tune", "held_out", "all"), default="all",
                         help="which half to report; 'all' reports tune, held_out and both")
-    parser.add_argument("--verbose", action="store_true", help="print every item that is not predicted exactly")
+    parser.add_argument("--verbose", action="store_true", help="print every item of the reported split(s) that is not predicted exactly")
     args = parser.parse_args(argv)
     kinds = ("text", "photo") if args.kind == "all" else (args.kind,)
     try:
@@ -158,7 +161,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.verbose:
                 for item, (pred, n) in zip(items, preds):
                     truth = set(item["labels"])
-                    if pred != truth:
+                    if pred != truth and args.split in ("all", item["split"]):
                         name = item.get("text") or item["file"]
                         print(f"  [{item['split']}] {name!r}: missing {sorted(truth - pred)}, extra {sorted(pred - truth)} ({n} calls)")
     except (FileNotFoundError, ValueError) as exc:
