@@ -495,7 +495,7 @@ def _(s):
     s.sky("overcast", 0.1); s.ground([("tiles", 0, INF, -INF, INF)])
     s.box(-6, 16, 8, 12, hsv(0, 0, 0.55), True); s.box(5, 18, 9, 15, hsv(0, 0, 0.65), True)
 
-@scene("lighthouse_coast", ["tall", "low", "water", "flowing"])
+@scene("lighthouse_coast", ["tall", "low", "water", "flowing", "rough"])
 def _(s):
     s.sky("blue"); s.ground([("gravel", 0, INF, -INF, INF), ("sea", 7, INF, -INF, INF)]); s.lighthouse(6, 14); _rocks(s, 8, zr=(2, 6))
 
@@ -530,7 +530,7 @@ def _(s):
     for side in (-1, 1):
         s.side_wall(side * 9, 6, 60, 12, hsv(s.rng.uniform(20, 50), 0.3, 0.7), True)
 
-@scene("calm_sea_rocks", ["water", "low"])
+@scene("calm_sea_rocks", ["water", "low", "rough"])
 def _(s):
     s.sky("blue", 0.2); s.ground([("gravel", 0, INF, -INF, INF), ("water", 6, INF, -INF, INF)]); _rocks(s, 8, zr=(2, 6))
 
