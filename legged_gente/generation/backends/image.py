@@ -193,6 +193,10 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
 PH, PW = 96, 128  # photo analysis resolution (rows, columns)
 Z_NEAR = 3.0
 """Distance (m) of the ground seen at the bottom of a photo: a camera ~1.6 m high with a ~60 degree view."""
+CAMERA_HEIGHT = 1.6
+"""Eye height (m) of a photo: a thing standing on flat ground whose base is ``b`` rows under the horizon and
+that is ``k`` rows tall is ``CAMERA_HEIGHT * k / b`` metres tall (pinhole camera)."""
+STANDING = 0.5  # m: a compact blob on the ground at least this tall is a tall obstacle (bench, car, block)
 SKY_TEXTURE = 0.03  # brightness spread over 5 x 5 px below which a pixel is smooth enough to be sky
 SKY_MAX_ROW = 0.7  # the sky never reaches below this share of the picture height
 MIN_SHARE = {"water": 0.1, "gravel": 0.3}
@@ -317,7 +321,7 @@ def _stairs(lum: np.ndarray, usable: np.ndarray) -> tuple[int, int] | None:
         runs = np.diff(np.concatenate([[0], edges + 1, [len(dark)]]))
         kinds = [dark[i] for i in np.concatenate([[0], edges + 1])]
         dark_runs = [r for r, k in zip(runs, kinds) if k and r >= 2]
-        contrast = p[~dark].mean() - p[dark].mean() if dark.any() and (~dark).any() else 0.0
+        contrast = float(np.percentile(p, 90) - np.percentile(p, 10))
         if len(dark_runs) >= 5 and contrast > 0.12:
             hits.append(c0)
     runs = np.split(np.array(hits), np.flatnonzero(np.diff(hits) > win) + 1) if hits else []
@@ -342,6 +346,23 @@ def _rock_blobs(lum: np.ndarray, usable: np.ndarray) -> np.ndarray:
         keep[k] = (3 <= size <= 80 and min(width, height) >= 2 and width >= height * 0.8
                    and size >= 0.5 * width * height and width <= 0.2 * lum.shape[1])
     return keep[labels]
+
+
+def _standing(rgb: np.ndarray, ground: np.ndarray, horizon: int, classes: np.ndarray) -> np.ndarray:
+    """Compact blobs below the horizon that stand at least STANDING metres tall (cars, benches, blocks)."""
+    out = np.zeros_like(ground)
+    ref = np.array([np.median(rgb[r][ground[r]], 0) if ground[r].sum() > 8 else np.full(3, np.nan) for r in range(rgb.shape[0])])
+    odd = ground & (np.linalg.norm(rgb - ref[:, None, :], axis=-1) > 0.2) & (classes != SURFACES.index("water"))
+    labels, n = ndimage.label(ndimage.binary_opening(odd))
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        blob = labels[sl] == k
+        rows, cols = blob.shape
+        base = sl[0].stop - horizon
+        if sl[0].stop >= rgb.shape[0] - 1 or base <= 0 or blob.sum() < 10 or blob.mean() < 0.7:
+            continue  # touching the bottom edge (near ground), not on the ground, a speck or a ragged patch
+        if CAMERA_HEIGHT * rows / base >= STANDING and cols >= rows:
+            out[sl] |= blob
+    return out
 
 
 def _is_water(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -394,6 +415,7 @@ def read_photo(img: Image.Image) -> PhotoReading:
             comp = lab == k
             similar = (np.linalg.norm(rgb - rgb[comp].mean(0), axis=-1) < 0.1) & ~sky
             objects |= ndimage.binary_propagation(comp, mask=similar | comp)
+    objects |= _standing(rgb, ~sky & ~objects & (rows >= horizon), horizon, classes)
     ground = ~sky & ~objects & (rows >= horizon)
     surface = np.where(ground, classes, -1)
     if grey:
@@ -419,11 +441,16 @@ def read_photo(img: Image.Image) -> PhotoReading:
         land_beyond = not reaches_horizon and spans and (water[horizon:wrows[0]] & on_tile[horizon:wrows[0]]).mean() < 0.1
         if streak_rows >= 2 or land_beyond:
             flow = "tide" if reaches_horizon else "current"
-    fractions = {name: {sf: float((surface[m] == i).mean()) if m.any() else 0.0 for i, sf in enumerate(SURFACES)}
-                 for name, m in parts.items()}
     water = surface == SURFACES.index("water")
     usable = ground & ~water
     stairs = _stairs(lum, usable)
+    if stairs is not None:  # the flight is built as stairs: its edges are neither gravel nor rocks
+        flight = np.zeros_like(usable)
+        flight[horizon:, stairs[0]:stairs[1]] = True
+        surface[flight & (surface == SURFACES.index("gravel"))] = SURFACES.index("grey")
+        usable &= ~flight
+    fractions = {name: {sf: float((surface[m] == i).mean()) if m.any() else 0.0 for i, sf in enumerate(SURFACES)}
+                 for name, m in parts.items()}
     rocks_mask = _rock_blobs(lum, usable)
     rock_counts = {name: ndimage.label(rocks_mask & m)[1] for name, m in parts.items()}
     tall = {}
