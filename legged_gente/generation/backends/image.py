@@ -366,7 +366,10 @@ def _standing(rgb: np.ndarray, ground: np.ndarray, horizon: int, classes: np.nda
 
 
 def _is_water(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return (h >= 170) & (h < 255) & ((s >= 0.15) | ((s >= 0.08) & (v < 0.6)))
+    """Blue to cyan water. Saturation alone is unreliable on dark pixels (a grey asphalt's slight tint), so the
+    colour must also stand out in absolute terms (chroma = max - min channel)."""
+    chroma = rgb.max(-1) - rgb.min(-1)
+    return (h >= 170) & (h < 255) & ((s >= 0.15) | ((s >= 0.08) & (v < 0.6))) & (chroma >= 0.05)
 
 
 def read_photo(img: Image.Image) -> PhotoReading:
@@ -415,6 +418,7 @@ def read_photo(img: Image.Image) -> PhotoReading:
             comp = lab == k
             similar = (np.linalg.norm(rgb - rgb[comp].mean(0), axis=-1) < 0.1) & ~sky
             objects |= ndimage.binary_propagation(comp, mask=similar | comp)
+        objects = ndimage.binary_fill_holes(objects)  # windows and doors belong to their building
     objects |= _standing(rgb, ~sky & ~objects & (rows >= horizon), horizon, classes)
     ground = ~sky & ~objects & (rows >= horizon)
     surface = np.where(ground, classes, -1)
