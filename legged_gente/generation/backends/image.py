@@ -269,9 +269,8 @@ def _sky_mask(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> t
     return sky, horizon
 
 
-def _classify_ground(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Surface index per pixel from colour and fine texture (first matching rule wins)."""
-    lum = rgb.mean(-1)
+def _classify_ground(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray, lum: np.ndarray) -> np.ndarray:
+    """Surface index per pixel from colour (of a smoothed image) and fine texture (of ``lum``, not smoothed)."""
     fine = _local_std(lum - ndimage.uniform_filter(lum, 3), 3)  # speckle: gravel, pebbles
     rules = [
         ("snow", (s < 0.14) & (v > 0.78)),
@@ -285,6 +284,8 @@ def _classify_ground(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarra
     out = np.full(lum.shape, SURFACES.index("grey"), np.int64)
     done = np.zeros(lum.shape, bool)
     for name, mask in rules:
+        if name == "water":  # water is a coherent surface; scattered blue-ish pixels are colour noise
+            mask = mask & (ndimage.uniform_filter(mask.astype(np.float32), 3) > 0.4)
         take = mask & ~done
         out[take] = SURFACES.index(name)
         done |= take
@@ -383,7 +384,7 @@ def read_photo(img: Image.Image) -> PhotoReading:
     above = ~sky & (rows < horizon)
     # Above the horizon: a hill (slope), clouds and far scenery (ignored), or tall obstacles.
     near_ground = np.median(rgb[int(0.8 * PH):].reshape(-1, 3), 0)
-    classes = _classify_ground(rgb, h, s, v)
+    classes = _classify_ground(rgb, h, s, v, lum)
     near_class = np.bincount(classes[int(0.8 * PH):].ravel(), minlength=len(SURFACES)).argmax()
     gx = np.abs(ndimage.sobel(ndimage.gaussian_filter(lum, 0.7), axis=1)) / 8
     sky_colour = np.median(rgb[sky], 0) if sky.any() else np.ones(3)
