@@ -205,17 +205,19 @@ water is distinctive and matters even as a thin river band; gravel-like speckle 
 DEFAULT_SHARE = 0.25
 MIN_ROCKS = 4  # small dark blobs in a part that make it rocky
 
-SURFACES = ("water", "ice", "snow", "sand", "mud", "grass", "grey", "gravel")
+SURFACES = ("water", "ice", "snow", "sand", "mud", "grass", "grey", "gravel", "forest")
 SURFACE_STEPS: dict[str, tuple[Step, ...]] = {
     "ice": (Step("low_friction", {"preset": "ice"}),),
     "snow": (Step("soil", {"preset": "snow"}),),
     "sand": (Step("soil", {"preset": "dry_sand"}),),
     "mud": (Step("soil", {"preset": "mud"}),),
-    "gravel": (Step("random_uniform", {"amplitude": 0.04, "spacing": 0.1, "platform": 0.0}, mode="add"),),
+    "gravel": (Step("random_uniform", {"amplitude": 0.04, "spacing": 0.1}, mode="add"),),
+    "forest": (Step("pillars", {"height": 3.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.05}, mode="add"),),
     "grass": (),
     "grey": (),
 }
-"""Recipe of each ground surface of a photo per part (water's depends on its flow, see :func:`_water_steps`)."""
+"""Recipe of each ground surface of a photo per part (water's depends on its flow, see :func:`_water_steps`).
+Obstacles keep the registry's default central platform: the robot spawns on level ground, as with text."""
 
 
 @dataclasses.dataclass
@@ -272,12 +274,18 @@ def _sky_mask(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> t
 def _classify_ground(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray, lum: np.ndarray) -> np.ndarray:
     """Surface index per pixel from colour (of a smoothed image) and fine texture (of ``lum``, not smoothed)."""
     fine = _local_std(lum - ndimage.uniform_filter(lum, 3), 3)  # speckle: gravel, pebbles
+    # Trunks in a forest: dark vertical stripes among green, i.e. strong vertical edges, weak horizontal ones.
+    gx = ndimage.uniform_filter(np.abs(ndimage.sobel(lum, axis=1)), 8) / 8
+    gy = ndimage.uniform_filter(np.abs(ndimage.sobel(lum, axis=0)), 8) / 8
+    green = ndimage.uniform_filter(((h >= 58) & (h < 170) & (s >= 0.18)).astype(np.float32), 8) > 0.4
+    trunks = green & (gx > 0.025) & (gx > 1.5 * gy)
     rules = [
         ("snow", (s < 0.14) & (v > 0.78)),
         ("ice", (h >= 170) & (h < 255) & (s >= 0.1) & (s < 0.3) & (v >= 0.62)),
         ("water", _is_water(rgb, h, s, v)),
         ("sand", (h >= 25) & (h < 58) & (s >= 0.16) & (v >= 0.63)),
         ("mud", ((h < 45) | (h >= 340)) & (s >= 0.3) & (v < 0.45)),
+        ("forest", trunks),
         ("grass", (h >= 58) & (h < 170) & (s >= 0.18)),
         ("gravel", (s < 0.3) & (fine > 0.05)),
     ]
@@ -509,7 +517,7 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
     if r.stairs is not None:
         c0, c1 = r.stairs
         y1, y0 = size_y * (1 - c0 / PW), size_y * (1 - c1 / PW)
-        out.append((Step("stairs", {"step_height": 0.15, "step_width": 0.32, "direction": "up", "platform": 1.0}),
+        out.append((Step("stairs", {"step_height": 0.15, "step_width": 0.32, "direction": "up"}),
                     {"region": {"x0": 0.0, "y0": round(y0, 2), "x1": round(size_x, 2), "y1": round(y1, 2)}}))
         notes.append("one flight of stairs ahead")
     for region, surfaces in _merge(per_part):
@@ -523,14 +531,12 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
             strip = (y1 - 2.0, y1) if side == "left" else (y0, y0 + 2.0)
             out.append((Step("flat", {"height": 2.0}), {"region": {"x0": 2.0, "y0": strip[0], "x1": x1, "y1": strip[1]}}))
         else:
-            out.append((Step("pillars", {"height": 3.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.05, "platform": 0.0}, mode="add"),
-                        {"region": "front_" + side}))
+            out.append((SURFACE_STEPS["forest"][0], {"region": "front_" + side}))
         notes.append(f"tall obstacles on the {side} ({'building or wall' if kind == 'block' else 'trees or posts'})")
-    rocky = [k for k, n in r.rocks.items() if n >= MIN_ROCKS]
-    for region, _ in _merge({k: (k in rocky,) for k in r.rocks}):
-        if region in rocky or (region in ("full", "back", "front", "left", "right") and any(k.startswith(region) or k.endswith(region) for k in rocky)):
-            if any(k in rocky for k in r.rocks if region == "full" or region in k):
-                out.append((Step("rocks", {"max_height": 0.15, "min_radius": 0.1, "max_radius": 0.4, "density": 0.5, "platform": 0.0}, mode="add"), {"region": region}))
+    rocky = {k: ("rocks",) if n >= MIN_ROCKS else () for k, n in r.rocks.items()}
+    for region, found in _merge(rocky):
+        if found:
+            out.append((Step("rocks", {"max_height": 0.15, "min_radius": 0.1, "max_radius": 0.4, "density": 0.5}, mode="add"), {"region": region}))
     # geometry first, then materials
     out.sort(key=lambda sr: ATOMIC_TERRAINS[sr[0].tool].kind == "physical")
     return out

@@ -444,15 +444,8 @@ def _steps(cue: Cue, modifiers: list[Modifier]) -> list[Step]:
     return [s for s in cue.steps if not _dropped(s, drops)] + [s for m in modifiers for s in m.extra]
 
 
-def plan_text(
-    text: str,
-    size_x: float = 20.0,
-    size_y: float = 20.0,
-    registry: Mapping[str, AtomicTerrain] | None = None,
-) -> GenerationResult:
-    """Deterministic tool calls for a scene description (see the module docstring for the rules)."""
-    registry = ATOMIC_TERRAINS if registry is None else registry
-    warnings: list[str] = []
+def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], dict[str, list[Modifier]]]:
+    """The cues laid out (at most 4, by first mention) and the modifiers bound to each (negations included)."""
     lower = text.lower()
     cue_mentions, mod_mentions = _scan(lower)
     cues = find_cues(text)
@@ -476,7 +469,29 @@ def plan_text(
             warnings.append(f"modifier '{mention[2].name}' does not apply to {aimed.name if aimed else 'anything'}; ignored.")
         elif mention[2] not in per_cue[target.name]:
             per_cue[target.name].append(mention[2])
-    negated = _negations(lower)
+    for negation in _negations(lower):
+        for _, cue in cues:
+            if negation.applies_to(cue):
+                per_cue[cue.name].append(negation)
+    return cues, per_cue
+
+
+def recipe_steps(text: str) -> list[Step]:
+    """Every recipe step :func:`plan_text` builds for ``text`` (modifiers' drops and extra steps applied)."""
+    cues, per_cue = _bind_all(text, [])
+    return [step for _, cue in cues for step in _steps(cue, per_cue[cue.name])]
+
+
+def plan_text(
+    text: str,
+    size_x: float = 20.0,
+    size_y: float = 20.0,
+    registry: Mapping[str, AtomicTerrain] | None = None,
+) -> GenerationResult:
+    """Deterministic tool calls for a scene description (see the module docstring for the rules)."""
+    registry = ATOMIC_TERRAINS if registry is None else registry
+    warnings: list[str] = []
+    cues, per_cue = _bind_all(text, warnings)
     regions = named_regions(size_x, size_y)
     geometric_calls: list[ToolCall] = []
     physical_calls: list[ToolCall] = []
@@ -484,7 +499,7 @@ def plan_text(
     for i, (_, cue) in enumerate(cues):
         slot_name = SLOT_LAYOUTS[len(cues)][i]
         slot = regions[slot_name]
-        used = per_cue[cue.name] + [n for n in negated if n.applies_to(cue)]
+        used = per_cue[cue.name]
         notes.append(f"{cue.name} on {slot_name}" + (f" ({', '.join(m.name for m in used)})" if used else "")
                      + (f": {cue.note}" if cue.note else ""))
         steps = _steps(cue, used)
