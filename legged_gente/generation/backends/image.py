@@ -236,6 +236,7 @@ class PhotoReading:
     rocks: dict[str, int]  # rock blobs per part
     tall: dict[str, str]  # part -> "block" (building, wall) or "pillars" (trees, posts)
     grey: bool
+    water_band: tuple[float, float] | None  # (near, far) distance from the tile's back edge (m) of water across the view
 
 
 def _sky_mask(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, int]:
@@ -470,7 +471,15 @@ def read_photo(img: Image.Image) -> PhotoReading:
     for side, half in (("left", objects[:, :PW // 2]), ("right", objects[:, PW // 2:])):
         if half.sum() > 0.01 * PH * PW:
             tall[side] = "block" if half.any(0).mean() > 0.6 else "pillars"
-    return PhotoReading(sky, horizon, ground, surface, objects, fractions, flow, slope, stairs, rock_counts, tall, grey)
+    # Water across the whole view (a river, the sea) is one band at its distance, not a share of parts.
+    band_rows = np.flatnonzero((surface == SURFACES.index("water")).mean(1) > 0.5)
+    water_band = None
+    if len(band_rows) and len(band_rows) >= 0.5 * (band_rows[-1] - band_rows[0] + 1):
+        distance = lambda r: Z_NEAR * (PH - horizon) / max(r + 0.5 - horizon, 1e-6) - Z_NEAR  # noqa: E731
+        far = 1e9 if band_rows[0] <= horizon + 0.1 * (PH - horizon) else distance(band_rows[0])
+        water_band = (max(distance(band_rows[-1] + 1), 0.0), far)
+    return PhotoReading(sky, horizon, ground, surface, objects, fractions, flow, slope, stairs, rock_counts, tall, grey,
+                        water_band)
 
 
 def _water_steps(flow: str) -> tuple[Step, ...]:
@@ -520,6 +529,13 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
         out.append((Step("stairs", {"step_height": 0.15, "step_width": 0.32, "direction": "up"}),
                     {"region": {"x0": 0.0, "y0": round(y0, 2), "x1": round(size_x, 2), "y1": round(y1, 2)}}))
         notes.append("one flight of stairs ahead")
+    if r.water_band is not None:
+        near, far = (round(min(d, size_x), 1) for d in r.water_band)
+        if far - near >= 0.5:
+            per_part = {k: tuple(sf for sf in v if sf != "water") for k, v in per_part.items()}
+            region = "full" if (near, far) == (0.0, size_x) else {"x0": near, "y0": 0.0, "x1": far, "y1": size_y}
+            out += [(step, {"region": region}) for step in _water_steps(r.flow)]
+            notes.append(f"water across the view from {near:g} m to {far:g} m ahead ({r.flow})")
     for region, surfaces in _merge(per_part):
         for sf in surfaces:
             steps = _water_steps(r.flow) if sf == "water" else SURFACE_STEPS[sf]
