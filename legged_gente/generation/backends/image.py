@@ -472,7 +472,7 @@ def read_photo(img: Image.Image) -> PhotoReading:
         if half.sum() > 0.01 * PH * PW:
             tall[side] = "block" if half.any(0).mean() > 0.6 else "pillars"
     # Water across the whole view (a river, the sea) is one band at its distance, not a share of parts.
-    band_rows = np.flatnonzero((surface == SURFACES.index("water")).mean(1) > 0.5)
+    band_rows = np.flatnonzero((surface == SURFACES.index("water")).mean(1) > 0.7)
     water_band = None
     if len(band_rows) and len(band_rows) >= 0.5 * (band_rows[-1] - band_rows[0] + 1):
         distance = lambda r: Z_NEAR * (PH - horizon) / max(r + 0.5 - horizon, 1e-6) - Z_NEAR  # noqa: E731
