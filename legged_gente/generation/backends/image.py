@@ -9,21 +9,22 @@ Two kinds of images, told apart by :func:`is_sketch`:
   flat almost everywhere (a photo has noise, texture and gradients even where it is grey).
 * **Photos**, read in perspective as a person standing at the back edge of the tile looking along +x:
 
-  1. *Sky*: smooth, bright or bluish / grey / sunset-coloured pixels connected to the top edge, contiguous
-     down each column, are dropped; nothing above the horizon is ever read as ground (so a blue sky cannot
-     become water, nor a white one snow).
-  2. *Horizon*: the lowest skyline over most columns. Non-sky things rising above it are far scenery (a thin,
-     full-width band: tree line, distant mountains), a *hill* (a wide smooth ridge or a tilted hillside the
-     colour of the ground below it: a slope), or *tall obstacles* (trees, buildings, walls, towers).
+  1. *Sky*: smooth, bright or bluish / grey / sunset-coloured regions connected to the top edge (or large ones
+     starting in the top rows) are dropped; nothing above the horizon is ever read as ground (so a blue sky
+     cannot become water, nor a white one snow).
+  2. *Horizon*: where the sky ends in the columns that show most of it. Non-sky things rising above it are
+     clouds or far scenery (hazy ridges, a thin band: tree line, skyline), a *hill* (a wide smooth-edged region
+     of the near ground's surface: a slope), or *tall obstacles* (trees, buildings, walls, towers); below it,
+     compact blobs standing at least ``STANDING`` m tall (cars, benches, blocks) are tall obstacles too.
   3. *Ground*: below the horizon, row ``r`` sees the ground at distance ``Z = Z_NEAR * (bottom - horizon) /
      (r - horizon)`` (a pinhole camera over flat ground), so the tile's back half (``Z < Z_NEAR + size_x / 2``)
      is the lower part of the picture and its front half a thin band under the horizon. Pixels are classified
-     by colour (water, ice, snow, sand, mud, grass, grey ground) and texture (gravel: rough).
-  4. *Cues*: foam, wave crests and a water band with land beyond it (a river) make water flow; small dark
-     blobs with their shadows on the ground are rocks (low obstacles); a run of regular, thick horizontal
-     bands is one flight of stairs.
+     by colour (water, ice, snow, sand, mud, grass, grey ground) and texture (gravel: rough; trunks: trees).
+  4. *Cues*: foam, wave crests and a water band with land beyond it (a river) make water flow; water across
+     the view is one band at its distance; small dark blobs with their shadows on the ground are rocks (low
+     obstacles); a run of regular, thick horizontal bands is one flight of stairs.
   5. *Layout*: GenTe's four parts (back/front x left/right); each part takes its dominant surface, and equal
-     neighbouring parts are merged, so a photo gives 3-20 calls.
+     neighbouring parts are merged, so a photo gives a few calls (at most ``MAX_CALLS``).
 
 A greyscale photo has no colours to read: only sky, horizon, obstacles, stairs, rocks and roughness are found,
 with a warning.
@@ -514,7 +515,10 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
     per_part: dict[str, tuple[str, ...]] = {}
     for name, frac in r.parts.items():
         ranked = sorted(frac, key=lambda k: -frac[k])
-        chosen = tuple(sorted(k for k in ranked if frac[k] >= MIN_SHARE.get(k, DEFAULT_SHARE) or (k == ranked[0] and frac[k] > 0)))
+        # The dominant surface and at most one more: with the base, slope, stairs, a water band, 2 tall and 4
+        # rock calls this bounds a photo to 1 + 1 + 1 + 1 + 4 * 2 + 2 + 4 = 18 <= MAX_CALLS calls.
+        kept = [k for k in ranked if frac[k] >= MIN_SHARE.get(k, DEFAULT_SHARE) or (k == ranked[0] and frac[k] > 0)]
+        chosen = tuple(sorted(kept[:2]))
         per_part[name] = chosen
     notes.append("parts: " + "; ".join(f"{k} {'+'.join(v) or 'nothing'}" for k, v in per_part.items()))
     grey_share = np.mean([f["grey"] for f in r.parts.values()])
@@ -553,8 +557,6 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
     for region, found in _merge(rocky):
         if found:
             out.append((Step("rocks", {"max_height": 0.15, "min_radius": 0.1, "max_radius": 0.4, "density": 0.5}, mode="add"), {"region": region}))
-    # geometry first, then materials
-    out.sort(key=lambda sr: ATOMIC_TERRAINS[sr[0].tool].kind == "physical")
     return out
 
 

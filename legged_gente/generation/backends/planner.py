@@ -386,10 +386,6 @@ def find_cues(text: str) -> list[tuple[int, Cue]]:
     return sorted(first.values(), key=lambda pc: (pc[0], pc[1].name))
 
 
-def find_modifiers(text: str) -> list[tuple[int, Modifier]]:
-    return [(start, mod) for start, _, mod in _scan(text.lower())[1]]
-
-
 def _bind(text: str, mod: Mention, cue_mentions: list[Mention]) -> tuple[Cue | None, Cue | None]:
     """(cue the modifier changes, cue it was aimed at) for one modifier mention (module docstring's rule)."""
     start, end, modifier = mod
