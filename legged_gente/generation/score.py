@@ -1,6 +1,6 @@
 """Score the offline planner on a labelled evaluation set of scene texts and photos.
 
-    python -m legged_gente.generation.score                       # benchmarks/generation_eval, both halves
+    python -m legged_gente.generation.score                       # legged_gente/benchmarks/generation_eval
     python -m legged_gente.generation.score --set DIR --kind photo --split held_out
 
 The set is a folder with ``texts.json`` (``{"items": [{"text", "labels"}]}``) and ``photos/manifest.json``
@@ -33,7 +33,8 @@ step over (``tall``, >= 0.3 m) or can (``low``), stairs, slopes, and rough (unev
 TALL = 0.3
 """Height (m) from which an obstacle counts as ``tall``: about the knee of the ~1 m biped."""
 
-DEFAULT_SET = Path(__file__).resolve().parents[2] / "benchmarks" / "generation_eval"
+DEFAULT_SET = Path(__file__).resolve().parents[1] / "benchmarks" / "generation_eval"
+"""The set in a source checkout (it is not package data: a development tool, 1.2 MB of pictures)."""
 
 
 def features(calls: Iterable[ToolCall], size_x: float = 20.0, size_y: float = 20.0) -> set[str]:

@@ -1,6 +1,6 @@
 """Render the photo half of the planner's evaluation set: perspective scenes drawn with numpy and PIL.
 
-    python benchmarks/generation_eval/render.py        # rewrite photos/*.png|jpg and photos/manifest.json
+    python legged_gente/benchmarks/generation_eval/render.py   # rewrite photos/*.png|jpg and photos/manifest.json
 
 Each scene of :data:`SCENES` is written by hand: what is in it (sky, ground surfaces by distance, water,
 objects standing on the ground) and its labels (what a walking robot meets on the 20 m in front of the

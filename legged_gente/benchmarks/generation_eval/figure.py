@@ -1,6 +1,6 @@
 """Draw docs/img/gen_photos.png: eight evaluation photos next to the terrains the offline planner builds.
 
-    python benchmarks/generation_eval/figure.py
+    python legged_gente/benchmarks/generation_eval/figure.py
 
 Each terrain preview is turned so that it matches the photo: the tile's front (+x) at the top, its left (+y)
 on the left; the robot starts at the bottom edge, where the camera stands.
@@ -18,7 +18,7 @@ from legged_gente.generation.spec import TerrainSpec
 from legged_gente.terrain.terrain import preview_rgb
 
 HERE = Path(__file__).resolve().parent
-OUT = HERE.parents[1] / "docs" / "img" / "gen_photos.png"
+OUT = HERE.parents[2] / "docs" / "img" / "gen_photos.png"
 PICKS = ("00_beach_waves.png", "02_river_crossing.jpg", "06_city_street.png", "08_stone_stairs.jpg",
          "11_grassy_hill.jpg", "17_rocky_field.jpg", "27_fountain_square.png", "04_snowy_forest.png")
 W, H = 160, 120
