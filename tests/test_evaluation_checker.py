@@ -10,7 +10,7 @@ from legged_gente.generation.pipeline import generate_spec
 from legged_gente.generation.validation import ToolCall
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
 
-PROMPT = "a knee-deep river crossing a meadow"
+PROMPT = "a knee-deep river crossing a meadow with trees and muddy banks"
 
 
 @pytest.fixture(scope="module")

@@ -1,47 +1,133 @@
-"""The image planner on synthesised photos and a colour-coded sketch map."""
+"""The image planner: sketch maps by their legend, photos in perspective (sky dropped, near = bottom)."""
 
 from __future__ import annotations
 
 import io
+import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from legged_gente.generation.backends.image import LEGEND, OBSTACLE_HEIGHT, plan_image
+from legged_gente.generation.backends.image import LEGEND, MAX_CALLS, OBSTACLE_HEIGHT, is_sketch, plan_image, read_photo
+from legged_gente.generation.score import DEFAULT_SET, features
 from legged_gente.generation.spec import TerrainSpec
 
 H, W = 120, 160
+PHOTOS = DEFAULT_SET / "photos"
+MANIFEST = json.loads((PHOTOS / "manifest.json").read_text())["items"]
 
 
-def _noisy(a, sigma, seed=0):
+def _png(a, fmt="PNG"):
+    buf = io.BytesIO()
+    Image.fromarray(np.asarray(a, np.uint8)).save(buf, format=fmt)
+    return buf.getvalue()
+
+
+def _photo(sky_top, sky_low, ground, horizon=45, noise=6.0, seed=0, sea=None):
+    """A plain eye-level photo: a vertical sky gradient over a textured ground (optionally a sea band)."""
     rng = np.random.default_rng(seed)
-    return np.clip(a + rng.normal(0, sigma, a.shape), 0, 255).astype(np.uint8)
-
-
-def beach_photo():
     im = np.zeros((H, W, 3), np.float32)
-    im[:30] = (150, 200, 250)  # smooth sky
-    im[30:70] = (20, 80, 170)  # sea
-    im[70:] = (225, 200, 140)  # sand
-    out = _noisy(im, 10)
-    out[:30] = im[:30].astype(np.uint8)
-    return out
+    t = (np.arange(horizon) / horizon)[:, None, None]
+    im[:horizon] = np.asarray(sky_top) * (1 - t) + np.asarray(sky_low) * t
+    im[horizon:] = ground
+    im[horizon:] += rng.normal(0, 18, (H - horizon, W, 3))  # ground texture
+    if sea is not None:
+        im[horizon:sea] = (30, 90, 160)
+        for r in range(horizon + 2, sea, 4):  # wave crests: pale streaks across the view
+            im[r:r + 2] = (215, 230, 240)
+    return np.clip(im + rng.normal(0, noise, im.shape), 0, 255).astype(np.uint8)
 
 
-def city_stairs_photo():
-    im = np.full((H, W, 3), 140, np.float32)  # grey pavement
-    for r in range(20, 110):
-        im[r, 30:130] = 90 if (r // 6) % 2 else 190  # lit treads and shaded risers
-    return _noisy(im, 4)
+def _tools(result):
+    return [c.tool for c in result.calls]
 
 
-def forest_photo():
-    im = np.zeros((H, W, 3), np.float32)
-    im[:] = (40, 140, 50)
-    for c in range(5, W, 20):
-        im[:, c:c + 5] = (60, 40, 20)  # dark trunks
-    return _noisy(im, 15)
+SKIES = {
+    "blue": ((40, 90, 200), (170, 210, 250)),
+    "white": ((235, 235, 238), (250, 250, 252)),
+    "overcast": ((150, 152, 158), (200, 202, 206)),
+    "sunset": ((70, 50, 120), (250, 160, 70)),
+    "dusk": ((15, 25, 70), (90, 120, 160)),
+}
+GROUNDS = {"grass": (70, 130, 50), "asphalt": (80, 80, 84), "dirt": (140, 110, 75)}
+
+
+@pytest.mark.parametrize("sky", SKIES)
+@pytest.mark.parametrize("ground", GROUNDS)
+def test_sky_never_becomes_water_or_snow(sky, ground):
+    r = plan_image(_png(_photo(*SKIES[sky], GROUNDS[ground])))
+    assert not {"water", "snow"} & features(r.calls), (sky, ground, r.notes)
+    assert "read as a colour-coded sketch map" not in r.notes
+
+
+def test_no_eval_photo_reads_its_sky_as_ground():
+    """In every photo of the evaluation set, nothing above the horizon is classified as a ground surface."""
+    for item in MANIFEST:
+        r = read_photo(Image.open(PHOTOS / item["file"]).convert("RGB"))
+        assert (r.surface[: r.horizon] == -1).all(), item["file"]
+        assert not (r.surface[r.sky] >= 0).any(), item["file"]
+
+
+def test_photo_calls_are_bounded_and_build():
+    for item in MANIFEST[::4]:
+        r = plan_image(PHOTOS / item["file"])
+        assert 1 <= len(r.calls) <= MAX_CALLS, item["file"]
+        heights, _ = TerrainSpec(r.calls).build()
+        assert np.isfinite(heights).all()
+
+
+def test_beach_is_read_in_perspective_with_waves():
+    # horizon at row 40, sea rows 40-58 (far: beyond ~13 m), sand below (near the camera)
+    r = plan_image(_png(_photo(*SKIES["blue"], (225, 200, 140), horizon=40, sea=58)))
+    water = [c for c in r.calls if c.tool == "water"]
+    sand = [c for c in r.calls if c.tool == "soil" and c.params["preset"] == "dry_sand"]
+    assert water and sand
+    # The sea's near edge, 18 rows under the horizon of 80 ground rows, is Z = 3 m * 80 / 18 = 13 m from the
+    # camera, 10 m from the tile's back edge (a pixel or two of blur either way: 8-11 m); it reaches the horizon.
+    assert [(round(c.rect(20, 20)[2]), 8 <= c.rect(20, 20)[0] <= 11) for c in water] == [(20, True)]
+    assert any(c.rect(20, 20)[0] == 0.0 for c in sand)  # the sand is at the back, where the robot starts
+    assert {c.params["flow"] for c in water} == {"tide"}  # crests on water that reaches the horizon
+    heights, material = TerrainSpec(r.calls).build()
+    assert material.has_water()[150:].all() and not material.has_water()[:80].any()
+
+
+def test_calm_sea_is_still():
+    calm = _photo(*SKIES["blue"], (225, 200, 140), horizon=40, seed=1)
+    calm[40:58] = np.clip(np.array((30, 90, 160)) + np.random.default_rng(2).normal(0, 4, (18, W, 3)), 0, 255)
+    r = plan_image(_png(calm))
+    assert {c.params["flow"] for c in r.calls if c.tool == "water"} == {"still"}
+
+
+def test_grey_photo_is_not_a_sketch_but_a_sketch_is():
+    grey = _photo(*SKIES["overcast"], GROUNDS["asphalt"], noise=3.0)
+    assert not is_sketch(Image.open(io.BytesIO(_png(grey))))
+    smooth_grey = np.zeros((H, W, 3), np.uint8)
+    smooth_grey[:50] = np.linspace(150, 215, 50)[:, None, None]  # overcast sky gradient, no noise
+    smooth_grey[50:] = 128  # pavement grey, exactly the legend's
+    smooth_grey[50:] += np.random.default_rng(0).integers(0, 20, (H - 50, W, 1)).astype(np.uint8)
+    assert not is_sketch(Image.fromarray(smooth_grey))
+    assert is_sketch(Image.open(io.BytesIO(_png(sketch_map(), fmt="JPEG"))))
+
+
+def test_stairs_photo_gives_one_flight():
+    for name in ("08_stone_stairs.jpg", "44_grey_concrete_stairs.jpg"):
+        r = plan_image(PHOTOS / name)
+        stairs = [c for c in r.calls if c.tool == "stairs"]
+        assert len(stairs) == 1, name
+        x0, _, x1, _ = stairs[0].rect(20, 20)
+        assert x1 - x0 == 20.0  # one flight along the walking direction, not patches
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("02_river_crossing.jpg", {"water", "flowing"}),
+    ("11_grassy_hill.jpg", {"slope"}),
+    ("06_city_street.png", {"tall"}),
+    ("18_rubble.png", {"low"}),
+])
+def test_photo_cues(name, expected):
+    assert expected <= features(plan_image(PHOTOS / name).calls)
 
 
 def sketch_map():
@@ -53,39 +139,10 @@ def sketch_map():
     return im
 
 
-def _png(a):
-    buf = io.BytesIO()
-    Image.fromarray(a).save(buf, format="PNG")
-    return buf.getvalue()
-
-
-def test_beach_photo_has_water_at_the_front_and_sand_at_the_back():
-    r = plan_image(_png(beach_photo()))
-    water = [c for c in r.calls if c.tool == "water"]
-    sand = [c for c in r.calls if c.tool == "soil" and c.params["preset"] == "dry_sand"]
-    assert water and sand and any("sky" in n for n in r.notes)
-    assert min(c.rect(20, 20)[0] for c in water) > max(c.rect(20, 20)[0] for c in sand)  # sea is farther (+x)
-    heights, material = TerrainSpec(r.calls).build()
-    assert material.has_water()[150:].mean() > 0.8 and not material.has_water()[:50].any()
-
-
-def test_city_stairs_photo_has_stairs():
-    r = plan_image(_png(city_stairs_photo()))
-    assert "stairs" in [c.tool for c in r.calls]
-    assert "water" not in [c.tool for c in r.calls]
-
-
-def test_forest_photo_has_trees():
-    r = plan_image(_png(forest_photo()))
-    assert "pillars" in [c.tool for c in r.calls]
-    heights, _ = TerrainSpec(r.calls).build()
-    assert heights.max() > 2.0  # trunks stand up
-
-
 def test_sketch_map_is_read_by_its_legend():
     r = plan_image(_png(sketch_map()))
     assert "read as a colour-coded sketch map" in r.notes
-    tools = [c.tool for c in r.calls]
+    tools = _tools(r)
     assert {"water", "stairs", "flat"} <= set(tools) and "pillars" not in tools
     water = [c.rect(20, 20) for c in r.calls if c.tool == "water"]
     # water: the left 60/160 of the width (y > 12.5 m), all along x except the sand in the back-left corner
@@ -103,15 +160,18 @@ def test_sketch_map_is_read_by_its_legend():
 
 
 def test_image_planner_is_deterministic_and_rejects_garbage():
-    a, b = plan_image(_png(forest_photo())), plan_image(_png(forest_photo()))
+    a, b = plan_image(PHOTOS / MANIFEST[5]["file"]), plan_image(PHOTOS / MANIFEST[5]["file"])
     assert a.calls == b.calls
     with pytest.raises(ValueError, match="could not be read"):
         plan_image(b"not an image")
 
 
-def test_docs_list_the_legend():
-    from pathlib import Path
+def test_greyscale_photo_warns():
+    grey = _photo(*SKIES["blue"], GROUNDS["grass"]).mean(-1, keepdims=True).repeat(3, -1)
+    assert any("greyscale photo" in w for w in plan_image(_png(grey)).warnings)
 
+
+def test_docs_list_the_legend():
     doc = (Path(__file__).parents[1] / "docs" / "generation.md").read_text()
     for name, legend in LEGEND.items():
         r, g, b = legend.rgb

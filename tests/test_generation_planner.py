@@ -7,7 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from legged_gente.generation.backends.planner import CUES, MODIFIERS, Modifier, Step, _apply, plan_text
+from legged_gente.generation.backends.planner import CUES, MODIFIERS, NEGATED, Modifier, Step, _apply, plan_text
+from legged_gente.generation.score import features
 from legged_gente.generation.spec import TerrainSpec, text_source
 from legged_gente.generation.tools import tool_schemas
 from legged_gente.generation.validation import ValidationError, validate_call
@@ -38,18 +39,18 @@ def _tools(text):
 SCENES = {
     "a sandy beach on the shore": {"water", "soil"},
     "a river to cross": {"river", "water"},
-    "a small stream in a meadow": {"river", "water", "natural_ground", "pillars"},
+    "a small stream in a meadow": {"river", "water", "natural_ground"},
     "a calm lake": {"pit", "water"},
     "desert dunes": {"hills", "soil"},
     "a dense forest": {"pillars", "natural_ground"},
     "a city street with stairs": {"flat", "stairs"},
     "ruins and rubble": {"discrete_obstacles", "rocks"},
-    "a construction site": {"discrete_obstacles", "pit", "soil"},
+    "a construction site": {"flat", "pit", "soil"},
     "fresh snow": {"soil", "natural_ground"},
     "an icy path": {"low_friction"},
     "a muddy swamp": {"soil", "water"},
     "rolling hills": {"hills"},
-    "a mountain trail": {"hills", "rocks"},
+    "a mountain trail": {"hills", "natural_ground"},
     "a cave": {"rocks", "low_friction"},
 }
 
@@ -143,3 +144,50 @@ def test_spec_load_errors_are_precise(tmp_path):
         TerrainSpec.load(path)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         TerrainSpec.load(tmp_path / "missing.json")
+
+
+def test_tall_qualifies_trees_not_slopes():
+    calls = plan_text("tall trees in a quiet forest").calls
+    assert not [c for c in calls if c.tool in ("hills", "pyramid_slope", "stairs")]
+    heights = sorted({c.params["height"] for c in calls if c.tool == "pillars"})
+    assert heights == [3.0, 4.5]  # the trees' pillars are 1.5 x taller; the forest's keep 3 m
+    assert plan_text("a field of tall grass").warnings == ["modifier 'tall' does not apply to grass; ignored."]
+
+
+def test_state_words_change_the_water():
+    assert features(plan_text("a frozen stream").calls) == {"ice"}  # no flowing water under the ice
+    assert "water" not in features(plan_text("a frozen lake").calls)
+    assert "water" not in features(plan_text("a dry riverbed").calls)
+    river = [c.params for c in plan_text("a calm lake next to a river").calls if c.tool == "water"]
+    assert sorted(p["flow"] for p in river) == ["current", "still"]  # calm binds to the lake only
+
+
+def test_shore_is_not_a_tidal_beach():
+    calls = plan_text("a grassy shore").calls
+    assert features(calls) == {"water"}
+    assert {c.params["flow"] for c in calls if c.tool == "water"} == {"still"}
+
+
+@pytest.mark.parametrize("word", ["building", "wall", "fence", "benches", "fountain", "cliff", "lighthouse",
+                                  "lamp posts", "parked cars", "hedge", "statue", "houses"])
+def test_structures_and_street_furniture_are_tall_obstacles(word):
+    result = plan_text(f"a street with a {word}")
+    assert "tall" in features(result.calls) and result.warnings == []
+
+
+def test_negated_nouns_remove_parts_of_recipes():
+    assert "sand" not in features(plan_text("a beach without sand").calls)
+    calm = plan_text("a beach with no waves").calls
+    assert {c.params["flow"] for c in calm if c.tool == "water"} == {"still"}
+    assert "snow" not in features(plan_text("a frozen lake with no snow on it").calls)
+    assert set(NEGATED) >= {"sand", "snow", "water", "waves"}
+
+
+def test_modifier_binds_to_the_following_noun():
+    calls = plan_text("icy stone steps by a calm sea").calls
+    stairs = [c.rect(20, 20) for c in calls if c.tool == "stairs"]
+    ice = [c.rect(20, 20) for c in calls if c.tool == "low_friction"]
+    assert stairs == ice  # the ice lies on the steps, not on the sea
+    assert {c.params["flow"] for c in calls if c.tool == "water"} == {"still"}
+    snowy = plan_text("a snowy hillside dotted with pine trees").calls
+    assert [c.params["preset"] for c in snowy if c.tool == "soil"] == ["snow"]

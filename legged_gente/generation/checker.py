@@ -1,8 +1,8 @@
 """Rejects benchmark items that are empty, out of bounds, untraversable at the spawn, or miss what they name.
 
 What an item *names* comes from the generation planner's own vocabulary, never from a second table:
-a text prompt names the tools of the planner cues and modifiers it mentions (``find_cues``,
-``find_modifiers``: "river" -> natural_ground, river, soil, water; "slippery" -> low_friction); an image item
+a text prompt names the tools the planner's recipes build for it (``recipe_steps``: its cues with their
+modifiers applied: "river" -> natural_ground, river, water; "slippery" -> low_friction); an image item
 names the tools of the ``LEGEND`` classes its picture was drawn with. Each named tool must appear in the
 spec *and* be visible in the built tile inside that call's rectangle (water cells, soil cells, lowered
 friction, or relief for geometry).
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from legged_gente.generation.backends.image import LEGEND
-from legged_gente.generation.backends.planner import Step, find_cues, find_modifiers
+from legged_gente.generation.backends.planner import Step, recipe_steps
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
@@ -52,8 +52,7 @@ def required_tools(prompt: str | None = None, names: tuple[str, ...] = ()) -> li
     """Tools a prompt's planner cues/modifiers or an image's LEGEND classes ask for (sorted, unique)."""
     steps: list[Step] = []
     if prompt:
-        steps += [s for _, cue in find_cues(prompt) for s in cue.steps]
-        steps += [s for _, mod in find_modifiers(prompt) for s in mod.extra]
+        steps += recipe_steps(prompt)
     for name in names:
         if name not in LEGEND:
             raise ValueError(f"image class {name!r} is not in the planner LEGEND {sorted(LEGEND)}.")

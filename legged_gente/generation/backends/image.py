@@ -1,21 +1,33 @@
-"""The ``planner`` backend for images: colour, texture and brightness analysis -> terrain tool calls.
+"""The ``planner`` backend for images: sketch maps and photos -> terrain tool calls, without a model.
 
-The image is read as a map of the tile seen from above: its top edge is the tile's front (+x), its left
-edge the tile's left (+y); a photo taken at eye level maps the same way (near ground at the bottom = the
-back of the tile, where the robot starts), after the sky above the horizon is cut off.
+Two kinds of images, told apart by :func:`is_sketch`:
 
-Two kinds of images:
+* **Sketch maps**: the tile seen from above, painted with the flat colours of :data:`LEGEND` (any paint
+  program): top edge = front (+x), left edge = left (+y). Every pixel takes the class of the nearest legend
+  colour, the classes are pooled into blocks and covered by rectangles, and black blobs become raised blocks at
+  their exact place. A sketch is an image whose pixels almost all lie *tightly* on legend colours *and* that is
+  flat almost everywhere (a photo has noise, texture and gradients even where it is grey).
+* **Photos**, read in perspective as a person standing at the back edge of the tile looking along +x:
 
-* **Sketch maps** drawn with the colours of :data:`LEGEND` (any paint program): every pixel is given the
-  class of the nearest legend colour. An image is a sketch when almost all of its pixels lie close to a
-  legend colour.
-* **Photos**: pixels are classified by hue, saturation and brightness (HSV rules below); texture (local
-  brightness spread) tells a forest with trunks from grass, rubble from pavement; regular horizontal edges
-  in grey areas are stairs; a strong linear brightness gradient over the ground is read as a slope.
+  1. *Sky*: smooth, bright or bluish / grey / sunset-coloured regions connected to the top edge (or large ones
+     starting in the top rows) are dropped; nothing above the horizon is ever read as ground (so a blue sky
+     cannot become water, nor a white one snow).
+  2. *Horizon*: where the sky ends in the columns that show most of it. Non-sky things rising above it are
+     clouds or far scenery (hazy ridges, a thin band: tree line, skyline), a *hill* (a wide smooth-edged region
+     of the near ground's surface: a slope), or *tall obstacles* (trees, buildings, walls, towers); below it,
+     compact blobs standing at least ``STANDING`` m tall (cars, benches, blocks) are tall obstacles too.
+  3. *Ground*: below the horizon, row ``r`` sees the ground at distance ``Z = Z_NEAR * (bottom - horizon) /
+     (r - horizon)`` (a pinhole camera over flat ground), so the tile's back half (``Z < Z_NEAR + size_x / 2``)
+     is the lower part of the picture and its front half a thin band under the horizon. Pixels are classified
+     by colour (water, ice, snow, sand, mud, grass, grey ground) and texture (gravel: rough; trunks: trees).
+  4. *Cues*: foam, wave crests and a water band with land beyond it (a river) make water flow; water across
+     the view is one band at its distance; small dark blobs with their shadows on the ground are rocks (low
+     obstacles); a run of regular, thick horizontal bands is one flight of stairs.
+  5. *Layout*: GenTe's four parts (back/front x left/right); each part takes its dominant surface, and equal
+     neighbouring parts are merged, so a photo gives a few calls (at most ``MAX_CALLS``).
 
-The class map is pooled into blocks of about 2 m; the blocks of each class are covered by rectangles, and
-each rectangle gets its class's recipe of tool calls (validated against the registry). Black blobs of a
-sketch become raised blocks at their exact place.
+A greyscale photo has no colours to read: only sky, horizon, obstacles, stairs, rocks and roughness are found,
+with a warning.
 """
 
 from __future__ import annotations
@@ -31,13 +43,14 @@ from scipy import ndimage
 
 from legged_gente.generation.backends import GenerationResult
 from legged_gente.generation.backends.planner import KNEE_HEIGHT, Step
+from legged_gente.generation.tools import named_regions
 from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 
 @dataclasses.dataclass(frozen=True)
 class Legend:
-    """One surface class: its sketch colour (RGB), what it means, and its recipe per rectangle."""
+    """One surface class of a sketch map: its colour (RGB), what it means, and its recipe per rectangle."""
 
     rgb: tuple[int, int, int]
     meaning: str
@@ -70,30 +83,34 @@ LEGEND: dict[str, Legend] = {
     )),
 }
 CLASSES = list(LEGEND)
-SKETCH_TOLERANCE = 60.0
+SKETCH_TOLERANCE = 24.0
 """Largest RGB distance of a sketch pixel from its legend colour (antialiasing, JPEG noise)."""
-SKETCH_FRACTION = 0.9
-"""An image whose pixels lie within the tolerance of a legend colour at least this often is a sketch."""
+SKETCH_FRACTION = 0.85
+"""A sketch has at least this share of its pixels within the tolerance of a legend colour ..."""
+SKETCH_FLAT = 0.6
+"""... and at least this share of pixels whose 3 x 3 neighbourhood varies by less than FLAT_RANGE."""
+FLAT_RANGE = 12.0
 
-GRID = 96  # analysis resolution (pixels per image side)
-BLOCK = 8  # pixels per block of a photo: 12 blocks per side (1.7 m on a 20 m tile); sketches use half
+GRID = 96  # sketch analysis resolution (pixels per side)
+SKETCH_BLOCK = 4  # pixels per block of a sketch: 24 blocks per side (0.8 m on a 20 m tile)
+MIN_FRACTION = 0.02  # a sketch class covering less of the image is ignored
+MAX_CALLS = 20
+"""Most calls a photo gives (GenTe asks for 3-20)."""
 
-MIN_FRACTION = 0.02  # a class covering less of the image is ignored
 
-
-def _load(image: str | Path | bytes | Image.Image) -> tuple[Image.Image, bytes | None]:
+def _load(image: str | Path | bytes | Image.Image) -> Image.Image:
     if isinstance(image, Image.Image):
-        return image.convert("RGB"), None
+        return image.convert("RGB")
     data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
     try:
-        return Image.open(io.BytesIO(data)).convert("RGB"), data
+        return Image.open(io.BytesIO(data)).convert("RGB")
     except Exception as exc:  # Pillow raises several types for unreadable data
         raise ValueError(f"the image could not be read ({exc}); pass a PNG or JPEG file.") from None
 
 
 def _hsv(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Hue (degrees), saturation and value in [0, 1] of float RGB in [0, 1]."""
-    hsv = np.asarray(Image.fromarray((rgb * 255).astype(np.uint8)).convert("HSV"), np.float32) / 255.0
+    hsv = np.asarray(Image.fromarray((np.clip(rgb, 0, 1) * 255).astype(np.uint8)).convert("HSV"), np.float32) / 255.0
     return hsv[..., 0] * 360.0, hsv[..., 1], hsv[..., 2]
 
 
@@ -109,48 +126,13 @@ def _local_std(x: np.ndarray, size: int) -> np.ndarray:
     return np.sqrt(np.maximum(ndimage.uniform_filter(x * x, size, mode="nearest") - mean * mean, 0.0))
 
 
-def _classify_photo(rgb: np.ndarray) -> np.ndarray:
-    """Class index per pixel of a photo from HSV rules (first matching rule wins)."""
-    h, s, v = _hsv(rgb)
-    lum = rgb.mean(-1)
-    # Colour texture: spread of all three channels over a block (dark trunks in foliage, stones in gravel).
-    texture = np.sqrt(sum(_local_std(rgb[..., c], BLOCK) ** 2 for c in range(3)))
-    gy = np.abs(ndimage.sobel(lum, axis=0))
-    gx = np.abs(ndimage.sobel(lum, axis=1))
-    gy_b, gx_b = ndimage.uniform_filter(gy, BLOCK), ndimage.uniform_filter(gx, BLOCK)
-    grey = s < 0.18
-    rules = [
-        ("obstacle", v < 0.15),
-        ("stairs", grey & (gy_b > 0.25) & (gy_b > 3.0 * gx_b)),  # regular horizontal edges: step nosings
-        ("snow", (s < 0.12) & (v > 0.85)),
-        ("ice", (h >= 170) & (h < 200) & (s >= 0.12) & (s < 0.5) & (v > 0.7)),
-        ("water", (h >= 180) & (h < 260) & (s >= 0.25)),
-        ("sand", (h >= 35) & (h < 65) & (s >= 0.2) & (v > 0.55)),
-        ("forest", (h >= 65) & (h < 170) & (s >= 0.2) & (texture > 0.12)),
-        ("grass", (h >= 65) & (h < 170) & (s >= 0.2)),
-        ("mud", (h < 45) & (s >= 0.25) & (v <= 0.55)),
-        ("rock", grey & ((v < 0.5) | (texture > 0.15))),
-        ("pavement", grey),
-    ]
-    out = np.full(lum.shape, CLASSES.index("pavement"), np.int64)
-    done = np.zeros(lum.shape, bool)
-    for name, mask in rules:
-        take = mask & ~done
-        out[take] = CLASSES.index(name)
-        done |= take
-    return out
-
-
-def _cut_sky(rgb: np.ndarray) -> tuple[np.ndarray, int]:
-    """Drop the rows above the horizon of a photo: top rows that are mostly bright, smooth, bluish or white."""
-    h, s, v = _hsv(rgb)
-    texture = _local_std(rgb.mean(-1), 5)
-    sky = (v > 0.6) & (texture < 0.03) & (((h >= 180) & (h < 250)) | (s < 0.15))
-    rows = sky.mean(1) > 0.6
-    horizon = 0
-    while horizon < len(rows) // 2 and rows[horizon]:
-        horizon += 1
-    return rgb[horizon:], horizon
+def is_sketch(img: Image.Image) -> bool:
+    """Whether ``img`` is a colour-coded sketch map (see the module docstring) rather than a photo."""
+    px = np.asarray(img.resize((GRID, GRID), Image.Resampling.NEAREST), np.float32)
+    _, dist = _legend_distance(px)
+    spread = ndimage.maximum_filter(px, (3, 3, 1)) - ndimage.minimum_filter(px, (3, 3, 1))
+    flat = spread.max(-1) < FLAT_RANGE
+    return float((dist < SKETCH_TOLERANCE).mean()) >= SKETCH_FRACTION and float(flat.mean()) >= SKETCH_FLAT
 
 
 def _rectangles(mask: np.ndarray) -> list[tuple[int, int, int, int]]:
@@ -180,6 +162,404 @@ def _to_metres(rect, shape, size_x: float, size_y: float) -> dict[str, float]:
     return {k: round(float(v), 2) for k, v in zip(("x0", "y0", "x1", "y1"), (x0, y0, x1, y1))}
 
 
+def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str]) -> list[tuple[Step, dict]]:
+    """Steps and regions of a sketch map: legend classes pooled into blocks, covered by rectangles."""
+    classes, _ = _legend_distance(np.asarray(img.resize((GRID, GRID), Image.Resampling.NEAREST), np.float32))
+    notes.append("read as a colour-coded sketch map")
+    bs, nb = SKETCH_BLOCK, GRID // SKETCH_BLOCK
+    blocks = classes.reshape(nb, bs, nb, bs).transpose(0, 2, 1, 3).reshape(nb, nb, -1)
+    block_class = np.stack([(blocks == k).sum(-1) for k in range(len(CLASSES))], -1).argmax(-1)
+    coverage = {c: float((block_class == k).mean()) for k, c in enumerate(CLASSES)}
+    coverage["obstacle"] = float((classes == CLASSES.index("obstacle")).mean())  # placed exactly, at any size
+    present = [c for c in CLASSES if coverage[c] >= MIN_FRACTION or (c == "obstacle" and coverage[c] > 0)]
+    notes.append("surfaces: " + ", ".join(f"{c} {100 * coverage[c]:.0f}%" for c in sorted(present, key=lambda c: -coverage[c])))
+    flat_base = coverage["pavement"] + coverage["ice"] > 0.5
+    base = Step("flat", {"height": 0.0}) if flat_base else Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0})
+    out = [(base, {"region": "full"})]
+    for name in present:
+        if name == "obstacle":
+            labels, _ = ndimage.label(classes == CLASSES.index("obstacle"))
+            rects = [(s[0].start, s[1].start, s[0].stop, s[1].stop) for s in ndimage.find_objects(labels)]
+            shape = classes.shape
+        else:
+            rects = _rectangles(block_class == CLASSES.index(name))
+            shape = block_class.shape
+        for rect in rects:
+            region = _to_metres(rect, shape, size_x, size_y)
+            out += [(step, {"region": region}) for step in LEGEND[name].steps]
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ photos
+PH, PW = 96, 128  # photo analysis resolution (rows, columns)
+Z_NEAR = 3.0
+"""Distance (m) of the ground seen at the bottom of a photo: a camera ~1.6 m high with a ~60 degree view."""
+CAMERA_HEIGHT = 1.6
+"""Eye height (m) of a photo: a thing standing on flat ground whose base is ``b`` rows under the horizon and
+that is ``k`` rows tall is ``CAMERA_HEIGHT * k / b`` metres tall (pinhole camera)."""
+STANDING = 0.5  # m: a compact blob on the ground at least this tall is a tall obstacle (bench, car, block)
+SKY_TEXTURE = 0.03  # brightness spread over 5 x 5 px below which a pixel is smooth enough to be sky
+SKY_MAX_ROW = 0.7  # the sky never reaches below this share of the picture height
+MIN_SHARE = {"water": 0.1, "gravel": 0.3}
+"""Share of a part a surface must cover to be built there besides the dominant one (default DEFAULT_SHARE):
+water is distinctive and matters even as a thin river band; gravel-like speckle also comes from joints."""
+DEFAULT_SHARE = 0.25
+MIN_ROCKS = 4  # small dark blobs in a part that make it rocky
+
+SURFACES = ("water", "ice", "snow", "sand", "mud", "grass", "grey", "gravel", "forest")
+SURFACE_STEPS: dict[str, tuple[Step, ...]] = {
+    "ice": (Step("low_friction", {"preset": "ice"}),),
+    "snow": (Step("soil", {"preset": "snow"}),),
+    "sand": (Step("soil", {"preset": "dry_sand"}),),
+    "mud": (Step("soil", {"preset": "mud"}),),
+    "gravel": (Step("random_uniform", {"amplitude": 0.04, "spacing": 0.1}, mode="add"),),
+    "forest": (Step("pillars", {"height": 3.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.05}, mode="add"),),
+    "grass": (),
+    "grey": (),
+}
+"""Recipe of each ground surface of a photo per part (water's depends on its flow, see :func:`_water_steps`).
+Obstacles keep the registry's default central platform: the robot spawns on level ground, as with text."""
+
+
+@dataclasses.dataclass
+class PhotoReading:
+    """What was read from a photo: masks and per-part findings (inspectable in tests)."""
+
+    sky: np.ndarray
+    horizon: int
+    ground: np.ndarray
+    surface: np.ndarray  # index into SURFACES per pixel; -1 where not ground
+    objects: np.ndarray  # tall things standing on the tile
+    parts: dict[str, dict[str, float]]
+    flow: str  # "still", "current" or "tide"
+    slope: float  # rad, 0 when none
+    stairs: tuple[int, int] | None  # image columns of the flight
+    rocks: dict[str, int]  # rock blobs per part
+    tall: dict[str, str]  # part -> "block" (building, wall) or "pillars" (trees, posts)
+    grey: bool
+    water_band: tuple[float, float] | None  # (near, far) distance from the tile's back edge (m) of water across the view
+
+
+def _sky_mask(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, int]:
+    """Sky (smooth, sky-coloured, connected to the top edge) and the horizon row.
+
+    The horizon is the 95th percentile, over the columns where sky shows, of the row where a column's sky first
+    ends (objects and hills in front of the sky raise that row, so a low percentile would be fooled by them);
+    below the horizon nothing is sky, so a white sky cannot run on into a snowfield.
+    """
+    # Band-pass colour detail: sensor noise (finer) and the sky's smooth gradient (coarser) are not texture.
+    detail = ndimage.gaussian_filter(rgb, (1.0, 1.0, 0)) - ndimage.gaussian_filter(rgb, (3.0, 3.0, 0))
+    texture = np.sqrt(ndimage.uniform_filter((detail ** 2).sum(-1), 5))
+    blue = (h >= 180) & (h < 300) & (v > 0.15)
+    pale = (s < 0.25) & (v > 0.5)
+    warm = ((h < 50) | (h >= 300)) & (v > 0.45) & (s < 0.85)  # sunset and dusk glow
+    candidate = (texture < SKY_TEXTURE) & (blue | pale | warm)
+    candidate = ndimage.binary_opening(candidate, iterations=1)  # no leaks through one-pixel gaps
+    labels, n = ndimage.label(candidate)
+    # Sky regions: touching the top edge, or large and starting in the top rows (sky between tree crowns).
+    sizes = ndimage.sum(candidate, labels, np.arange(1, n + 1))
+    starts = [sl[0].start for sl in ndimage.find_objects(labels)]
+    keep = [k + 1 for k in range(n) if starts[k] == 0 or (starts[k] < 0.15 * rgb.shape[0] and sizes[k] > 0.02 * candidate.size)]
+    sky = np.isin(labels, keep) & candidate
+    first = np.argmax(sky, axis=0)
+    below_first = np.arange(sky.shape[0])[:, None] >= first[None, :]
+    run = np.cumprod(np.where(below_first, sky, True), axis=0).sum(0)  # rows down to the end of the first sky run
+    skyline = np.where(sky.any(0), run, 0)
+    seen = skyline[skyline > 0]
+    if len(seen) < 0.1 * rgb.shape[1]:
+        return np.zeros_like(sky), 0
+    horizon = int(np.clip(np.percentile(seen, 95), 1, SKY_MAX_ROW * rgb.shape[0]))
+    sky[horizon:] = False
+    return sky, horizon
+
+
+def _classify_ground(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray, lum: np.ndarray) -> np.ndarray:
+    """Surface index per pixel from colour (of a smoothed image) and fine texture (of ``lum``, not smoothed)."""
+    fine = _local_std(lum - ndimage.uniform_filter(lum, 3), 3)  # speckle: gravel, pebbles
+    # Trunks in a forest: dark vertical stripes among green, i.e. strong vertical edges, weak horizontal ones.
+    gx = ndimage.uniform_filter(np.abs(ndimage.sobel(lum, axis=1)), 8) / 8
+    gy = ndimage.uniform_filter(np.abs(ndimage.sobel(lum, axis=0)), 8) / 8
+    green = ndimage.uniform_filter(((h >= 58) & (h < 170) & (s >= 0.18)).astype(np.float32), 8) > 0.4
+    trunks = green & (gx > 0.025) & (gx > 1.5 * gy)
+    rules = [
+        ("snow", (s < 0.14) & (v > 0.78)),
+        ("ice", (h >= 170) & (h < 255) & (s >= 0.1) & (s < 0.3) & (v >= 0.62)),
+        ("water", _is_water(rgb, h, s, v)),
+        ("sand", (h >= 25) & (h < 58) & (s >= 0.16) & (v >= 0.63)),
+        ("mud", ((h < 45) | (h >= 340)) & (s >= 0.3) & (v < 0.45)),
+        ("forest", trunks),
+        ("grass", (h >= 58) & (h < 170) & (s >= 0.18)),
+        ("gravel", (s < 0.3) & (fine > 0.05)),
+    ]
+    out = np.full(lum.shape, SURFACES.index("grey"), np.int64)
+    done = np.zeros(lum.shape, bool)
+    for name, mask in rules:
+        if name == "water":  # water is a coherent surface; scattered blue-ish pixels are colour noise
+            mask = mask & (ndimage.uniform_filter(mask.astype(np.float32), 3) > 0.4)
+        take = mask & ~done
+        out[take] = SURFACES.index(name)
+        done |= take
+    return out
+
+
+def _part_masks(shape: tuple[int, int], horizon: int, ground: np.ndarray) -> dict[str, np.ndarray]:
+    """GenTe's four parts in image space: back = near ground (bottom), front = the band under the horizon."""
+    rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
+    t = (rows + 0.5 - horizon) / max(shape[0] - horizon, 1)  # 1 at the bottom, 0 at the horizon
+    z = Z_NEAR / np.maximum(t, 1e-6)
+    on_tile = ground & (z <= Z_NEAR + 20.0 * 1.25)  # a little beyond the tile: small tiles and haze
+    far = z >= Z_NEAR + 10.0
+    left = cols < shape[1] / 2
+    return {"back_left": on_tile & ~far & left, "back_right": on_tile & ~far & ~left,
+            "front_left": on_tile & far & left, "front_right": on_tile & far & ~left}
+
+
+def _stairs(lum: np.ndarray, usable: np.ndarray) -> tuple[int, int] | None:
+    """Columns of a flight of stairs: >= 5 alternating thick bright / dark horizontal bands in >= 2 windows."""
+    win = 8
+    hits = []
+    for c0 in range(0, lum.shape[1] - win + 1, win):
+        rows = usable[:, c0:c0 + win].mean(1) > 0.8
+        prof = np.where(rows, lum[:, c0:c0 + win].mean(1), np.nan)
+        idx = np.flatnonzero(rows)
+        if len(idx) < 16:
+            continue
+        p = prof[idx[0]:idx[-1] + 1]
+        p = np.where(np.isnan(p), np.nanmean(p), p)
+        detr = p - ndimage.uniform_filter1d(p, 9, mode="nearest")
+        dark = detr < -0.03
+        edges = np.flatnonzero(np.diff(dark.astype(int)) != 0)
+        runs = np.diff(np.concatenate([[0], edges + 1, [len(dark)]]))
+        kinds = [dark[i] for i in np.concatenate([[0], edges + 1])]
+        dark_runs = [r for r, k in zip(runs, kinds) if k and r >= 2]
+        contrast = float(np.percentile(p, 90) - np.percentile(p, 10))
+        if len(dark_runs) >= 5 and contrast > 0.12:
+            hits.append(c0)
+    runs = np.split(np.array(hits), np.flatnonzero(np.diff(hits) > win) + 1) if hits else []
+    best = max(runs, key=len, default=np.array([]))
+    if len(best) < 3:  # at least 3 adjacent windows: a flight is wide
+        return None
+    return int(best[0]), int(best[-1]) + win
+
+
+def _rock_blobs(lum: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """Pixels of small, compact dark blobs on the ground: rocks and their shadows."""
+    local = ndimage.median_filter(lum, 9)
+    dark = (lum < local - 0.1) & usable
+    labels, n = ndimage.label(dark)
+    if n == 0:
+        return np.zeros_like(dark)
+    sizes = ndimage.sum(dark, labels, np.arange(1, n + 1))
+    spans = ndimage.find_objects(labels)
+    keep = np.zeros(n + 1, bool)
+    for k, (sl, size) in enumerate(zip(spans, sizes), start=1):
+        height, width = sl[0].stop - sl[0].start, sl[1].stop - sl[1].start
+        keep[k] = (3 <= size <= 80 and min(width, height) >= 2 and width >= height * 0.8
+                   and size >= 0.5 * width * height and width <= 0.2 * lum.shape[1])
+    return keep[labels]
+
+
+def _standing(rgb: np.ndarray, ground: np.ndarray, horizon: int, classes: np.ndarray) -> np.ndarray:
+    """Compact blobs below the horizon that stand at least STANDING metres tall (cars, benches, blocks)."""
+    out = np.zeros_like(ground)
+    ref = np.array([np.median(rgb[r][ground[r]], 0) if ground[r].sum() > 8 else np.full(3, np.nan) for r in range(rgb.shape[0])])
+    odd = ground & (np.linalg.norm(rgb - ref[:, None, :], axis=-1) > 0.2) & (classes != SURFACES.index("water"))
+    labels, n = ndimage.label(ndimage.binary_opening(odd))
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        blob = labels[sl] == k
+        rows, cols = blob.shape
+        base = sl[0].stop - horizon
+        if sl[0].stop >= rgb.shape[0] - 1 or base <= 0 or blob.sum() < 10 or blob.mean() < 0.7:
+            continue  # touching the bottom edge (near ground), not on the ground, a speck or a ragged patch
+        if CAMERA_HEIGHT * rows / base >= STANDING and cols >= rows:
+            out[sl] |= blob
+    return out
+
+
+def _is_water(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Blue to cyan water. Saturation alone is unreliable on dark pixels (a grey asphalt's slight tint), so the
+    colour must also stand out in absolute terms (chroma = max - min channel)."""
+    chroma = rgb.max(-1) - rgb.min(-1)
+    return (h >= 170) & (h < 255) & ((s >= 0.15) | ((s >= 0.08) & (v < 0.6))) & (chroma >= 0.05)
+
+
+def read_photo(img: Image.Image) -> PhotoReading:
+    """Read a photo in perspective (module docstring); the findings, before any tool call is made."""
+    rgb = np.asarray(img.resize((PW, PH), Image.Resampling.BOX), np.float32) / 255.0
+    h, s, v = _hsv(rgb)
+    lum = rgb.mean(-1)
+    grey = float(s.mean()) < 0.03
+    sky, horizon = _sky_mask(rgb, h, s, v)
+    rows = np.arange(PH)[:, None]
+    above = ~sky & (rows < horizon)
+    # Above the horizon: a hill (slope), clouds and far scenery (ignored), or tall obstacles.
+    near_ground = np.median(rgb[int(0.8 * PH):].reshape(-1, 3), 0)
+    classes = _classify_ground(rgb, h, s, v, lum)
+    near_class = np.bincount(classes[int(0.8 * PH):].ravel(), minlength=len(SURFACES)).argmax()
+    gx = np.abs(ndimage.sobel(ndimage.gaussian_filter(lum, 0.7), axis=1)) / 8
+    sky_colour = np.median(rgb[sky], 0) if sky.any() else np.ones(3)
+    objects = np.zeros_like(sky)
+    slope = 0.0
+    labels, _ = ndimage.label(above)
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        comp = labels == k
+        cols = np.flatnonzero(comp.any(0))
+        rise = horizon - sl[0].start
+        colour = rgb[comp].mean(0)
+        width = len(cols) / PW
+        inner = ndimage.binary_erosion(comp, iterations=2)
+        detail = float(gx[inner].mean()) if inner.any() else 1.0  # windows, trunks and edges: not a hillside
+        lower = comp & (rows >= (sl[0].start + horizon) / 2)
+        same = np.bincount(classes[lower], minlength=len(SURFACES)).argmax() == near_class if lower.any() else False
+        if width > 0.6 and rise >= 0.1 * PH and detail < 0.012 and (same or np.linalg.norm(colour - near_ground) < 0.2):
+            top = np.argmax(comp[:, cols], axis=0).astype(float)  # the ridge: upper edge per column
+            tilt = abs(np.polyfit(cols, top, 1)[0]) * PW / PH
+            slope = max(slope, 0.25 if tilt > 0.2 else 0.15)  # the ground itself rises ahead: ~14 or ~9 degrees
+            continue
+        hue, sat = float(np.median(h[comp])), float(s[comp].mean())
+        hazy = 180 <= hue < 260 and 0.05 <= sat < 0.45  # far mountains, blue with distance
+        cloud = (sat < 0.25 and float(v[comp].mean()) > 0.6) or np.linalg.norm(colour - sky_colour) < 0.18
+        if cloud or hazy or sl[0].stop < horizon - 1 or rise < 0.06 * PH:
+            continue  # clouds, far scenery, a tree line on the horizon, or something not standing on the ground
+        objects |= comp
+    # Tall things reach down into the ground (building fronts, walls): grow them over similar colours.
+    if objects.any():
+        lab, m = ndimage.label(objects)
+        for k in range(1, m + 1):
+            comp = lab == k
+            similar = (np.linalg.norm(rgb - rgb[comp].mean(0), axis=-1) < 0.1) & ~sky
+            objects |= ndimage.binary_propagation(comp, mask=similar | comp)
+        objects = ndimage.binary_fill_holes(objects)  # windows and doors belong to their building
+    objects |= _standing(rgb, ~sky & ~objects & (rows >= horizon), horizon, classes)
+    ground = ~sky & ~objects & (rows >= horizon)
+    surface = np.where(ground, classes, -1)
+    if grey:
+        surface = np.where(surface >= 0, np.where(surface == SURFACES.index("gravel"), surface, SURFACES.index("grey")), -1)
+    parts = _part_masks((PH, PW), horizon, ground)
+    # Flow: foam or wave crests on the water (bright streaks), or a water band with land beyond (a river).
+    water = surface == SURFACES.index("water")
+    on_tile = np.any(list(parts.values()), axis=0)
+    flow = "still"
+    wrows = np.flatnonzero((water & on_tile).mean(1) > 0.3)  # rows mostly water
+    if (water & on_tile).sum() > 0.03 * on_tile.sum() and len(wrows):
+        band = np.zeros_like(water)
+        band[wrows[0]:wrows[-1] + 1] = True  # rows from the first to the last mostly-water row
+        # Foam and wave crests: streaks brighter and paler than the water across the band (read as ice or snow
+        # pixel by pixel); reflected clouds are blobs and do not fill a row.
+        pale = band & ground & (surface >= 0) & ((surface == SURFACES.index("ice")) | (surface == SURFACES.index("snow"))
+                                                  | ((v > np.median(v[water]) + 0.1) & (s < 0.35)))
+        wide = (water | pale)[wrows[0]:wrows[-1] + 1].mean(1) > 0.6
+        streak_rows = int(((pale[wrows[0]:wrows[-1] + 1].mean(1) > 0.3) & wide).sum())
+        surface[pale & ~water] = SURFACES.index("water")  # the crests are part of the water
+        reaches_horizon = wrows[0] <= horizon + 0.1 * (PH - horizon)
+        spans = (water & on_tile)[wrows].mean(1).min() > 0.85 if len(wrows) else False
+        land_beyond = not reaches_horizon and spans and (water[horizon:wrows[0]] & on_tile[horizon:wrows[0]]).mean() < 0.1
+        if streak_rows >= 2 or land_beyond:
+            flow = "tide" if reaches_horizon else "current"
+    water = surface == SURFACES.index("water")
+    usable = ground & ~water
+    stairs = _stairs(lum, usable)
+    if stairs is not None:  # the flight is built as stairs: its edges are neither gravel nor rocks
+        flight = np.zeros_like(usable)
+        flight[horizon:, stairs[0]:stairs[1]] = True
+        surface[flight & (surface == SURFACES.index("gravel"))] = SURFACES.index("grey")
+        usable &= ~flight
+    fractions = {name: {sf: float((surface[m] == i).mean()) if m.any() else 0.0 for i, sf in enumerate(SURFACES)}
+                 for name, m in parts.items()}
+    rocks_mask = _rock_blobs(lum, usable)
+    rock_counts = {name: ndimage.label(rocks_mask & m)[1] for name, m in parts.items()}
+    tall = {}
+    for side, half in (("left", objects[:, :PW // 2]), ("right", objects[:, PW // 2:])):
+        if half.sum() > 0.01 * PH * PW:
+            tall[side] = "block" if half.any(0).mean() > 0.6 else "pillars"
+    # Water across the whole view (a river, the sea) is one band at its distance, not a share of parts.
+    band_rows = np.flatnonzero((surface == SURFACES.index("water")).mean(1) > 0.7)
+    water_band = None
+    if len(band_rows) and len(band_rows) >= 0.5 * (band_rows[-1] - band_rows[0] + 1):
+        distance = lambda r: Z_NEAR * (PH - horizon) / max(r + 0.5 - horizon, 1e-6) - Z_NEAR  # noqa: E731
+        far = 1e9 if band_rows[0] <= horizon + 0.1 * (PH - horizon) else distance(band_rows[0])
+        water_band = (max(distance(band_rows[-1] + 1), 0.0), far)
+    return PhotoReading(sky, horizon, ground, surface, objects, fractions, flow, slope, stairs, rock_counts, tall, grey,
+                        water_band)
+
+
+def _water_steps(flow: str) -> tuple[Step, ...]:
+    if flow == "current":
+        return (Step("water", {"depth": KNEE_HEIGHT, "flow": "current", "speed": 0.8, "direction": np.pi / 2}),)
+    if flow == "tide":
+        return (Step("water", {"depth": KNEE_HEIGHT, "flow": "tide", "speed": 0.4, "omega": 0.5, "direction": 0.0}),)
+    return (Step("water", {"depth": KNEE_HEIGHT}),)
+
+
+def _merge(per_part: dict[str, tuple[str, ...]]) -> list[tuple[str, tuple[str, ...]]]:
+    """Equal neighbouring parts merged into halves or the whole tile: (region name, surfaces)."""
+    bl, br, fl, fr = (per_part[k] for k in ("back_left", "back_right", "front_left", "front_right"))
+    if bl == br == fl == fr:
+        return [("full", bl)]
+    out = []
+    if bl == br and fl == fr:
+        return [("back", bl), ("front", fl)]
+    if bl == fl and br == fr:
+        return [("left", bl), ("right", br)]
+    for band, (a, b) in (("back", (bl, br)), ("front", (fl, fr))):
+        out += [(band, a)] if a == b else [(f"{band}_left", a), (f"{band}_right", b)]
+    return out
+
+
+def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str], warnings: list[str]) -> list[tuple[Step, dict]]:
+    r = read_photo(img)
+    notes.append(f"read as a photo in perspective: sky above row {r.horizon} of {PH} dropped")
+    if r.grey:
+        warnings.append("greyscale photo: water, snow, sand, mud and ice cannot be told apart by colour; only "
+                        "obstacles, stairs, slopes and roughness were read.")
+    per_part: dict[str, tuple[str, ...]] = {}
+    for name, frac in r.parts.items():
+        ranked = sorted(frac, key=lambda k: -frac[k])
+        # The dominant surface and at most one more: with the base, slope, stairs, a water band, 2 tall and 4
+        # rock calls this bounds a photo to 1 + 1 + 1 + 1 + 4 * 2 + 2 + 4 = 18 <= MAX_CALLS calls.
+        kept = [k for k in ranked if frac[k] >= MIN_SHARE.get(k, DEFAULT_SHARE) or (k == ranked[0] and frac[k] > 0)]
+        chosen = tuple(sorted(kept[:2]))
+        per_part[name] = chosen
+    notes.append("parts: " + "; ".join(f"{k} {'+'.join(v) or 'nothing'}" for k, v in per_part.items()))
+    grey_share = np.mean([f["grey"] for f in r.parts.values()])
+    base = Step("flat", {"height": 0.0}) if grey_share > 0.5 else Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0})
+    out: list[tuple[Step, dict]] = [(base, {"region": "full"})]
+    if r.slope > 0:
+        out.append((Step("pyramid_slope", {"slope": r.slope, "direction": "up", "platform": 2.0}, mode="add"), {"region": "front"}))
+        notes.append(f"a hill rises above the horizon: slope of {r.slope:.2f} rad ahead")
+    if r.stairs is not None:
+        c0, c1 = r.stairs
+        y1, y0 = size_y * (1 - c0 / PW), size_y * (1 - c1 / PW)
+        out.append((Step("stairs", {"step_height": 0.15, "step_width": 0.32, "direction": "up"}),
+                    {"region": {"x0": 0.0, "y0": round(y0, 2), "x1": round(size_x, 2), "y1": round(y1, 2)}}))
+        notes.append("one flight of stairs ahead")
+    if r.water_band is not None:
+        near, far = (round(min(d, size_x), 1) for d in r.water_band)
+        if far - near >= 0.5:
+            per_part = {k: tuple(sf for sf in v if sf != "water") for k, v in per_part.items()}
+            region = "full" if (near, far) == (0.0, size_x) else {"x0": near, "y0": 0.0, "x1": far, "y1": size_y}
+            out += [(step, {"region": region}) for step in _water_steps(r.flow)]
+            notes.append(f"water across the view from {near:g} m to {far:g} m ahead ({r.flow})")
+    for region, surfaces in _merge(per_part):
+        for sf in surfaces:
+            steps = _water_steps(r.flow) if sf == "water" else SURFACE_STEPS[sf]
+            out += [(step, {"region": region}) for step in steps]
+    regions = named_regions(size_x, size_y)
+    for side, kind in r.tall.items():
+        x0, y0, x1, y1 = regions["front_" + side]
+        if kind == "block":  # a building front or wall along that side of the tile
+            strip = (y1 - 2.0, y1) if side == "left" else (y0, y0 + 2.0)
+            out.append((Step("flat", {"height": 2.0}), {"region": {"x0": 2.0, "y0": strip[0], "x1": x1, "y1": strip[1]}}))
+        else:
+            out.append((SURFACE_STEPS["forest"][0], {"region": "front_" + side}))
+        notes.append(f"tall obstacles on the {side} ({'building or wall' if kind == 'block' else 'trees or posts'})")
+    rocky = {k: ("rocks",) if n >= MIN_ROCKS else () for k, n in r.rocks.items()}
+    for region, found in _merge(rocky):
+        if found:
+            out.append((Step("rocks", {"max_height": 0.15, "min_radius": 0.1, "max_radius": 0.4, "density": 0.5}, mode="add"), {"region": region}))
+    return out
+
+
 def plan_image(
     image: str | Path | bytes | Image.Image,
     size_x: float = 20.0,
@@ -188,69 +568,15 @@ def plan_image(
 ) -> GenerationResult:
     """Deterministic tool calls for a photo or a colour-coded sketch map (see the module docstring)."""
     registry = ATOMIC_TERRAINS if registry is None else registry
-    img, _ = _load(image)
+    img = _load(image)
     warnings: list[str] = []
     notes: list[str] = []
-    sketch_px = np.asarray(img.resize((GRID, GRID), Image.Resampling.NEAREST), np.float32)
-    idx, dist = _legend_distance(sketch_px)
-    is_sketch = float((dist < SKETCH_TOLERANCE).mean()) >= SKETCH_FRACTION
-    if is_sketch:
-        classes = idx
-        notes.append("read as a colour-coded sketch map")
-        slope = 0.0
+    if is_sketch(img):
+        steps = _plan_sketch(img, size_x, size_y, notes)
     else:
-        rgb = np.asarray(img.resize((GRID, GRID), Image.Resampling.BOX), np.float32) / 255.0
-        ground, horizon = _cut_sky(rgb)
-        if horizon:
-            notes.append(f"photo: cut {100 * horizon / GRID:.0f}% of the image above the horizon as sky")
-        # Back to a square analysis grid so blocks map to equal tile areas.
-        ground = np.asarray(Image.fromarray((ground * 255).astype(np.uint8)).resize((GRID, GRID), Image.Resampling.BOX), np.float32) / 255.0
-        classes = _classify_photo(ground)
-        notes.append("read as a photo (colour, texture and brightness rules)")
-        # A linear brightness ramp over the ground that explains most of its variance reads as a slope.
-        lum = ground.mean(-1)
-        rr, cc = np.mgrid[0:GRID, 0:GRID] / (GRID - 1.0)
-        design = np.stack([rr.ravel(), cc.ravel(), np.ones(GRID * GRID)], 1)
-        coef, *_ = np.linalg.lstsq(design, lum.ravel(), rcond=None)
-        r2 = 1.0 - np.var(lum.ravel() - design @ coef) / max(np.var(lum), 1e-9)
-        ramp = float(np.hypot(coef[0], coef[1]))
-        slope = min(0.6 * ramp, 0.4) if (r2 > 0.6 and ramp > 0.25) else 0.0
-
-    # Pool classes into blocks: each block takes its majority class (finer blocks for clean sketches).
-    bs = BLOCK // 2 if is_sketch else BLOCK
-    nb = GRID // bs
-    blocks = classes.reshape(nb, bs, nb, bs).transpose(0, 2, 1, 3).reshape(nb, nb, -1)
-    counts = np.stack([(blocks == k).sum(-1) for k in range(len(CLASSES))], -1)
-    block_class = counts.argmax(-1)
-    # Coverage by blocks (what gets built); a sketch's black blobs count at any size, they are placed exactly.
-    coverage = {c: float((block_class == k).mean()) for k, c in enumerate(CLASSES)}
-    if is_sketch:
-        coverage["obstacle"] = float((classes == CLASSES.index("obstacle")).mean())
-    present = [c for c in CLASSES if coverage[c] >= MIN_FRACTION or (c == "obstacle" and is_sketch and coverage[c] > 0)]
-    notes.append("surfaces: " + ", ".join(f"{c} {100 * coverage[c]:.0f}%" for c in sorted(present, key=lambda c: -coverage[c])))
-
-    geometric: list[tuple[Step, dict]] = []
-    physical: list[tuple[Step, dict]] = []
-    flat_base = coverage["pavement"] + coverage["ice"] > 0.5
-    base = Step("flat", {"height": 0.0}) if flat_base else Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0})
-    geometric.append((base, {"region": "full"}))
-    if slope > 0.0:
-        geometric.append((Step("pyramid_slope", {"slope": round(slope, 3), "direction": "up", "platform": 2.0}, mode="add"), {"region": "full"}))
-        notes.append(f"brightness gradient read as a slope of {slope:.2f} rad")
-    for name in present:
-        if name == "obstacle" and is_sketch:
-            labels, _ = ndimage.label(classes == CLASSES.index("obstacle"))
-            rects = [(s[0].start, s[1].start, s[0].stop, s[1].stop) for s in ndimage.find_objects(labels)]
-            shape = classes.shape
-        else:
-            rects = _rectangles(block_class == CLASSES.index(name))
-            shape = block_class.shape
-        if not rects:
-            continue
-        for rect in rects:
-            region = _to_metres(rect, shape, size_x, size_y)
-            for step in LEGEND[name].steps:
-                (geometric if registry[step.tool].kind == "geometric" else physical).append((step, {"region": region}))
+        steps = _plan_photo(img, size_x, size_y, notes, warnings)
+    geometric = [sr for sr in steps if registry[sr[0].tool].kind == "geometric"]
+    physical = [sr for sr in steps if registry[sr[0].tool].kind == "physical"]
     calls: list[ToolCall] = []
     for step, layout in geometric + physical:
         args = {**step.params, **layout}

@@ -1,12 +1,18 @@
 """The ``planner`` backend: offline, deterministic text -> terrain tool calls (images: see ``image.py``).
 
-A scene description is scanned for *cues* (beach, river, forest, stairs, snow, ...) and *modifiers*
-(knee-deep, steep, rocky, slippery, strong current, ...). Each cue is a short recipe of tool calls on a
-*slot* of the tile; the cues found are laid out in the order they are mentioned (one cue: the whole tile;
-two: back then front half; three: back half, front-right, front-left; four: the quadrants). A modifier
-changes the calls of the cue mentioned nearest to it ("knee-deep river", "a river, knee-deep"). Every call
-is validated against the registry, so the recipes can only use real tools and parameters, and a modifier
-that would push a value out of range is clamped with a warning.
+A scene description is scanned for *cues* (beach, river, forest, stairs, buildings, benches, ...) and
+*modifiers* (knee-deep, steep, tall, rocky, frozen, dry, calm, ...). Each cue is a short recipe of tool calls
+on a *slot* of the tile; the cues found are laid out in the order they are mentioned (one cue: the whole tile;
+two: back then front half; three: back half, front-right, front-left; four: the quadrants).
+
+A modifier is bound to the noun it qualifies: first the cue named right after it in the same phrase ("tall
+trees", "icy stone steps"), else the nearest cue before it in the same sentence ("a river, knee-deep"), else
+the nearest cue it can change at all; a modifier that changes no cue is reported. Modifiers set or scale
+parameters (depths, heights, speeds), add calls (rocky: rocks; snowy: snow) or remove them (frozen: the
+water becomes ice; dry: no water). Negated words are honoured: "no river" drops the cue, "without sand" /
+"no waves" / "no snow" remove that part of every recipe. Every call is validated against the registry, so the
+recipes can only use real tools and parameters, and a modifier that would push a value out of range is
+clamped with a warning.
 
 Scale: depths like "knee-deep" refer to a robot of about 1 m height (knee at about 0.3 m), the biped this
 project ships; change :data:`KNEE_HEIGHT` for other robots.
@@ -50,100 +56,150 @@ class Cue:
     weak: tuple[str, ...] = ()
 
 
+Drop = tuple[str, "str | None"]
+"""A (tool, preset) pattern of recipe steps a modifier removes; preset None matches any."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Modifier:
-    """Changes the steps of its cue: ``set`` values, ``scale`` factors (per tool, per parameter), ``extra`` steps."""
+    """Changes the steps of its cue: ``set`` values, ``scale`` factors (per tool, per parameter), ``drop`` steps,
+    ``extra`` steps (added after the drop, so "snowy" replaces the cue's soil by snow)."""
 
     name: str
     keywords: tuple[str, ...]
     set: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
     scale: Mapping[str, Mapping[str, float]] = dataclasses.field(default_factory=dict)
     extra: tuple[Step, ...] = ()
+    drop: tuple[Drop, ...] = ()
+
+    def applies_to(self, cue: Cue) -> bool:
+        """Whether this modifier changes anything in ``cue``."""
+        tools = {s.tool for s in cue.steps}
+        return bool(self.extra) or bool(tools & (set(self.set) | set(self.scale))) or any(
+            _dropped(s, self.drop) for s in cue.steps)
+
+
+def _dropped(step: Step, drop: tuple[Drop, ...]) -> bool:
+    return any(step.tool == tool and (preset is None or step.params.get("preset") == preset) for tool, preset in drop)
 
 
 ACROSS = math.pi / 2  # a channel whose axis runs along y: the robot walking +x has to cross it
 WATER_FRONT: Frac = (0.6, 0.0, 1.0, 1.0)
+BUILDING_HEIGHT = 2.0
+"""Height (m) of a building, tower or cliff block (the top of `flat`'s range): a wall the robot walks around."""
+WALL_HEIGHT = 1.2
+"""Height (m) of a wall, fence or hedge."""
 
 CUES: tuple[Cue, ...] = (
-    Cue("beach", ("beach", "shore", "shoreline", "coast", "seaside", "sea", "ocean"), (
-        Step("natural_ground", {"amplitude": 0.05, "wavelength": 4.0, "platform": 0.0}),
+    # --- water
+    Cue("beach", ("beach",), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 4.0, "platform": 0.0}),
         Step("soil", {"preset": "dry_sand"}, (0.0, 0.0, 0.6, 1.0)),
         Step("soil", {"preset": "wet_sand"}, WATER_FRONT),
         Step("water", {"depth": 0.2, "flow": "tide", "speed": 0.3, "omega": 0.5, "direction": 0.0}, WATER_FRONT),
     )),
-    Cue("river", ("river",), (
+    Cue("sea", ("sea", "ocean", "coast", "coastline", "seaside", "seashore"), (
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 4.0, "platform": 0.0}),
+        Step("water", {"depth": 0.4, "flow": "tide", "speed": 0.4, "omega": 0.5, "direction": 0.0}, WATER_FRONT),
+    )),
+    Cue("tidal flat", ("tidal flat", "tidal flats", "mudflat", "mud flat", "mud flats"), (
+        Step("natural_ground", {"amplitude": 0.03, "wavelength": 4.0, "platform": 0.0}),
+        Step("soil", {"preset": "wet_sand"}),
+        Step("water", {"depth": 0.1, "flow": "tide", "speed": 0.3, "omega": 0.5, "direction": 0.0}, (0.5, 0.0, 1.0, 1.0)),
+    )),
+    Cue("shore", ("shore", "shoreline", "lakeshore", "waterfront", "waterside"), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
+        Step("water", {"depth": 0.15}, WATER_FRONT),
+    )),
+    Cue("bank", ("bank", "riverbank", "embankment"), (
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 3.0, "platform": 0.0}),
+    ), note="the dry ground next to water"),
+    Cue("river", ("river", "riverbed", "river bed"), (
         Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
         Step("river", {"width": 4.0, "depth": 0.5, "bank_width": 0.8, "direction": ACROSS, "meander_amplitude": 0.5}, mode="add"),
-        Step("soil", {"preset": "wet_sand"}, (0.3, 0.0, 0.7, 1.0)),
         Step("water", {"depth": 0.35, "flow": "current", "speed": 0.6, "direction": ACROSS}, (0.3, 0.0, 0.7, 1.0)),
     )),
-    Cue("stream", ("stream", "creek", "brook"), (
+    Cue("rapids", ("rapids", "torrent", "whitewater", "white water"), (
         Step("natural_ground", {"amplitude": 0.05, "wavelength": 2.0, "platform": 0.0}),
+        Step("river", {"width": 5.0, "depth": 0.6, "bank_width": 0.8, "direction": ACROSS}, mode="add"),
+        Step("water", {"depth": 0.4, "flow": "current", "speed": 1.5, "direction": ACROSS}, (0.25, 0.0, 0.75, 1.0)),
+    )),
+    Cue("waterfall", ("waterfall", "waterfalls", "cascade"), (
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 2.0, "platform": 0.0}),
+        Step("river", {"width": 2.0, "depth": 0.4, "bank_width": 0.4, "direction": 0.0}, mode="add"),
+        Step("water", {"depth": 0.3, "flow": "current", "speed": 1.2, "direction": 0.0}, (0.0, 0.4, 1.0, 0.6)),
+    )),
+    Cue("stream", ("stream", "creek", "brook"), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 2.0, "platform": 0.0}),
         Step("river", {"width": 1.5, "depth": 0.2, "bank_width": 0.3, "direction": ACROSS, "meander_amplitude": 0.3}, mode="add"),
         Step("water", {"depth": 0.12, "flow": "current", "speed": 0.4, "direction": ACROSS}, (0.4, 0.0, 0.6, 1.0)),
     )),
-    Cue("lake", ("lake", "pond", "pool", "puddle"), weak=("water",), steps=(
+    Cue("lake", ("lake", "pond", "pool", "lagoon", "reservoir"), weak=("water",), steps=(
         Step("natural_ground", {"amplitude": 0.03, "wavelength": 3.0, "platform": 0.0}),
         Step("pit", {"depth": 0.4, "width": 6.0}, (0.2, 0.2, 0.8, 0.8), mode="add"),
-        Step("soil", {"preset": "mud"}, (0.2, 0.2, 0.8, 0.8)),
         Step("water", {"depth": 0.3}, (0.2, 0.2, 0.8, 0.8)),
     )),
-    Cue("dunes", ("dune", "desert"), weak=("sand", "sandy"), steps=(
-        Step("hills", {"amplitude": 0.6, "wavelength": 7.0, "platform": 0.0}),
-        Step("soil", {"preset": "dry_sand"}),
-    )),
-    Cue("forest", ("forest", "wood", "woods", "woodland", "jungle"), weak=("tree",), steps=(
-        Step("natural_ground", {"amplitude": 0.1, "wavelength": 2.0, "platform": 0.0}),
-        Step("pillars", {"height": 3.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.06}, mode="add"),
-        Step("rocks", {"max_height": 0.08, "min_radius": 0.05, "max_radius": 0.2, "density": 0.3}, mode="add"),
-        Step("soil", {"preset": "clay_loam"}),
-    )),
-    Cue("park", ("park", "meadow", "grass", "grassland", "lawn", "field"), (
-        Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
-        Step("pillars", {"height": 3.0, "min_radius": 0.15, "max_radius": 0.3, "density": 0.01}, mode="add"),
-    )),
-    Cue("street", ("city street", "street", "sidewalk", "road", "plaza", "city", "urban"), (
+    Cue("harbour", ("harbour", "harbor", "marina", "canal", "pier", "jetty", "quay"), (
         Step("flat", {"height": 0.0}),
-        Step("discrete_obstacles", {"max_height": 0.12, "min_size": 0.3, "max_size": 1.0, "density": 0.05, "platform": 1.0}, mode="add"),
-        Step("pillars", {"height": 3.0, "min_radius": 0.05, "max_radius": 0.12, "density": 0.02}, mode="add"),
+        Step("flat", {"height": -1.0}, WATER_FRONT),
+        Step("water", {"depth": 1.0}, WATER_FRONT),
     )),
-    Cue("stairs", ("stairs", "staircase", "stairway", "steps", "stair"), (
-        Step("stairs", {"step_height": 0.12, "step_width": 0.35, "direction": "up"}),
+    Cue("puddles", ("puddle", "puddles"), (
+        Step("natural_ground", {"amplitude": 0.03, "wavelength": 2.0, "platform": 0.0}),
+        Step("water", {"depth": 0.05}, (0.2, 0.1, 0.4, 0.4)),
+        Step("water", {"depth": 0.05}, (0.6, 0.5, 0.8, 0.8)),
     )),
-    Cue("rubble", ("ruin", "ruins", "rubble", "debris", "collapsed"), (
-        Step("discrete_obstacles", {"max_height": 0.2, "min_size": 0.2, "max_size": 1.0, "density": 0.8}),
-        Step("rocks", {"max_height": 0.15, "min_radius": 0.1, "max_radius": 0.4, "density": 0.6}, mode="add"),
-    )),
-    Cue("construction", ("construction site", "construction", "building site"), (
-        Step("discrete_obstacles", {"max_height": 0.25, "min_size": 0.3, "max_size": 1.5, "density": 0.2}),
-        Step("pit", {"depth": 0.3, "width": 3.0}, (0.5, 0.0, 1.0, 0.5), mode="add"),
-        Step("soil", {"preset": "clay_loam"}),
-    )),
-    Cue("snow", ("snow", "snowy", "snowfield"), (
-        Step("natural_ground", {"amplitude": 0.12, "wavelength": 3.0, "platform": 0.0}),
-        Step("soil", {"preset": "snow"}),
-    )),
-    Cue("ice", ("ice", "icy", "frozen"), (
-        Step("flat", {"height": 0.0}),
-        Step("low_friction", {"preset": "ice"}),
-    )),
-    Cue("mud", ("mud", "muddy", "dirt"), (
-        Step("natural_ground", {"amplitude": 0.06, "wavelength": 1.5, "platform": 0.0}),
-        Step("soil", {"preset": "mud"}),
-    )),
-    Cue("swamp", ("swamp", "marsh", "bog", "wetland"), (
-        Step("natural_ground", {"amplitude": 0.12, "wavelength": 2.5, "platform": 0.0}),
+    Cue("swamp", ("swamp", "marsh", "bog", "wetland", "wetlands"), (
+        Step("natural_ground", {"amplitude": 0.06, "wavelength": 2.5, "platform": 0.0}),
         Step("soil", {"preset": "mud"}),
         Step("water", {"depth": 0.15}, (0.1, 0.1, 0.45, 0.9)),
         Step("water", {"depth": 0.15}, (0.55, 0.1, 0.9, 0.9)),
     )),
-    Cue("hills", ("hill", "hills", "hilly", "slope", "incline"), (
+    # --- surfaces
+    Cue("dunes", ("dune", "desert", "sand dune"), (
+        Step("hills", {"amplitude": 0.6, "wavelength": 7.0, "platform": 0.0}),
+        Step("soil", {"preset": "dry_sand"}),
+    )),
+    Cue("sand", ("sand",), (
+        Step("natural_ground", {"amplitude": 0.03, "wavelength": 3.0, "platform": 0.0}),
+        Step("soil", {"preset": "dry_sand"}),
+    )),
+    Cue("snow", ("snow", "snowfield", "powder", "snowdrift"), (
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 3.0, "platform": 0.0}),
+        Step("soil", {"preset": "snow"}),
+    )),
+    Cue("ice", ("ice", "glacier", "ice rink", "ice sheet"), (
+        Step("flat", {"height": 0.0}),
+        Step("low_friction", {"preset": "ice"}),
+    )),
+    Cue("mud", ("mud", "mire"), (
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 1.5, "platform": 0.0}),
+        Step("soil", {"preset": "mud"}),
+    )),
+    Cue("gravel", ("gravel", "pebble", "scree", "shingle"), (
+        Step("natural_ground", {"amplitude": 0.03, "wavelength": 2.0, "platform": 0.0}),
+        Step("random_uniform", {"amplitude": 0.04, "spacing": 0.1, "platform": 0.0}, mode="add"),
+    )),
+    Cue("grass", ("meadow", "grass", "grassland", "lawn", "field", "garden", "pasture", "farm"), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
+    )),
+    Cue("path", ("path", "trail", "track", "footpath", "dirt road", "dirt track", "dirt path"), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 2.0, "platform": 0.0}),
+    )),
+    Cue("street", ("city street", "street", "sidewalk", "pavement", "road", "plaza", "square", "parking lot", "car park",
+                   "city", "urban", "alley", "courtyard", "yard", "underpass"), (
+        Step("flat", {"height": 0.0}),
+    )),
+    # --- relief
+    Cue("hills", ("hill", "hilly", "hillside", "slope", "incline", "ramp", "ski slope"), (
         Step("hills", {"amplitude": 0.8, "wavelength": 8.0, "platform": 0.0}),
     )),
-    Cue("mountain", ("mountain trail", "mountain", "alpine"), weak=("trail", "path"), steps=(
+    Cue("mountain", ("mountain trail", "mountain", "alpine"), (
         Step("hills", {"amplitude": 1.2, "wavelength": 10.0, "platform": 0.0}),
-        Step("natural_ground", {"amplitude": 0.08, "wavelength": 1.0, "platform": 0.0}, mode="add"),
-        Step("rocks", {"max_height": 0.12, "density": 0.4}, mode="add"),
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 1.0, "platform": 0.0}, mode="add"),
+    )),
+    Cue("stairs", ("stairs", "staircase", "stairway", "steps", "stair", "stone stairs", "stone steps", "flight of steps"), (
+        Step("stairs", {"step_height": 0.12, "step_width": 0.35, "direction": "up"}),
     )),
     Cue("cave", ("cave", "cavern", "tunnel"), (
         Step("natural_ground", {"amplitude": 0.15, "wavelength": 1.0, "platform": 0.0}),
@@ -153,17 +209,72 @@ CUES: tuple[Cue, ...] = (
     Cue("stepping_stones", ("stepping stones", "stepping stone"), (
         Step("stepping_stones", {"stone_size": 0.6, "stone_distance": 0.25, "depth": 0.5}),
     )),
-    Cue("gap", ("gap", "gaps", "trench", "ditch", "chasm"), (
+    Cue("gap", ("gap", "trench", "ditch", "chasm", "crevasse"), (
         Step("gap", {"gap_width": 0.6, "depth": 1.0, "platform": 3.0}),
-    )),
-    Cue("obstacles", ("obstacle", "obstacles", "pillar", "pillars", "post", "posts", "pole", "poles"), (
-        Step("pillars", {"height": 2.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.08}),
-    )),
-    Cue("rocks", ("rock", "rocks", "boulder", "boulders", "stones", "gravel"), (
-        Step("rocks", {"max_height": 0.15, "density": 0.8}),
     )),
     Cue("bumps", ("bumps", "bumpy", "moguls", "wavy ground", "undulating"), (
         Step("waves", {"amplitude": 0.1, "wavelength": 2.0, "pattern": "grid"}),
+    )),
+    # --- obstacles, natural
+    Cue("forest", ("forest", "wood", "woods", "woodland", "jungle", "grove"), (
+        Step("natural_ground", {"amplitude": 0.06, "wavelength": 2.0, "platform": 0.0}),
+        Step("pillars", {"height": 3.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.06}, mode="add"),
+        Step("soil", {"preset": "clay_loam"}),
+    )),
+    Cue("trees", ("tree", "pine", "palm", "bush", "shrub"), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
+        Step("pillars", {"height": 3.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.03}, mode="add"),
+    )),
+    Cue("park", ("park",), (
+        Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
+        Step("pillars", {"height": 3.0, "min_radius": 0.15, "max_radius": 0.3, "density": 0.01}, mode="add"),
+    )),
+    Cue("rocks", ("rock", "rocks", "boulder", "stones"), (
+        Step("rocks", {"max_height": 0.15, "density": 0.8}),
+    )),
+    Cue("cliff", ("cliff", "bluff", "rock face", "canyon", "gorge", "ravine", "escarpment"), (
+        Step("natural_ground", {"amplitude": 0.05, "wavelength": 2.0, "platform": 0.0}),
+        Step("flat", {"height": BUILDING_HEIGHT}, (0.75, 0.0, 1.0, 1.0)),
+    ), note="the cliff is a 2 m face along the far edge of its part"),
+    Cue("logs", ("log", "fallen tree", "root", "curb", "kerb", "stump"), (
+        Step("discrete_obstacles", {"max_height": 0.2, "min_size": 0.3, "max_size": 1.5, "density": 0.15, "platform": 0.0}, mode="add"),
+    )),
+    Cue("rubble", ("ruin", "ruins", "rubble", "debris", "collapsed"), (
+        Step("discrete_obstacles", {"max_height": 0.2, "min_size": 0.2, "max_size": 1.0, "density": 0.8}),
+        Step("rocks", {"max_height": 0.15, "min_radius": 0.1, "max_radius": 0.4, "density": 0.6}, mode="add"),
+        Step("random_uniform", {"amplitude": 0.03, "spacing": 0.1, "platform": 0.0}, mode="add"),
+    )),
+    # --- obstacles, built
+    Cue("buildings", ("building", "house", "skyscraper", "apartment", "temple", "church", "barn", "shed", "hut",
+                      "cabin", "factory", "warehouse", "shop", "storefront", "row of houses"), (
+        Step("flat", {"height": 0.0}),
+        Step("flat", {"height": BUILDING_HEIGHT}, (0.1, 0.0, 0.9, 0.15)),
+        Step("flat", {"height": BUILDING_HEIGHT}, (0.1, 0.85, 0.9, 1.0)),
+    ), note="buildings are 2 m blocks along both sides of their part"),
+    Cue("wall", ("wall", "brick wall", "stone wall", "fence", "railing", "hedge", "barrier", "sandbag"), (
+        Step("flat", {"height": WALL_HEIGHT}, (0.0, 0.9, 1.0, 0.96)),
+    ), note="the wall runs along the left edge of its part"),
+    Cue("tower", ("lighthouse", "tower", "chimney", "windmill", "silo", "obelisk"), (
+        Step("flat", {"height": BUILDING_HEIGHT}, (0.45, 0.45, 0.6, 0.6)),
+    )),
+    Cue("fountain", ("fountain",), (
+        Step("flat", {"height": 0.5}, (0.3, 0.3, 0.7, 0.7)),
+        Step("flat", {"height": 0.1}, (0.35, 0.35, 0.65, 0.65)),
+        Step("flat", {"height": 1.2}, (0.47, 0.47, 0.55, 0.55)),
+        Step("water", {"depth": 0.3}, (0.35, 0.35, 0.65, 0.65)),
+    ), note="a basin with a 0.5 m rim, water inside and a central column"),
+    Cue("furniture", ("bench", "car", "barrel", "bin", "trash can", "kiosk", "bus stop", "picnic table", "table",
+                      "block", "concrete block", "crate", "container", "parked car"), (
+        Step("discrete_obstacles", {"max_height": 0.5, "min_size": 0.5, "max_size": 1.5, "density": 0.08, "platform": 1.0}, mode="add"),
+    ), note="street furniture as 0.5 m blocks"),
+    Cue("obstacles", ("obstacle", "pillar", "post", "pole", "lamp post", "streetlight", "street light", "column",
+                      "statue", "bollard", "sign", "signpost"), (
+        Step("pillars", {"height": 2.0, "min_radius": 0.1, "max_radius": 0.3, "density": 0.05}, mode="add"),
+    )),
+    Cue("construction", ("construction site", "construction", "building site"), (
+        Step("flat", {"height": 0.0}),
+        Step("pit", {"depth": 0.3, "width": 3.0}, (0.5, 0.0, 1.0, 0.5), mode="add"),
+        Step("soil", {"preset": "clay_loam"}),
     )),
 )
 
@@ -173,6 +284,8 @@ _STEEPNESS = {
 }
 _ROUGHNESS = {"natural_ground": ("amplitude",), "random_uniform": ("amplitude",), "rocks": ("max_height",),
               "discrete_obstacles": ("max_height",), "waves": ("amplitude",)}
+_DENSITY = ("pillars", "rocks", "discrete_obstacles")
+_ALL_SOIL: tuple[Drop, ...] = (("soil", None),)
 
 
 def _per_tool(table: Mapping[str, tuple[str, ...]], value: float) -> dict[str, dict[str, float]]:
@@ -185,22 +298,42 @@ MODIFIERS: tuple[Modifier, ...] = (
     Modifier("knee-deep", ("knee-deep", "knee deep"), set={"water": {"depth": KNEE_HEIGHT}}),
     Modifier("deep", ("deep",), set={"water": {"depth": 2.0 * KNEE_HEIGHT}, "river": {"depth": 2.5 * KNEE_HEIGHT}}),
     Modifier("waist-deep", ("waist-deep", "waist deep"), set={"water": {"depth": 2.0 * KNEE_HEIGHT}}),
-    Modifier("steep", ("steep", "steeper", "tall"), scale=_per_tool(_STEEPNESS, 1.8)),
+    Modifier("steep", ("steep", "steeper"), scale=_per_tool(_STEEPNESS, 1.8)),
     Modifier("gentle", ("gentle", "gently", "easy", "mild"), scale=_per_tool(_STEEPNESS, 0.5)),
+    Modifier("tall", ("tall", "towering", "high"),
+             scale={"pillars": {"height": 1.5}, "flat": {"height": 1.5}, "discrete_obstacles": {"max_height": 1.5}}),
     Modifier("rough", ("rough", "uneven", "broken"), scale=_per_tool(_ROUGHNESS, 2.0)),
     Modifier("smooth", ("smooth",), scale=_per_tool(_ROUGHNESS, 0.4)),
     Modifier("rocky", ("rocky", "stony"), extra=(Step("rocks", {"max_height": 0.15, "density": 0.6}, mode="add"),)),
     Modifier("slippery", ("slippery", "slick", "wet"), extra=(Step("low_friction", {"preset": "wet_tiles"}),)),
     Modifier("flooded", ("flooded", "flooding", "submerged"), extra=(Step("water", {"depth": 0.2}),)),
-    Modifier("strong current", ("strong current", "fast-flowing", "fast flowing", "rapids", "torrent", "swift"),
+    Modifier("frozen", ("frozen", "icy", "iced over", "ice-covered"), drop=(("water", None),),
+             extra=(Step("low_friction", {"preset": "ice"}),)),
+    Modifier("dry", ("dry", "dried", "dried-up", "dried up"), drop=(("water", None),)),
+    Modifier("snowy", ("snowy", "snow-covered", "snow covered", "snowbound"), drop=_ALL_SOIL,
+             extra=(Step("soil", {"preset": "snow"}),)),
+    Modifier("muddy", ("muddy",), drop=_ALL_SOIL, extra=(Step("soil", {"preset": "mud"}),)),
+    Modifier("sandy", ("sandy",), drop=_ALL_SOIL, extra=(Step("soil", {"preset": "dry_sand"}),)),
+    Modifier("strong current", ("strong current", "fast-flowing", "fast flowing", "swift", "fast", "raging"),
              set={"water": {"flow": "current", "speed": 1.5}}),
+    Modifier("flowing", ("flowing", "slow-flowing", "slow flowing", "running"), set={"water": {"flow": "current", "speed": 0.4}}),
     Modifier("calm", ("calm", "still", "stagnant"), set={"water": {"flow": "still", "speed": 0.0}}),
-    Modifier("waves", ("waves", "wavy", "surf", "tide", "tidal"), set={"water": {"flow": "tide", "speed": 0.6, "omega": 0.8}}),
-    Modifier("dense", ("dense", "thick", "crowded", "cluttered"),
-             scale={"pillars": {"density": 2.0}, "rocks": {"density": 2.0}, "discrete_obstacles": {"density": 2.0}}),
-    Modifier("sparse", ("sparse", "scattered"),
-             scale={"pillars": {"density": 0.4}, "rocks": {"density": 0.4}, "discrete_obstacles": {"density": 0.4}}),
+    Modifier("waves", ("waves", "wavy", "surf", "tide", "tidal", "breakers"), set={"water": {"flow": "tide", "speed": 0.6, "omega": 0.8}}),
+    Modifier("dense", ("dense", "thick", "crowded", "cluttered"), scale={t: {"density": 2.0} for t in _DENSITY}),
+    Modifier("sparse", ("sparse", "scattered", "few"), scale={t: {"density": 0.4} for t in _DENSITY}),
 )
+
+NEGATED: dict[str, Modifier] = {
+    "sand": Modifier("no sand", (), drop=(("soil", "dry_sand"), ("soil", "wet_sand"))),
+    "snow": Modifier("no snow", (), drop=(("soil", "snow"),)),
+    "water": Modifier("no water", (), drop=(("water", None),)),
+    "waves": Modifier("no waves", (), set={"water": {"flow": "still", "speed": 0.0}}),
+    "current": Modifier("no current", (), set={"water": {"flow": "still", "speed": 0.0}}),
+    "trees": Modifier("no trees", (), drop=(("pillars", None),)),
+    "vegetation": Modifier("no vegetation", (), drop=(("pillars", None),)),
+    "rocks": Modifier("no rocks", (), drop=(("rocks", None),)),
+}
+"""Negated words ("without sand", "no waves") and what they remove from every recipe of the text."""
 
 SLOT_LAYOUTS = {
     1: ("full",),
@@ -210,38 +343,69 @@ SLOT_LAYOUTS = {
 }
 
 _NEGATION = re.compile(r"\b(no|not|without|never|avoid)\s+(\w+\s+){0,2}$")
+_SENTENCE_END = re.compile(r"[.;!?]")
+_PHRASE_END = re.compile(r"[,.;:!?]")
+
+Mention = tuple[int, int, Any]  # (start, end, Cue or Modifier)
 
 
-def _find(keywords: tuple[str, ...], text: str) -> tuple[int, int] | None:
-    """Span of the first keyword (whole words, optional plural) not negated just before it; None if absent."""
-    best = None
-    for kw in keywords:
-        for m in re.finditer(rf"(?<![\w-]){re.escape(kw)}(?:s|es)?(?![\w-])", text):
-            if not _NEGATION.search(text[max(0, m.start() - 30):m.start()]):
-                best = m.span() if best is None or m.start() < best[0] else best
-                break
-    return best
+def _mentions(items, text: str, keys) -> list[Mention]:
+    """Every non-negated occurrence of an item's keywords (whole words, optional plural) in ``text``."""
+    out = []
+    for item in items:
+        for kw in keys(item):
+            for m in re.finditer(rf"(?<!\w){re.escape(kw)}(?:s|es)?(?!\w)", text):
+                if not _NEGATION.search(text[max(0, m.start() - 30):m.start()]):
+                    out.append((m.start(), m.end(), item))
+    return out
 
 
-def _first_mentions(items, text: str, keys) -> list[tuple[int, Any]]:
-    """Items whose keywords occur in ``text``, by first mention; a match inside a longer match is dropped."""
-    spans = [(span, item) for item in items if (span := _find(keys(item), text)) is not None]
-    keep = [(a, item) for (a, b), item in spans
-            if not any(c <= a and b <= d and d - c > b - a for (c, d), _ in spans)]
-    return sorted(keep, key=lambda pi: (pi[0], pi[1].name))
+def _outermost(mentions: list[Mention]) -> list[Mention]:
+    """Drop mentions lying inside a longer one ("stepping stones" hides "stones", "knee-deep" hides "deep")."""
+    return [(a, b, x) for a, b, x in mentions
+            if not any(c <= a and b <= d and d - c > b - a for c, d, _ in mentions)]
+
+
+def _scan(text: str) -> tuple[list[Mention], list[Mention]]:
+    """Cue and modifier mentions of ``text`` (lower case), inner mentions dropped across both kinds.
+
+    Weak cue keywords ("water") count only when no cue is named by a strong keyword.
+    """
+    mods = _mentions(MODIFIERS, text, lambda m: m.keywords)
+    cues = _mentions(CUES, text, lambda c: c.keywords) or _mentions(CUES, text, lambda c: c.weak)
+    both = _outermost(cues + mods)
+    is_cue = lambda x: isinstance(x, Cue)  # noqa: E731
+    return sorted(m for m in both if is_cue(m[2]) and m in cues), sorted((m for m in both if not is_cue(m[2])), key=lambda m: m[0])
 
 
 def find_cues(text: str) -> list[tuple[int, Cue]]:
-    """Cues mentioned in ``text`` with the position of their first mention, in order of mention.
+    """Cues mentioned in ``text`` with the position of their first mention, in order of first mention."""
+    first: dict[str, tuple[int, Cue]] = {}
+    for start, _, cue in _scan(text.lower())[0]:
+        first.setdefault(cue.name, (start, cue))
+    return sorted(first.values(), key=lambda pc: (pc[0], pc[1].name))
 
-    Weak keywords ("water", "sand", "trees") count only when no cue is named by a strong keyword.
-    """
-    text = text.lower()
-    return _first_mentions(CUES, text, lambda c: c.keywords) or _first_mentions(CUES, text, lambda c: c.weak)
+
+def _bind(text: str, mod: Mention, cue_mentions: list[Mention]) -> tuple[Cue | None, Cue | None]:
+    """(cue the modifier changes, cue it was aimed at) for one modifier mention (module docstring's rule)."""
+    start, end, modifier = mod
+    following = [m for m in cue_mentions if m[0] >= end and not _PHRASE_END.search(text[end:m[0]])
+                 and len(text[end:m[0]].split()) <= 3]
+    preceding = [m for m in cue_mentions if m[1] <= start and not _SENTENCE_END.search(text[m[1]:start])]
+    ordered = following[:1] + sorted(preceding, key=lambda m: start - m[1])
+    ordered += sorted(cue_mentions, key=lambda m: min(abs(m[0] - end), abs(start - m[1])))
+    for m in ordered:
+        if modifier.applies_to(m[2]):
+            return m[2], ordered[0][2]
+    return None, ordered[0][2] if ordered else None
 
 
-def find_modifiers(text: str) -> list[tuple[int, Modifier]]:
-    return _first_mentions(MODIFIERS, text.lower(), lambda m: m.keywords)
+def _negations(text: str) -> list[Modifier]:
+    found = []
+    for word, mod in NEGATED.items():
+        if re.search(rf"\b(?:no|not|without|never)\s+(?:\w+\s+){{0,2}}{word}s?\b", text):
+            found.append(mod)
+    return found
 
 
 def _frac_rect(slot: tuple[float, float, float, float], where: Frac) -> tuple[float, float, float, float]:
@@ -270,6 +434,50 @@ def _apply(step: Step, modifiers: list[Modifier], terrain: AtomicTerrain, warnin
     return params
 
 
+def _steps(cue: Cue, modifiers: list[Modifier]) -> list[Step]:
+    """The cue's recipe after the modifiers' drops, then their extra steps."""
+    drops = tuple(d for m in modifiers for d in m.drop)
+    return [s for s in cue.steps if not _dropped(s, drops)] + [s for m in modifiers for s in m.extra]
+
+
+def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], dict[str, list[Modifier]]]:
+    """The cues laid out (at most 4, by first mention) and the modifiers bound to each (negations included)."""
+    lower = text.lower()
+    cue_mentions, mod_mentions = _scan(lower)
+    cues = find_cues(text)
+    if not cues:
+        warnings.append(
+            f"no scene cue recognised in {text!r}; built flat ground. Known cues: "
+            f"{sorted(k for c in CUES for k in c.keywords[:1])}."
+        )
+        flat = Cue("flat", (), (Step("flat", {"height": 0.0}),))
+        cues = [(0, flat)]
+        cue_mentions = [(0, 0, flat)]
+    if len(cues) > 4:
+        warnings.append(f"{len(cues)} scene cues found; the tile holds 4, dropped {[c.name for _, c in cues[4:]]}.")
+        cues = cues[:4]
+    kept = {c.name for _, c in cues}
+    cue_mentions = [m for m in cue_mentions if m[2].name in kept]
+    per_cue: dict[str, list[Modifier]] = {c.name: [] for _, c in cues}
+    for mention in mod_mentions:
+        target, aimed = _bind(lower, mention, cue_mentions)
+        if target is None:
+            warnings.append(f"modifier '{mention[2].name}' does not apply to {aimed.name if aimed else 'anything'}; ignored.")
+        elif mention[2] not in per_cue[target.name]:
+            per_cue[target.name].append(mention[2])
+    for negation in _negations(lower):
+        for _, cue in cues:
+            if negation.applies_to(cue):
+                per_cue[cue.name].append(negation)
+    return cues, per_cue
+
+
+def recipe_steps(text: str) -> list[Step]:
+    """Every recipe step :func:`plan_text` builds for ``text`` (modifiers' drops and extra steps applied)."""
+    cues, per_cue = _bind_all(text, [])
+    return [step for _, cue in cues for step in _steps(cue, per_cue[cue.name])]
+
+
 def plan_text(
     text: str,
     size_x: float = 20.0,
@@ -279,21 +487,7 @@ def plan_text(
     """Deterministic tool calls for a scene description (see the module docstring for the rules)."""
     registry = ATOMIC_TERRAINS if registry is None else registry
     warnings: list[str] = []
-    cues = find_cues(text)
-    if not cues:
-        warnings.append(
-            f"no scene cue recognised in {text!r}; built flat ground. Known cues: "
-            f"{sorted(k for c in CUES for k in c.keywords[:1])}."
-        )
-        cues = [(0, Cue("flat", (), (Step("flat", {"height": 0.0}),)))]
-    if len(cues) > 4:
-        warnings.append(f"{len(cues)} scene cues found; the tile holds 4, dropped {[c.name for _, c in cues[4:]]}.")
-        cues = cues[:4]
-    mods = find_modifiers(text)
-    per_cue: dict[int, list[Modifier]] = {i: [] for i in range(len(cues))}
-    for mpos, mod in mods:  # nearest cue mention wins; ties go to the cue after the modifier ("steep stairs")
-        i = min(range(len(cues)), key=lambda k: (abs(cues[k][0] - mpos), cues[k][0] < mpos))
-        per_cue[i].append(mod)
+    cues, per_cue = _bind_all(text, warnings)
     regions = named_regions(size_x, size_y)
     geometric_calls: list[ToolCall] = []
     physical_calls: list[ToolCall] = []
@@ -301,14 +495,10 @@ def plan_text(
     for i, (_, cue) in enumerate(cues):
         slot_name = SLOT_LAYOUTS[len(cues)][i]
         slot = regions[slot_name]
-        used = per_cue[i]
+        used = per_cue[cue.name]
         notes.append(f"{cue.name} on {slot_name}" + (f" ({', '.join(m.name for m in used)})" if used else "")
                      + (f": {cue.note}" if cue.note else ""))
-        touched = {s.tool for s in cue.steps}
-        for mod in used:
-            if not (touched & (set(mod.set) | set(mod.scale))) and not mod.extra:
-                warnings.append(f"modifier '{mod.name}' does not apply to {cue.name}; ignored.")
-        steps = list(cue.steps) + [s for m in used for s in m.extra]
+        steps = _steps(cue, used)
         geometric = [s for s in steps if registry[s.tool].kind == "geometric"]
         physical = [s for s in steps if registry[s.tool].kind == "physical"]
         for step in geometric + physical:
