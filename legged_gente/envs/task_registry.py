@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
 from datetime import datetime
@@ -19,6 +20,17 @@ def default_log_root() -> Path:
     """Where runs go: ``$GENTE_LOG_ROOT``, else ``logs/`` in the current working directory (legged_gym's habit:
     a project's runs land in the project's folder, never in the installed package)."""
     return Path(os.environ.get("GENTE_LOG_ROOT") or "logs").absolute()
+
+
+@contextlib.contextmanager
+def shipped_task_warnings_quiet(task: str, verbose: bool):
+    """Hide the shipped tasks' own known construction warnings unless ``verbose``: the quadruped's light legs
+    (their added mass in deep water reaches their mass; docs/forces.md) are not news to a user of that task. A
+    user's own robot still gets the warning."""
+    with warnings.catch_warnings():
+        if task in BUILTIN_TASKS and not verbose:
+            warnings.filterwarnings("ignore", message=r"forces: the added mass of leg geoms")
+        yield
 
 
 def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO | None) -> None:
@@ -72,10 +84,7 @@ class TaskRegistry:
                   f"is sized for a GPU and will be slow here; pass e.g. --num_envs 4 for a quick CPU run", flush=True)
         # seed before the env draws anything (spawn yaw, commands, domain randomisation); one seed per rank
         torch.manual_seed(int(train_cfg.seed) + int(os.environ.get("RANK", "0")))
-        with warnings.catch_warnings():
-            if name in BUILTIN_TASKS and not getattr(args, "verbose", True):
-                # the shipped quadruped's light legs: known and documented (docs/forces.md), not news to its user
-                warnings.filterwarnings("ignore", message=r"forces: the added mass of leg geoms")
+        with shipped_task_warnings_quiet(name, getattr(args, "verbose", True)):
             env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
         return env, env_cfg
 
@@ -111,6 +120,22 @@ class TaskRegistry:
             # a checkpoint stores the last *finished* iteration; continue with the next one
             runner.current_learning_iteration += 1
         return runner, train_cfg, log_dir
+
+    def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):
+        """A runner (no run folder) with the policy shipped for task ``name`` loaded (actor only), its network
+        sizes taken from the shipped config. The checkpoint's path."""
+        from legged_gente.envs.base.base_config import update_from_dict
+        from legged_gente.utils.checkpoints import pretrained_policy
+
+        path, config = pretrained_policy(name)
+        train_cfg = train_cfg or self.get_cfgs(name)[1]
+        train_cfg.runner.resume = False
+        for section in ("actor", "critic"):
+            update_from_dict(getattr(train_cfg, section), config["train"][section], section)
+        runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
+        runner.load(str(path), load_cfg={"actor": True}, map_location=env.device)
+        runner.loaded_checkpoint = path
+        return runner, path
 
 
 def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) -> Path:

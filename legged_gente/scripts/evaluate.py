@@ -15,29 +15,40 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from legged_gente.utils.args import default_device
+from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
 
 
-def load_policy(evaluation, checkpoint: str | None = None, exported: str | None = None, baseline: str | None = None):
-    """obs TensorDict -> actions from an rsl-rl checkpoint (file or run folder), a TorchScript file, or a baseline."""
+def load_policy(evaluation, **sources):
+    """obs TensorDict -> actions (see ``load_policy_and_file``)."""
+    return load_policy_and_file(evaluation, **sources)[0]
+
+
+def load_policy_and_file(evaluation, checkpoint: str | None = None, exported: str | None = None,
+                         baseline: str | None = None, pretrained: bool = False):
+    """(obs TensorDict -> actions, the file it came from) from an rsl-rl checkpoint (file or run folder), an
+    exported ONNX policy, the policy shipped for the task, or a baseline."""
     env = evaluation.env
-    given = [x for x in (checkpoint, exported, baseline) if x]
+    given = [x for x in (checkpoint, exported, baseline, pretrained) if x]
     if len(given) != 1:
         raise ValueError("give exactly one of --checkpoint (rsl-rl model_N.pt or its run folder), --exported "
-                         "(TorchScript policy.pt from gente-play) or --baseline (zero | random).")
+                         "(policy.onnx from gente-play), --pretrained or --baseline (zero | random).")
     if baseline:
         if baseline == "zero":
-            return lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)
+            return (lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)), None
         if baseline == "random":
-            return lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)
+            return (lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)), None
         raise ValueError(f"--baseline {baseline!r}: use 'zero' or 'random'.")
     if exported:
-        model = torch.jit.load(exported, map_location=env.device)
-        model.eval()
-        return lambda obs: model(obs["policy"])
+        from legged_gente.utils.export import OnnxPolicy
+
+        num_obs = int(env.get_observations()["policy"].shape[1])
+        return OnnxPolicy(exported, num_obs, env.num_actions), Path(exported).resolve()
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.utils.checkpoints import find_checkpoint
 
+    if pretrained:
+        runner, path = task_registry.make_pretrained_runner(env, evaluation.task_name, evaluation.train_cfg)
+        return runner.get_inference_policy(device=env.device), path
     path = Path(checkpoint)
     if path.is_dir():
         path = find_checkpoint(path.parent, path.name)
@@ -45,7 +56,7 @@ def load_policy(evaluation, checkpoint: str | None = None, exported: str | None 
         raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
     runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
     runner.load(str(path), map_location=env.device)
-    return runner.get_inference_policy(device=env.device)
+    return runner.get_inference_policy(device=env.device), path.resolve()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,24 +64,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task", default="gente_biped", help="registered task name")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, or a run folder (its latest checkpoint)")
-    src.add_argument("--exported", help="TorchScript policy.pt exported by gente-play")
+    src.add_argument("--exported", help="policy.onnx exported by gente-play (run with onnxruntime on the CPU)")
+    src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
     p.add_argument("--benchmark", default="benchmarks/gente100", help="benchmark folder with manifest.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
-    p.add_argument("--robots_per_terrain", type=int, default=16)
+    p.add_argument(*flag("--robots_per_terrain"), type=int, default=16)
     p.add_argument("--mode", choices=("velocity", "waypoints"), default="velocity", help="evaluation task")
-    p.add_argument("--episode_s", type=float, default=None,
+    p.add_argument(*flag("--episode_s"), type=float, default=None,
                    help="episode length in s (default: 10 for velocity, 20 for waypoints)")
-    p.add_argument("--tracking_threshold", type=float, default=0.5,
+    p.add_argument(*flag("--tracking_threshold"), type=float, default=0.5,
                    help="m/s; velocity-task success needs a mean tracking error below it")
-    p.add_argument("--settle_s", type=float, default=1.0, help="s at the start not counted in the tracking error")
-    p.add_argument("--reach_distance", type=float, default=1.0, help="m; waypoint reached within this distance (d)")
+    p.add_argument(*flag("--settle_s"), type=float, default=1.0, help="s at the start not counted in the tracking error")
+    p.add_argument(*flag("--reach_distance"), type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
-    p.add_argument("--no_progress", action="store_true", help="no progress bar")
+    p.add_argument(*flag("--no_progress"), action="store_true", help="no progress bar")
+    add_verbose(p)
     return p
 
 
@@ -78,20 +91,24 @@ def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation
     from legged_gente.evaluation.report import build_report, write_reports
+    from legged_gente.envs.task_registry import shipped_task_warnings_quiet
 
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
         if args.limit < 1:
             raise ValueError(f"--limit must be >= 1, got {args.limit}.")
         items = items[: args.limit]
-    device = args.device or default_device()
-    device = "cuda:0" if device == "cuda" else device
+    device = resolve_device(args.device)
     episode_s = args.episode_s or (20.0 if args.mode == "waypoints" else 10.0)
-    evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
-    policy = load_policy(evaluation, args.checkpoint, args.exported, args.baseline)
+    with shipped_task_warnings_quiet(args.task, args.verbose):
+        evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
+    policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
+                                               args.pretrained)
     task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress)
-    meta = {"task": args.task, "benchmark": str(args.benchmark), "policy": args.checkpoint or args.exported or args.baseline,
+    meta = {"task": args.task, "benchmark": str(args.benchmark),
+            "policy": args.checkpoint or args.exported or args.baseline or "pretrained",
+            "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed}
     report = build_report(result, items, args.tracking_threshold, meta)
     json_path, csv_path = write_reports(report, args.out)
@@ -106,7 +123,10 @@ def evaluate(args) -> dict:
 
 
 def main(argv=None) -> None:
-    evaluate(build_parser().parse_args(argv))
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    quiet_third_party(args.verbose)
+    run_command("gente-evaluate", evaluate, args)
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import logging
 import sys
 import warnings
 
@@ -116,7 +117,11 @@ THIRD_PARTY_NOISE = (
     (DeprecationWarning, "", r"(torch|torchvision|onnx|onnxscript|tensordict|rsl_rl|mujoco_warp|warp)(\.|$)"),
     (UserWarning, r".*(Failed to load image Python extension|torchvision)", ""),
     (UserWarning, r".*torch\.jit\.\w+.*deprecated", ""),
+    (FutureWarning, r".*treespec", ""),  # torch.utils._pytree, raised from copyreg during torch.export
 )
+# Python loggers of third-party libraries whose warnings are not the user's (torch.onnx: "torchvision is not
+# installed. Skipping torchvision::nms" at every ONNX export)
+THIRD_PARTY_LOGGERS = ("torch.onnx",)
 
 
 def quiet_third_party(verbose: bool = False) -> None:
@@ -127,6 +132,8 @@ def quiet_third_party(verbose: bool = False) -> None:
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
+    for name in THIRD_PARTY_LOGGERS:
+        logging.getLogger(name).setLevel(logging.ERROR)
     for category, message, module in THIRD_PARTY_NOISE:
         warnings.filterwarnings("ignore", message=message, category=category, module=module)
 

@@ -8,6 +8,7 @@ of them are unpickled, never arbitrary Python objects (rsl-rl's own ``OnPolicyRu
 
 from __future__ import annotations
 
+import json
 import pickle
 import re
 import zipfile
@@ -140,3 +141,20 @@ def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int
 
 def _shapes(state: dict) -> dict[str, tuple[int, ...]]:
     return {key: tuple(value.shape) for key, value in state.items()}
+
+
+def policies_root() -> Path:
+    """Where the package's pretrained policies are: ``resources/policies/<task>/`` (model.pt, config.json)."""
+    return Path(__file__).resolve().parents[2] / "resources" / "policies"
+
+
+def pretrained_policy(task: str) -> tuple[Path, dict]:
+    """The shipped policy of ``task``: its checkpoint and its run's config (network sizes, code commit, note)."""
+    folder = policies_root() / task
+    if not (folder / "model.pt").is_file():
+        shipped = sorted(p.name for p in policies_root().iterdir() if (p / "model.pt").is_file()) \
+            if policies_root().is_dir() else []
+        raise FileNotFoundError(f"--pretrained: no policy is shipped for task {task!r} (shipped: "
+                                f"{', '.join(shipped) or 'none'}); train one with gente-train --task {task}, then "
+                                f"use --load_run/--checkpoint")
+    return folder / "model.pt", json.loads((folder / "config.json").read_text())
