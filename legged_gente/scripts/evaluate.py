@@ -93,6 +93,9 @@ def evaluate(args) -> dict:
     from legged_gente.evaluation.report import build_report, write_reports
     from legged_gente.envs.task_registry import shipped_task_warnings_quiet
 
+    for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
+        if given and not Path(given).exists():  # before the (slow) evaluation envs are built
+            raise FileNotFoundError(f"{name} {given}: no such file or run folder.")
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
         if args.limit < 1:

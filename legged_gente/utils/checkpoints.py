@@ -88,12 +88,15 @@ def load_checkpoint(path: str | Path, map_location=None) -> dict:
     try:
         loaded = torch.load(path, map_location=map_location, weights_only=True)
     except pickle.UnpicklingError as error:
-        if "weights_only" in str(error).lower() or "weights only" in str(error).lower():
-            detail = str(error).splitlines()[-1] if str(error).strip() else type(error).__name__
-            raise CheckpointError(f"checkpoint {path} holds Python objects that the safe loader refuses "
-                                  f"(torch.load weights_only=True: {detail.strip()}); legged_gente only loads "
-                                  f"checkpoints of tensors and plain values.") from None
-        raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (corrupt: {error}).") from None
+        # the safe unpickler names a refused object as a GLOBAL; anything else it stumbles on is a broken file
+        refused = [line.strip() for line in str(error).splitlines() if "global" in line.lower()]
+        if refused:
+            raise CheckpointError(f"checkpoint {path} holds Python objects that the safe loader refuses ("
+                                  f"{refused[0]}); legged_gente loads checkpoints with torch.load(weights_only=True), "
+                                  f"which unpickles tensors and plain values only, so a checkpoint cannot run code."
+                                  ) from None
+        reason = [line.strip() for line in str(error).splitlines() if line.strip()][-2:-1] or [type(error).__name__]
+        raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (corrupt: {reason[0]}).") from None
     except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError) as error:
         first = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (truncated or corrupt: {first}).") from None
