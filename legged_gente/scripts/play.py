@@ -143,7 +143,7 @@ def _open_viewer(env):
     return _Viewer()
 
 
-def main(argv=None) -> None:
+def build_play_parser():
     parser = build_parser("Roll out, export and record a trained policy.")
     parser.add_argument("--video", action="store_true", help="write an mp4 of robot 0")
     parser.add_argument("--steps", type=int, default=500, help="policy steps to roll out")
@@ -151,6 +151,11 @@ def main(argv=None) -> None:
                         help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
     parser.add_argument("--pretrained", action="store_true",
                         help="play the policy shipped with the package for --task (resources/policies/<task>/)")
+    return parser
+
+
+def main(argv=None) -> None:
+    parser = build_play_parser()
     args = parse_args(parser, argv)
     if args.pretrained and (args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --load_run/--checkpoint")

@@ -161,3 +161,27 @@ def pretrained_policy(task: str) -> tuple[Path, dict]:
                                 f"{', '.join(shipped) or 'none'}); train one with gente-train --task {task}, then "
                                 f"use --load_run/--checkpoint")
     return folder / "model.pt", json.loads((folder / "config.json").read_text())
+
+
+def ship_policy(checkpoint: str | Path, task: str, note: str, destination: Path | None = None) -> Path:
+    """Copy a run's checkpoint into the package as the pretrained policy of ``task``: the actor only (what
+    playing needs; small and CPU-loadable) in ``model.pt``, and the run's config.json (network sizes, the command
+    and the code commit it was trained at) with ``note`` (how it was trained) in ``config.json``."""
+    checkpoint = Path(checkpoint)
+    loaded = load_checkpoint(checkpoint, map_location="cpu")
+    infos = loaded.get("infos") or {}
+    if infos.get("task") not in (None, task):
+        raise CheckpointError(f"checkpoint {checkpoint} is for {infos['task']}, not {task}")
+    config_path = checkpoint.parent / "config.json"
+    if not config_path.is_file():
+        raise FileNotFoundError(f"{config_path} not found: a shipped policy needs its run's config.json")
+    folder = Path(destination) if destination is not None else policies_root() / task
+    folder.mkdir(parents=True, exist_ok=True)
+    actor = {key: value.detach().cpu().clone() for key, value in loaded["actor_state_dict"].items()}
+    torch.save({"actor_state_dict": actor, "iter": loaded.get("iter"),
+                "infos": {"task": task, "num_actions": infos.get("num_actions", _actor_outputs(actor))}},
+               folder / "model.pt")
+    config = json.loads(config_path.read_text())
+    config.update(note=note, source_checkpoint=f"{checkpoint.parent.name}/{checkpoint.name}")
+    (folder / "config.json").write_text(json.dumps(config, indent=1))
+    return folder
