@@ -14,6 +14,7 @@ import torch
 
 from legged_gente.envs.task_registry import default_log_root, task_registry
 from legged_gente.utils.args import apply_args, build_parser, flag, parse_args, run_command
+from legged_gente.utils.checkpoints import pretrained_policy
 from legged_gente.utils.export import deployment_metadata, export_onnx
 
 
@@ -76,6 +77,8 @@ class VideoRecorder:
 
 
 def play(args) -> dict:
+    if getattr(args, "pretrained", False):
+        pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
     env_cfg, train_cfg = task_registry.get_cfgs(args.task)
     env_cfg.env.num_envs = min(env_cfg.env.num_envs, 16)
     env_cfg.noise.add_noise = False

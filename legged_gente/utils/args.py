@@ -57,6 +57,7 @@ def resolve_device(device: str | None) -> str:
 
     if device is None:
         return default_device()
+    given = device
     if device == "cuda":
         device = "cuda:0"
     if device != "cpu" and not (device.startswith("cuda:") and device[5:].isdigit()):
@@ -64,7 +65,7 @@ def resolve_device(device: str | None) -> str:
     if device.startswith("cuda"):
         count = torch.cuda.device_count() if torch.cuda.is_available() else 0
         if count == 0:
-            raise ValueError(f"--device {device}: no GPU visible, use --device cpu")
+            raise ValueError(f"--device {given}: no GPU visible, use --device cpu")
         if int(device[5:]) >= count:
             raise ValueError(f"--device {device}: only {count} GPU(s) visible (cuda:0..cuda:{count - 1})")
     return device
