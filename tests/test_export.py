@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from legged_gente.envs.task_registry import task_registry
-from legged_gente.scripts.evaluate import load_policy_and_file
+from legged_gente.evaluation.evaluator import load_policy_and_file
 from legged_gente.utils.args import build_parser, parse_args
 from legged_gente.utils.export import OnnxPolicy, deployment_metadata, export_onnx, read_metadata
 

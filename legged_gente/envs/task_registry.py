@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import os
 import warnings
@@ -11,6 +12,8 @@ from pathlib import Path
 import torch
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO, rsl_rl_train_cfg
+from legged_gente.envs.terrain_arg import apply_terrain_arg
+from legged_gente.utils.args import apply_overrides
 
 BUILTIN_TASKS = ("gente_biped", "gente_biped_flat", "gente_quadruped", "gente_quadruped_flat")
 CPU_MANY_ENVS = 64  # more robots than this on the CPU: say that it will be slow, and how to make it fast
@@ -55,6 +58,25 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
             raise ValueError(f"{name}={value!r}: must be {bound} (--set {name}=...)")
 
 
+def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
+    """Override config instances with the flags that were given (None means 'keep the config's value')."""
+    apply_overrides(getattr(args, "overrides", None) or [], env_cfg, train_cfg)
+    if env_cfg is not None:
+        if getattr(args, "num_envs", None) is not None:
+            env_cfg.env.num_envs = args.num_envs
+        if getattr(args, "terrain", None):
+            apply_terrain_arg(args.terrain, env_cfg)
+    if train_cfg is not None:
+        if getattr(args, "seed", None) is not None:
+            train_cfg.seed = args.seed
+        for flag in ("max_iterations", "experiment_name", "run_name", "load_run", "checkpoint"):
+            value = getattr(args, flag, None)
+            if value is not None:
+                setattr(train_cfg.runner, flag, value)
+        if getattr(args, "resume", False):
+            train_cfg.runner.resume = True
+
+
 class TaskRegistry:
     def __init__(self) -> None:
         self.tasks: dict[str, tuple[type, type, type]] = {}
@@ -70,8 +92,6 @@ class TaskRegistry:
 
     def make_env(self, name: str, args=None, env_cfg: LeggedRobotCfg | None = None):
         """The task's env with ``args`` (argparse namespace from utils.args) applied to its config."""
-        from legged_gente.utils.args import apply_args
-
         default_env_cfg, train_cfg = self.get_cfgs(name)
         env_class = self.tasks[name][0]
         env_cfg = env_cfg or default_env_cfg
@@ -93,7 +113,6 @@ class TaskRegistry:
         """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default; an
         unreadable latest checkpoint falls back to the newest readable one). ``log_root``: where runs are
         ("default": ``default_log_root()``; None: no run folder)."""
-        from legged_gente.utils.args import apply_args
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 
         if train_cfg is None:

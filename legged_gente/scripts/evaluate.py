@@ -1,7 +1,7 @@
 """gente-evaluate: a policy on the benchmark's terrains -> per-terrain, per-category and overall metrics.
 
     gente-evaluate --task gente_biped --checkpoint logs/gente_biped/RUN/model_1500.pt \\
-        --benchmark benchmarks/gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
+        --benchmark gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
 
 Writes ``report.json``, ``report.csv`` and ``traces.npz`` (the first robot of every terrain: commands,
 velocities, positions, waypoints) to ``--out``. See docs/evaluation.md for the metrics' definitions.
@@ -13,50 +13,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
-
-
-def load_policy(evaluation, **sources):
-    """obs TensorDict -> actions (see ``load_policy_and_file``)."""
-    return load_policy_and_file(evaluation, **sources)[0]
-
-
-def load_policy_and_file(evaluation, checkpoint: str | None = None, exported: str | None = None,
-                         baseline: str | None = None, pretrained: bool = False):
-    """(obs TensorDict -> actions, the file it came from) from an rsl-rl checkpoint (file or run folder), an
-    exported ONNX policy, the policy shipped for the task, or a baseline."""
-    env = evaluation.env
-    given = [x for x in (checkpoint, exported, baseline, pretrained) if x]
-    if len(given) != 1:
-        raise ValueError("give exactly one of --checkpoint (rsl-rl model_N.pt or its run folder), --exported "
-                         "(policy.onnx from gente-play), --pretrained or --baseline (zero | random).")
-    if baseline:
-        if baseline == "zero":
-            return (lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)), None
-        if baseline == "random":
-            return (lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)), None
-        raise ValueError(f"--baseline {baseline!r}: use 'zero' or 'random'.")
-    if exported:
-        from legged_gente.utils.export import OnnxPolicy
-
-        num_obs = int(env.get_observations()["policy"].shape[1])
-        return OnnxPolicy(exported, num_obs, env.num_actions), Path(exported).resolve()
-    from legged_gente.envs.task_registry import task_registry
-    from legged_gente.utils.checkpoints import find_checkpoint
-
-    if pretrained:
-        runner, path = task_registry.make_pretrained_runner(env, evaluation.task_name, evaluation.train_cfg)
-        return runner.get_inference_policy(device=env.device), path
-    path = Path(checkpoint)
-    if path.is_dir():
-        path = find_checkpoint(path.parent, path.name)
-    if not path.is_file():
-        raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
-    runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
-    runner.load(str(path), map_location=env.device)
-    return runner.get_inference_policy(device=env.device), path.resolve()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -67,15 +25,20 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--exported", help="policy.onnx exported by gente-play (run with onnxruntime on the CPU)")
     src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
-    p.add_argument("--benchmark", default="benchmarks/gente100", help="benchmark folder with manifest.json")
+    p.add_argument("--benchmark", default="gente100", help="a shipped benchmark (gente100) or a folder with a manifest.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
     p.add_argument(*flag("--robots_per_terrain"), type=int, default=16)
     p.add_argument("--mode", choices=("velocity", "waypoints"), default="velocity", help="evaluation task")
     p.add_argument(*flag("--episode_s"), type=float, default=None,
                    help="episode length in s (default: 10 for velocity, 20 for waypoints)")
-    p.add_argument(*flag("--tracking_threshold"), type=float, default=0.5,
+    p.add_argument(*flag("--tracking_threshold"), type=float, default=0.25,
                    help="m/s; velocity-task success needs a mean tracking error below it")
+    p.add_argument(*flag("--min_progress"), type=float, default=0.7,
+                   help="velocity-task success needs this share of the commanded distance covered along the command")
+    p.add_argument(*flag("--min_speed"), type=float, default=0.3, help="m/s; the slowest moving command of the velocity task")
+    p.add_argument(*flag("--stand_fraction"), type=float, default=0.1,
+                   help="share of robots commanded to stand still (scored as the group stand_still)")
     p.add_argument(*flag("--settle_s"), type=float, default=1.0, help="s at the start not counted in the tracking error")
     p.add_argument(*flag("--reach_distance"), type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
@@ -89,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
     from legged_gente.evaluation.report import build_report, write_reports
     from legged_gente.envs.task_registry import shipped_task_warnings_quiet
 
@@ -107,13 +70,14 @@ def evaluate(args) -> dict:
         evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
                                                args.pretrained)
-    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed)
+    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
+                                stand_fraction=args.stand_fraction)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress)
     meta = {"task": args.task, "benchmark": str(args.benchmark),
             "policy": args.checkpoint or args.exported or args.baseline or "pretrained",
             "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed}
-    report = build_report(result, items, args.tracking_threshold, meta)
+    report = build_report(result, items, args.tracking_threshold, meta, args.min_progress)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]

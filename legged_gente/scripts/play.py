@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from legged_gente.envs.task_registry import default_log_root, task_registry
-from legged_gente.utils.args import apply_args, build_parser, flag, parse_args, run_command
+from legged_gente.envs.task_registry import apply_args, default_log_root, task_registry
+from legged_gente.utils.args import build_parser, flag, parse_args, run_command
 from legged_gente.utils.checkpoints import pretrained_policy
 from legged_gente.utils.export import deployment_metadata, export_onnx
 

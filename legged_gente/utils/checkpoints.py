@@ -8,6 +8,7 @@ of them are unpickled, never arbitrary Python objects (rsl-rl's own ``OnPolicyRu
 
 from __future__ import annotations
 
+import importlib.resources
 import json
 import pickle
 import re
@@ -148,7 +149,7 @@ def _shapes(state: dict) -> dict[str, tuple[int, ...]]:
 
 def policies_root() -> Path:
     """Where the package's pretrained policies are: ``resources/policies/<task>/`` (model.pt, config.json)."""
-    return Path(__file__).resolve().parents[2] / "resources" / "policies"
+    return Path(str(importlib.resources.files("legged_gente"))) / "resources" / "policies"  # package data
 
 
 def pretrained_policy(task: str) -> tuple[Path, dict]:
