@@ -138,3 +138,25 @@ def test_runs_go_to_the_working_directory_and_record_how_they_were_made(terminat
         assert code["git_commit"] == head.strip()
     assert config["terrain"] == {"mode": "plane"}
     assert "Module " not in out  # Warp's per-module load lines stay quiet without --verbose
+
+
+def test_config_records_the_resolved_terrain_of_a_heightfield_run(tmp_path):
+    """The tile grid the robots got (names per tile) and a generated spec's content, not only the config."""
+    from types import SimpleNamespace
+
+    from legged_gente.scripts.train import resolved_terrain
+    from legged_gente.terrain.terrain import Terrain
+
+    env_cfg, _ = task_registry.get_cfgs("gente_biped")
+    env_cfg.terrain.num_rows, env_cfg.terrain.num_cols = 2, 3
+    terrain = Terrain(env_cfg.terrain, num_robots=2)
+    record = resolved_terrain(SimpleNamespace(terrain=terrain, cfg=env_cfg))
+    assert record["mode"] == terrain.mode and record["resolution_m"] == env_cfg.terrain.resolution
+    assert len(record["tiles"]) == 2 and all(len(row) == 3 for row in record["tiles"])
+    assert all(isinstance(name, str) and name for row in record["tiles"] for name in row)
+    json.dumps(record)  # serialisable as config.json
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"version": 1, "calls": []}))
+    env_cfg.terrain.generated_specs = [str(spec)]
+    record = resolved_terrain(SimpleNamespace(terrain=terrain, cfg=env_cfg))
+    assert record["generated_specs"] == {str(spec): {"version": 1, "calls": []}}
