@@ -74,6 +74,7 @@ def test_rank_device_and_backend(monkeypatch):
 def test_parse_args_under_torchrun(monkeypatch):
     torchrun_env(monkeypatch, 1, 1, 2)
     monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    monkeypatch.setattr(torch.cuda, "device_count", lambda: 2)  # parse_args checks the device is there
     assert parse_args(build_parser("t"), ["--device", "cuda"]).device == "cuda:1"
     assert parse_args(build_parser("t"), []).device == "cuda:1"
     assert parse_args(build_parser("t"), ["--device", "cpu"]).device == "cpu"

@@ -28,7 +28,7 @@ case "$phase" in
       --csv "$OUT_DIR/${task}_benchmark.csv" 2>&1 | tail -12
     python3 legged_gente/scripts/play.py --task="$task" --headless --steps 500 2>&1 | tail -3
     python3 -m legged_gente.utils.tb_export "$(latest_run)" "$OUT_DIR/${task}_scalars.csv"
-    cp "$GENTE_LOG_ROOT/$task/exported/velocity_tracking.png" "$OUT_DIR/${task}_velocity_tracking.png"
+    cp "$(ls -td "$GENTE_LOG_ROOT/$task"/20*/exported | head -1)/velocity_tracking.png" "$OUT_DIR/${task}_velocity_tracking.png"
     ls -t "$(latest_run)"/model_*.pt | head -1 | xargs -I{} cp {} "$OUT_DIR/${task}_last.pt" ;;
   eval)
     python3 -m legged_gente.scripts.evaluate --task "$task" --checkpoint "$(latest_run)" --benchmark gente100 \

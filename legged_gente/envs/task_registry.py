@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import warnings
 from datetime import datetime
 from pathlib import Path
 
@@ -13,7 +15,47 @@ from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRob
 from legged_gente.envs.terrain_arg import apply_terrain_arg
 from legged_gente.utils.args import apply_overrides
 
-LOG_ROOT = Path(os.environ.get("GENTE_LOG_ROOT", Path(__file__).resolve().parents[2] / "logs"))
+BUILTIN_TASKS = ("gente_biped", "gente_biped_flat", "gente_quadruped", "gente_quadruped_flat")
+CPU_MANY_ENVS = 64  # more robots than this on the CPU: say that it will be slow, and how to make it fast
+
+
+def default_log_root() -> Path:
+    """Where runs go: ``$GENTE_LOG_ROOT``, else ``logs/`` in the current working directory (legged_gym's habit:
+    a project's runs land in the project's folder, never in the installed package)."""
+    return Path(os.environ.get("GENTE_LOG_ROOT") or "logs").absolute()
+
+
+@contextlib.contextmanager
+def shipped_task_warnings_quiet(task: str, verbose: bool):
+    """Hide the shipped tasks' own known construction warnings unless ``verbose``: the quadruped's light legs
+    (their added mass in deep water reaches their mass; docs/forces.md) are not news to a user of that task. A
+    user's own robot still gets the warning."""
+    with warnings.catch_warnings():
+        if task in BUILTIN_TASKS and not verbose:
+            warnings.filterwarnings("ignore", message=r"forces: the added mass of leg geoms")
+        yield
+
+
+def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO | None) -> None:
+    """The settings that divide or count (a zero would crash deep in the env or rsl-rl), checked up front."""
+    checks = []
+    if env_cfg is not None:
+        checks += [("sim.dt", env_cfg.sim.dt, float, 0.0), ("env.episode_length_s", env_cfg.env.episode_length_s, float, 0.0),
+                   ("control.decimation", env_cfg.control.decimation, int, 1), ("env.num_envs", env_cfg.env.num_envs, int, 1)]
+    if train_cfg is not None:
+        r, a = train_cfg.runner, train_cfg.algorithm
+        checks += [("runner.save_interval", r.save_interval, int, 1), ("runner.num_steps_per_env", r.num_steps_per_env, int, 1),
+                   ("algorithm.num_mini_batches", a.num_mini_batches, int, 1),
+                   ("algorithm.num_learning_epochs", a.num_learning_epochs, int, 1),
+                   ("runner.max_iterations", r.max_iterations, int, 0)]
+    for name, value, kind, low in checks:
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not number or (kind is int and value != int(value)):
+            raise ValueError(f"{name}={value!r}: must be {'an integer' if kind is int else 'a number'} "
+                             f"(--set {name}=...)")
+        if (value <= low) if kind is float else (value < low):
+            bound = f"> {low}" if kind is float else f">= {low}"
+            raise ValueError(f"{name}={value!r}: must be {bound} (--set {name}=...)")
 
 
 def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
@@ -55,39 +97,86 @@ class TaskRegistry:
         env_cfg = env_cfg or default_env_cfg
         if args is not None:
             apply_args(args, env_cfg, train_cfg)
+        validate_cfgs(env_cfg, train_cfg)
         device = getattr(args, "device", None) or "cpu"
+        if device == "cpu" and env_cfg.env.num_envs > CPU_MANY_ENVS:
+            print(f"[legged_gente] {env_cfg.env.num_envs} robots on the CPU (no GPU in use): the task's default "
+                  f"is sized for a GPU and will be slow here; pass e.g. --num_envs 4 for a quick CPU run", flush=True)
         # seed before the env draws anything (spawn yaw, commands, domain randomisation); one seed per rank
         torch.manual_seed(int(train_cfg.seed) + int(os.environ.get("RANK", "0")))
-        env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
+        with shipped_task_warnings_quiet(name, getattr(args, "verbose", True)):
+            env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
         return env, env_cfg
 
     def make_alg_runner(self, env, name: str, args=None, train_cfg: LeggedRobotCfgPPO | None = None,
-                        log_root: Path | str | None = LOG_ROOT):
-        """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default)."""
-        from legged_gente.utils.checkpoints import find_checkpoint
+                        log_root: Path | str | None = "default"):
+        """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default; an
+        unreadable latest checkpoint falls back to the newest readable one). ``log_root``: where runs are
+        ("default": ``default_log_root()``; None: no run folder)."""
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 
         if train_cfg is None:
             _, train_cfg = self.get_cfgs(name)
             if args is not None:
                 apply_args(args, None, train_cfg)
+        validate_cfgs(None, train_cfg)
         runner_cfg = train_cfg.runner
-        experiment_root = Path(log_root) / runner_cfg.experiment_name if log_root is not None else None
+        if log_root == "default":
+            log_root = default_log_root()
+        experiment_root = Path(log_root).absolute() / runner_cfg.experiment_name if log_root is not None else None
         log_dir = None
         if experiment_root is not None:
             stamp = datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
             log_dir = str(experiment_root / (stamp + (f"_{runner_cfg.run_name}" if runner_cfg.run_name else "")))
         runner = GenteOnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=log_dir, device=env.device)
+        runner.task_name = name
         if runner.gpu_global_rank != 0:
             log_dir = None  # under torchrun only rank 0 writes the run folder (rsl-rl logs from rank 0 only)
         if runner_cfg.resume:
-            path = find_checkpoint(experiment_root, runner_cfg.load_run, runner_cfg.checkpoint)
-            print(f"Loading model from {path}")
-            runner.load(str(path))
+            runner.loaded_checkpoint = load_newest_readable(runner, experiment_root, runner_cfg.load_run,
+                                                            runner_cfg.checkpoint)
             print(runner.curriculum_message)
             # a checkpoint stores the last *finished* iteration; continue with the next one
             runner.current_learning_iteration += 1
         return runner, train_cfg, log_dir
+
+    def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):
+        """A runner (no run folder) with the policy shipped for task ``name`` loaded (actor only), its network
+        sizes taken from the shipped config. The checkpoint's path."""
+        from legged_gente.envs.base.base_config import update_from_dict
+        from legged_gente.utils.checkpoints import pretrained_policy
+
+        path, config = pretrained_policy(name)
+        train_cfg = train_cfg or self.get_cfgs(name)[1]
+        train_cfg.runner.resume = False
+        for section in ("actor", "critic"):
+            update_from_dict(getattr(train_cfg, section), config["train"][section], section)
+        runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
+        runner.load(str(path), load_cfg={"actor": True}, map_location=env.device)
+        runner.loaded_checkpoint = path
+        return runner, path
+
+
+def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) -> Path:
+    """Load the newest checkpoint that reads (a truncated or corrupt newer one is skipped, and said so);
+    a checkpoint of another task is an error, not skipped. The path loaded."""
+    from legged_gente.utils.checkpoints import CheckpointError, UnreadableCheckpoint, checkpoint_candidates
+
+    candidates = checkpoint_candidates(experiment_root, load_run, checkpoint)
+    skipped = []
+    for path in candidates:
+        try:
+            runner.load(str(path))
+        except UnreadableCheckpoint as error:
+            if len(candidates) == 1:
+                raise
+            print(f"[legged_gente] {error} Trying the next newest.")
+            skipped.append(path.name)
+            continue
+        print(f"Loaded model from {path}" + (f" (newest readable; skipped {', '.join(skipped)})" if skipped else ""))
+        return path
+    raise CheckpointError(f"no readable checkpoint under {experiment_root} (tried {', '.join(skipped)}); train "
+                          f"anew without --resume.")
 
 
 task_registry = TaskRegistry()

@@ -233,26 +233,37 @@ class Evaluation:
         return RunResult(self.tile.cpu().numpy(), out, traces, self.mode, params)
 
 
-def load_policy(evaluation, checkpoint: str | None = None, exported: str | None = None, baseline: str | None = None):
-    """obs TensorDict -> actions from an rsl-rl checkpoint (file or run folder), a TorchScript file, or a baseline."""
+def load_policy(evaluation, **sources):
+    """obs TensorDict -> actions (see ``load_policy_and_file``)."""
+    return load_policy_and_file(evaluation, **sources)[0]
+
+
+def load_policy_and_file(evaluation, checkpoint: str | None = None, exported: str | None = None,
+                         baseline: str | None = None, pretrained: bool = False):
+    """(obs TensorDict -> actions, the file it came from) from an rsl-rl checkpoint (file or run folder), an
+    exported ONNX policy, the policy shipped for the task, or a baseline."""
     env = evaluation.env
-    given = [x for x in (checkpoint, exported, baseline) if x]
+    given = [x for x in (checkpoint, exported, baseline, pretrained) if x]
     if len(given) != 1:
         raise ValueError("give exactly one of --checkpoint (rsl-rl model_N.pt or its run folder), --exported "
-                         "(TorchScript policy.pt from gente-play) or --baseline (zero | random).")
+                         "(policy.onnx from gente-play), --pretrained or --baseline (zero | random).")
     if baseline:
         if baseline == "zero":
-            return lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)
+            return (lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)), None
         if baseline == "random":
-            return lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)
+            return (lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)), None
         raise ValueError(f"--baseline {baseline!r}: use 'zero' or 'random'.")
     if exported:
-        model = torch.jit.load(exported, map_location=env.device)
-        model.eval()
-        return lambda obs: model(obs["policy"])
+        from legged_gente.utils.export import OnnxPolicy
+
+        num_obs = int(env.get_observations()["policy"].shape[1])
+        return OnnxPolicy(exported, num_obs, env.num_actions), Path(exported).resolve()
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.utils.checkpoints import find_checkpoint
 
+    if pretrained:
+        runner, path = task_registry.make_pretrained_runner(env, evaluation.task_name, evaluation.train_cfg)
+        return runner.get_inference_policy(device=env.device), path
     path = Path(checkpoint)
     if path.is_dir():
         path = find_checkpoint(path.parent, path.name)
@@ -260,4 +271,4 @@ def load_policy(evaluation, checkpoint: str | None = None, exported: str | None 
         raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
     runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
     runner.load(str(path), map_location=env.device)
-    return runner.get_inference_policy(device=env.device)
+    return runner.get_inference_policy(device=env.device), path.resolve()

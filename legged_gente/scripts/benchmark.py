@@ -20,7 +20,7 @@ import warp as wp
 
 from legged_gente.envs.base.legged_robot import CUDA_GRAPH_MODES
 from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import default_device
+from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device
 
 
 def _sync(device: str) -> None:
@@ -298,24 +298,29 @@ def print_table(rows: list[dict], device: str) -> None:
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description="legged_gente throughput benchmark")
     parser.add_argument("--task", default="gente_biped_flat")
-    parser.add_argument("--num_envs", type=int, nargs="+", default=[1024, 4096, 8192])
+    parser.add_argument(*flag("--num_envs"), type=int, nargs="+", default=[1024, 4096, 8192])
     parser.add_argument("--device", default=None)
     parser.add_argument("--steps", type=int, default=100, help="policy steps timed per measurement")
     parser.add_argument("--iterations", type=int, default=3, help="PPO iterations timed (0 skips PPO)")
-    parser.add_argument("--terrain_build", action="store_true", help="also time the terrain grid build")
+    parser.add_argument(*flag("--terrain_build"), action="store_true", help="also time the terrain grid build")
     parser.add_argument("--csv", help="also write the table to this CSV file")
-    parser.add_argument("--check_sync", action="store_true",
+    parser.add_argument(*flag("--check_sync"), action="store_true",
                         help="CUDA: fail if LeggedRobot.step waits for the device anywhere (torch sync debug mode); "
                              "list where a PPO iteration does")
     parser.add_argument("--profile", metavar="TRACE_JSON",
                         help="also profile 10 env steps, then 1 PPO iteration (torch.profiler): print the costliest "
                              "operations and, on GPU, the Warp / torch split of the device time; write the env "
                              "steps' Chrome trace here, the PPO iteration's beside it (name + _ppo)")
-    parser.add_argument("--cuda_graph", choices=CUDA_GRAPH_MODES,
+    parser.add_argument(*flag("--cuda_graph"), choices=CUDA_GRAPH_MODES,
                         help="override the task's cfg.sim.cuda_graph (what one CUDA graph records on GPU)")
-    parser.add_argument("--profile_envs", type=int, help="the num_envs to profile at (default: the last of --num_envs)")
+    parser.add_argument(*flag("--profile_envs"), type=int, help="the num_envs to profile at (default: the last of --num_envs)")
+    add_verbose(parser)
     args = parser.parse_args(argv)
-    device = args.device or default_device()
+    quiet_third_party(args.verbose)
+    try:
+        device = resolve_device(args.device)
+    except ValueError as error:
+        parser.error(str(error))
     if any(n < 1 for n in args.num_envs):
         parser.error("--num_envs values must be >= 1")
     if args.terrain_build:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from legged_gente.utils.args import default_device
+from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -22,51 +22,60 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task", default="gente_biped", help="registered task name")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, or a run folder (its latest checkpoint)")
-    src.add_argument("--exported", help="TorchScript policy.pt exported by gente-play")
+    src.add_argument("--exported", help="policy.onnx exported by gente-play (run with onnxruntime on the CPU)")
+    src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
     p.add_argument("--benchmark", default="gente100", help="a shipped benchmark (gente100) or a folder with a manifest.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
-    p.add_argument("--robots_per_terrain", type=int, default=16)
+    p.add_argument(*flag("--robots_per_terrain"), type=int, default=16)
     p.add_argument("--mode", choices=("velocity", "waypoints"), default="velocity", help="evaluation task")
-    p.add_argument("--episode_s", type=float, default=None,
+    p.add_argument(*flag("--episode_s"), type=float, default=None,
                    help="episode length in s (default: 10 for velocity, 20 for waypoints)")
-    p.add_argument("--tracking_threshold", type=float, default=0.25,
+    p.add_argument(*flag("--tracking_threshold"), type=float, default=0.25,
                    help="m/s; velocity-task success needs a mean tracking error below it")
-    p.add_argument("--min_progress", type=float, default=0.7,
+    p.add_argument(*flag("--min_progress"), type=float, default=0.7,
                    help="velocity-task success needs this share of the commanded distance covered along the command")
-    p.add_argument("--min_speed", type=float, default=0.3, help="m/s; the slowest moving command of the velocity task")
-    p.add_argument("--stand_fraction", type=float, default=0.1,
+    p.add_argument(*flag("--min_speed"), type=float, default=0.3, help="m/s; the slowest moving command of the velocity task")
+    p.add_argument(*flag("--stand_fraction"), type=float, default=0.1,
                    help="share of robots commanded to stand still (scored as the group stand_still)")
-    p.add_argument("--settle_s", type=float, default=1.0, help="s at the start not counted in the tracking error")
-    p.add_argument("--reach_distance", type=float, default=1.0, help="m; waypoint reached within this distance (d)")
+    p.add_argument(*flag("--settle_s"), type=float, default=1.0, help="s at the start not counted in the tracking error")
+    p.add_argument(*flag("--reach_distance"), type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
-    p.add_argument("--no_progress", action="store_true", help="no progress bar")
+    p.add_argument(*flag("--no_progress"), action="store_true", help="no progress bar")
+    add_verbose(p)
     return p
 
 
 def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
     from legged_gente.evaluation.report import build_report, write_reports
+    from legged_gente.envs.task_registry import shipped_task_warnings_quiet
 
+    for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
+        if given and not Path(given).exists():  # before the (slow) evaluation envs are built
+            raise FileNotFoundError(f"{name} {given}: no such file or run folder.")
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
         if args.limit < 1:
             raise ValueError(f"--limit must be >= 1, got {args.limit}.")
         items = items[: args.limit]
-    device = args.device or default_device()
-    device = "cuda:0" if device == "cuda" else device
+    device = resolve_device(args.device)
     episode_s = args.episode_s or (20.0 if args.mode == "waypoints" else 10.0)
-    evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
-    policy = load_policy(evaluation, args.checkpoint, args.exported, args.baseline)
+    with shipped_task_warnings_quiet(args.task, args.verbose):
+        evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
+    policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
+                                               args.pretrained)
     task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
                                 stand_fraction=args.stand_fraction)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress)
-    meta = {"task": args.task, "benchmark": str(args.benchmark), "policy": args.checkpoint or args.exported or args.baseline,
+    meta = {"task": args.task, "benchmark": str(args.benchmark),
+            "policy": args.checkpoint or args.exported or args.baseline or "pretrained",
+            "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed}
     report = build_report(result, items, args.tracking_threshold, meta, args.min_progress)
     json_path, csv_path = write_reports(report, args.out)
@@ -81,7 +90,10 @@ def evaluate(args) -> dict:
 
 
 def main(argv=None) -> None:
-    evaluate(build_parser().parse_args(argv))
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    quiet_third_party(args.verbose)
+    run_command("gente-evaluate", evaluate, args)
 
 
 if __name__ == "__main__":

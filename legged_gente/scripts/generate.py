@@ -18,6 +18,7 @@ from legged_gente.generation.backends import GenerationError
 from legged_gente.generation.emit import DEFAULT_BASE, emit
 from legged_gente.generation.pipeline import BACKENDS, generate_spec
 from legged_gente.generation.validation import ValidationError
+from legged_gente.utils.args import flag
 
 
 def _positive(kind):
@@ -50,15 +51,15 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--image", type=Path, help="photo or colour-coded sketch map (PNG/JPEG); see docs/generation.md")
     p.add_argument("--out", type=Path, required=True, help="output directory (terrain_cfg.py, spec.json, preview.png)")
     p.add_argument("--backend", choices=BACKENDS, default="planner", help="planner (offline, default) or openai")
-    p.add_argument("--base-url", help="OpenAI-compatible server, e.g. http://localhost:8000/v1 (openai backend)")
-    p.add_argument("--model", help="model name on that server (openai backend)")
-    p.add_argument("--vision-model", help="model that describes the image in --two-phase (default: --model)")
-    p.add_argument("--two-phase", action="store_true", help="VLM describes the image, then the LLM calls the tools")
+    p.add_argument(*flag("--base-url"), help="OpenAI-compatible server, e.g. http://localhost:8000/v1 (openai backend)")
+    p.add_argument(*flag("--model"), help="model name on that server (openai backend)")
+    p.add_argument(*flag("--vision-model"), help="model that describes the image in --two-phase (default: --model)")
+    p.add_argument(*flag("--two-phase"), action="store_true", help="VLM describes the image, then the LLM calls the tools")
     p.add_argument("--toolset", choices=("ours", "gente"), default="ours",
                    help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
-    p.add_argument("--api-key-env", default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
+    p.add_argument(*flag("--api-key-env"), default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
     p.add_argument("--timeout", type=_positive(float), default=60.0, help="request timeout in seconds (default 60)")
-    p.add_argument("--max-retries", type=int, default=3, help="correction rounds for invalid tool calls (default 3)")
+    p.add_argument(*flag("--max-retries"), type=int, default=3, help="correction rounds for invalid tool calls (default 3)")
     p.add_argument("--seed", type=_seed, default=0, help="terrain seed (default 0)")
     p.add_argument("--size", type=_positive(float), default=20.0, help="tile side in metres (default 20)")
     p.add_argument("--resolution", type=_positive(float), default=0.1, help="cell size in metres (default 0.1)")

@@ -1,6 +1,7 @@
-"""Roll out a trained policy, export it (TorchScript + ONNX), plot command tracking, optionally record a video.
+"""Roll out a trained policy, export it (one self-contained ONNX file with deployment metadata), plot command
+tracking, optionally record a video.
 
-    python legged_gente/scripts/play.py --task=gente_biped [--load_run RUN --checkpoint N] [--video]
+    python legged_gente/scripts/play.py --task=gente_biped [--load_run RUN --checkpoint N | --pretrained] [--video]
 """
 
 from __future__ import annotations
@@ -11,16 +12,16 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from legged_gente.envs.task_registry import LOG_ROOT, apply_args, task_registry
-from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.envs.task_registry import apply_args, default_log_root, task_registry
+from legged_gente.utils.args import build_parser, flag, parse_args, run_command
+from legged_gente.utils.checkpoints import pretrained_policy
+from legged_gente.utils.export import deployment_metadata, export_onnx
 
 
-def export_policy(runner, export_dir: Path) -> tuple[Path, Path]:
-    """TorchScript and ONNX copies of the actor (inputs: the concatenated 'policy' observation group)."""
-    export_dir.mkdir(parents=True, exist_ok=True)
-    runner.export_policy_to_jit(str(export_dir), "policy.pt")
-    runner.export_policy_to_onnx(str(export_dir), "policy.onnx")
-    return export_dir / "policy.pt", export_dir / "policy.onnx"
+def export_policy(runner, env, export_dir: Path, checkpoint, task: str) -> Path:
+    """The actor as ``export_dir/policy.onnx``: one file, input the 'policy' observation group, with the
+    deployment metadata (observation names and scales, action scale, default joint positions, PD gains, dt)."""
+    return export_onnx(runner.alg.get_policy(), export_dir / "policy.onnx", deployment_metadata(env, checkpoint, task))
 
 
 def plot_tracking(log: dict[str, np.ndarray], dt: float, path: Path) -> None:
@@ -76,6 +77,8 @@ class VideoRecorder:
 
 
 def play(args) -> dict:
+    if getattr(args, "pretrained", False):
+        pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
     env_cfg, train_cfg = task_registry.get_cfgs(args.task)
     env_cfg.env.num_envs = min(env_cfg.env.num_envs, 16)
     env_cfg.noise.add_noise = False
@@ -85,14 +88,22 @@ def play(args) -> dict:
     env_cfg.terrain.curriculum = False
     env_cfg.sim.torch_compile = False  # for 16 robots the compile (~20 s) costs more than it saves
     apply_args(args, env_cfg, train_cfg)
-    train_cfg.runner.resume = True
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
-    runner, train_cfg, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg,
-                                                         log_root=args.log_root)
+    log_root = Path(args.log_root) if getattr(args, "log_root", None) else default_log_root()
+    if getattr(args, "pretrained", False):
+        runner, checkpoint = task_registry.make_pretrained_runner(env, args.task, train_cfg)
+        # a shipped policy has no run folder of its own: its exports go beside the user's runs of the task
+        export_dir = log_root / train_cfg.runner.experiment_name / "pretrained" / "exported"
+        print(f"Loaded the policy shipped for {args.task}: {checkpoint}")
+    else:
+        train_cfg.runner.resume = True
+        runner, train_cfg, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg,
+                                                             log_root=log_root)
+        checkpoint = runner.loaded_checkpoint
+        export_dir = checkpoint.parent / "exported"  # per run: another run's play never overwrites it
     policy = runner.get_inference_policy(device=env.device)
-    export_dir = Path(args.log_root) / train_cfg.runner.experiment_name / "exported"
-    jit_path, onnx_path = export_policy(runner, export_dir)
-    print(f"Exported policy to {jit_path} and {onnx_path}")
+    onnx_path = export_policy(runner, env, export_dir, checkpoint, args.task)
+    print(f"Exported policy to {onnx_path}")
 
     recorder = VideoRecorder(env) if args.video else None
     viewer = _open_viewer(env) if not args.headless and os.environ.get("DISPLAY") else None
@@ -115,7 +126,7 @@ def play(args) -> dict:
         video_path = export_dir / "rollout.mp4"
         recorder.save(video_path, fps=1.0 / env.dt)
         print(f"Wrote {video_path}")
-    return {"jit": jit_path, "onnx": onnx_path, "plot": plot_path, "log": log, "policy": policy, "env": env}
+    return {"onnx": onnx_path, "plot": plot_path, "log": log, "policy": policy, "env": env, "checkpoint": checkpoint}
 
 
 def _open_viewer(env):
@@ -135,12 +146,23 @@ def _open_viewer(env):
     return _Viewer()
 
 
-def main(argv=None) -> None:
+def build_play_parser():
     parser = build_parser("Roll out, export and record a trained policy.")
     parser.add_argument("--video", action="store_true", help="write an mp4 of robot 0")
     parser.add_argument("--steps", type=int, default=500, help="policy steps to roll out")
-    parser.add_argument("--log_root", default=str(LOG_ROOT), help="where runs are (default: logs/)")
-    play(parse_args(parser, argv))
+    parser.add_argument(*flag("--log_root"), default=None,
+                        help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
+    parser.add_argument("--pretrained", action="store_true",
+                        help="play the policy shipped with the package for --task (resources/policies/<task>/)")
+    return parser
+
+
+def main(argv=None) -> None:
+    parser = build_play_parser()
+    args = parse_args(parser, argv)
+    if args.pretrained and (args.load_run or args.checkpoint is not None):
+        parser.error("--pretrained plays the shipped policy; leave out --load_run/--checkpoint")
+    run_command("gente-play", play, args)
 
 
 if __name__ == "__main__":

@@ -3,11 +3,69 @@
 from __future__ import annotations
 
 import json
+import shlex
+import signal
+import subprocess
+import sys
+import threading
 from pathlib import Path
 
 from legged_gente.envs.base.base_config import class_to_dict
 from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.utils.args import build_parser, parse_args, run_command
+
+
+def code_version() -> dict:
+    """The code a run was made with: the git commit (and whether the checkout had changes) when legged_gente runs
+    from a git checkout, else the installed package's version."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        package = version("legged_gente")
+    except PackageNotFoundError:
+        package = None
+    source = Path(__file__).resolve().parents[2]
+    try:
+        def git(*cmd):
+            return subprocess.run(["git", "-C", str(source), *cmd], capture_output=True, text=True, timeout=10,
+                                  check=True).stdout.strip()
+
+        if Path(git("rev-parse", "--show-toplevel")).resolve() != source:
+            raise ValueError("legged_gente is not the checkout's top level")  # e.g. installed inside another repo
+        return {"git_commit": git("rev-parse", "HEAD"), "git_dirty": bool(git("status", "--porcelain")),
+                "package_version": package}
+    except (OSError, ValueError, subprocess.SubprocessError):
+        return {"git_commit": None, "package_version": package}
+
+
+def resolved_terrain(env) -> dict:
+    """What the robots actually walk on: the tile grid's terrain names and, for generated terrains, the specs
+    themselves (a spec file may change after the run)."""
+    terrain = env.terrain
+    if terrain is None:
+        return {"mode": "plane"}
+    specs = {}
+    for path in getattr(env.cfg.terrain, "generated_specs", None) or []:
+        try:
+            specs[str(path)] = json.loads(Path(path).read_text())
+        except (OSError, ValueError):
+            specs[str(path)] = None
+    return {"mode": terrain.mode, "tile_size_m": list(terrain.tile_size), "resolution_m": terrain.resolution,
+            "tiles": terrain.tile_names.tolist(), "generated_specs": specs}
+
+
+def run_record(task: str, env, env_cfg, train_cfg) -> dict:
+    """config.json of a run: enough to reproduce it."""
+    return {"task": task, "command": shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]]), "code": code_version(),
+            "terrain": resolved_terrain(env), "env": class_to_dict(env_cfg), "train": class_to_dict(train_cfg)}
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (what `timeout` and job schedulers send): stop like Ctrl-C, keeping what was learned."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
 
 
 def train(args) -> Path | None:
@@ -15,22 +73,30 @@ def train(args) -> Path | None:
     runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
     if log_dir is not None:
         Path(log_dir).mkdir(parents=True, exist_ok=True)
-        (Path(log_dir) / "config.json").write_text(json.dumps(
-            {"task": args.task, "env": class_to_dict(env_cfg), "train": class_to_dict(train_cfg)}, indent=1,
-            default=str))
+        (Path(log_dir) / "config.json").write_text(json.dumps(run_record(args.task, env, env_cfg, train_cfg),
+                                                              indent=1, default=str))
         print(f"Logging to {log_dir}")
+    main_thread = threading.current_thread() is threading.main_thread()  # only it may set signal handlers
+    previous = signal.signal(signal.SIGTERM, _raise_terminated) if main_thread else None
     try:
         runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
-    except KeyboardInterrupt:  # Ctrl-C (or `timeout -s INT`): keep what was learned
+    except KeyboardInterrupt as interrupt:  # Ctrl-C, SIGTERM, `timeout -s INT`: keep what was learned
+        if main_thread:
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the save short
         if log_dir is not None:
             path = Path(log_dir) / f"model_{runner.current_learning_iteration}.pt"
             runner.save(str(path))
-            print(f"\nInterrupted: saved {path}; continue with --resume")
+            what = "Terminated (SIGTERM)" if isinstance(interrupt, Terminated) else "Interrupted"
+            print(f"\n{what}: saved {path}; continue with --resume", flush=True)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
     return Path(log_dir) if log_dir else None
 
 
 def main(argv=None) -> None:
-    train(parse_args(build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp."), argv))
+    args = parse_args(build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp."), argv)
+    run_command("gente-train", train, args)
 
 
 if __name__ == "__main__":

@@ -1,29 +1,47 @@
-"""Command-line flags of train.py / play.py (legged_gym's set) and how they override config fields."""
+"""Command-line flags of the gente-* commands (legged_gym's set), how they override config fields, and how a
+command reports a user's mistake (one line, exit 2) and keeps third-party console noise out of sight."""
 
 from __future__ import annotations
 
 import argparse
 import ast
+import logging
+import sys
+import warnings
+
+
+def flag(name: str) -> tuple[str, ...]:
+    """A long option in both spellings, ``--num_envs`` and ``--num-envs``: every gente-* command accepts either
+    (argparse names the value after the first)."""
+    other = "--" + (name[2:].replace("_", "-") if "_" in name else name[2:].replace("-", "_"))
+    return (name,) if other == name else (name, other)
 
 
 def build_parser(description: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--task", default="gente_biped", help="registered task name")
-    parser.add_argument("--num_envs", type=int, help="number of parallel robots (worlds)")
-    parser.add_argument("--max_iterations", type=int, help="PPO iterations to run")
+    parser.add_argument(*flag("--num_envs"), type=int, help="number of parallel robots (worlds)")
+    parser.add_argument(*flag("--max_iterations"), type=int, help="PPO iterations to run")
     parser.add_argument("--headless", action="store_true", help="never open a viewer window")
     parser.add_argument("--resume", action="store_true", help="continue from a checkpoint")
-    parser.add_argument("--load_run", help="run folder name under logs/<experiment>/ (default: the latest)")
+    parser.add_argument(*flag("--load_run"), help="run folder name under logs/<experiment>/ (default: the latest)")
     parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
-    parser.add_argument("--experiment_name", help="logs/<experiment_name>/")
-    parser.add_argument("--run_name", help="suffix of the run folder")
+    parser.add_argument(*flag("--experiment_name"), help="logs/<experiment_name>/")
+    parser.add_argument(*flag("--run_name"), help="suffix of the run folder")
     parser.add_argument("--seed", type=int, help="random seed")
     parser.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     parser.add_argument("--terrain", help="'plane', a generated terrain spec JSON, or an emitted terrain_cfg.py")
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.FIELD=VALUE", dest="overrides",
                         help="override any config field (repeatable), e.g. --set terrain.solved_top_level=stay "
                              "--set algorithm.learning_rate=3e-4 (train config: actor, critic, algorithm, runner)")
+    add_verbose(parser)
     return parser
+
+
+def add_verbose(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--verbose", action="store_true",
+                        help="show third-party console output (Warp's module loads, library warnings) and full "
+                             "tracebacks of errors")
 
 
 def default_device() -> str:
@@ -32,22 +50,39 @@ def default_device() -> str:
     return "cuda:0" if torch.cuda.is_available() else "cpu"
 
 
+def resolve_device(device: str | None) -> str:
+    """``None`` -> cuda:0 when a GPU is visible, else cpu; ``cuda`` -> cuda:0; a CUDA device that is not there is
+    an error that says so (rather than Warp's 'Invalid device identifier' later)."""
+    import torch
+
+    if device is None:
+        return default_device()
+    given = device
+    if device == "cuda":
+        device = "cuda:0"
+    if device != "cpu" and not (device.startswith("cuda:") and device[5:].isdigit()):
+        raise ValueError(f"--device {device!r}: use cpu, cuda or cuda:N")
+    if device.startswith("cuda"):
+        count = torch.cuda.device_count() if torch.cuda.is_available() else 0
+        if count == 0:
+            raise ValueError(f"--device {given}: no GPU visible, use --device cpu")
+        if int(device[5:]) >= count:
+            raise ValueError(f"--device {device}: only {count} GPU(s) visible (cuda:0..cuda:{count - 1})")
+    return device
+
+
 def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace:
     args = parser.parse_args(argv)
+    quiet_third_party(verbose=args.verbose)
     from legged_gente.utils.distributed import rank_device, torchrun_launch
 
-    launch = torchrun_launch()
-    if launch is not None:  # under torchrun each rank trains on cuda:{LOCAL_RANK} (or the CPU)
-        try:
+    try:
+        launch = torchrun_launch()
+        if launch is not None:  # under torchrun each rank trains on cuda:{LOCAL_RANK} (or the CPU)
             args.device = rank_device(args.device, launch)
-        except ValueError as error:
-            parser.error(str(error))
-    if args.device is None:
-        args.device = default_device()
-    elif args.device == "cuda":
-        args.device = "cuda:0"
-    if args.device != "cpu" and not args.device.startswith("cuda"):
-        parser.error(f"--device {args.device!r}: use cpu, cuda or cuda:N")
+        args.device = resolve_device(args.device)
+    except ValueError as error:
+        parser.error(str(error))
     if args.num_envs is not None and args.num_envs < 1:
         parser.error("--num_envs must be >= 1")
     if args.max_iterations is not None and args.max_iterations < 0:
@@ -58,6 +93,50 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
         except ValueError as error:
             parser.error(str(error))
     return args
+
+
+# What a user can get wrong (a flag, a config value, a file): reported in one line with exit status 2.
+USER_ERRORS = (ValueError, FileNotFoundError, KeyError)
+
+
+def run_command(prog: str, main, args: argparse.Namespace):
+    """``main(args)``, with a user's mistake reported as ``prog: error: ...`` (exit 2) instead of a traceback;
+    ``--verbose`` shows the traceback."""
+    try:
+        return main(args)
+    except USER_ERRORS as error:
+        if getattr(args, "verbose", False):
+            raise
+        message = error.args[0] if isinstance(error, KeyError) and error.args else error
+        print(f"{prog}: error: {message}", file=sys.stderr)
+        sys.exit(2)
+
+
+# Third-party console output a user cannot act on, hidden unless --verbose: (category, message regex, module)
+THIRD_PARTY_NOISE = (
+    (FutureWarning, "", r"(torch|torchvision|onnx|onnxscript|tensordict|rsl_rl)(\.|$)"),
+    (DeprecationWarning, "", r"(torch|torchvision|onnx|onnxscript|tensordict|rsl_rl|mujoco_warp|warp)(\.|$)"),
+    (UserWarning, r".*(Failed to load image Python extension|torchvision)", ""),
+    (UserWarning, r".*torch\.jit\.\w+.*deprecated", ""),
+    (FutureWarning, r".*treespec", ""),  # torch.utils._pytree, raised from copyreg during torch.export
+)
+# Python loggers of third-party libraries whose warnings are not the user's (torch.onnx: "torchvision is not
+# installed. Skipping torchvision::nms" at every ONNX export)
+THIRD_PARTY_LOGGERS = ("torch.onnx",)
+
+
+def quiet_third_party(verbose: bool = False) -> None:
+    """Keep Warp's per-module 'Module ... loaded' lines and its banner (``warp.config.log_level``) and known
+    third-party deprecation/future warnings off the console; ``verbose`` keeps everything."""
+    if verbose:
+        return
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING
+    for name in THIRD_PARTY_LOGGERS:
+        logging.getLogger(name).setLevel(logging.ERROR)
+    for category, message, module in THIRD_PARTY_NOISE:
+        warnings.filterwarnings("ignore", message=message, category=category, module=module)
 
 
 def _parse_override(text: str) -> tuple[list[str], str]:

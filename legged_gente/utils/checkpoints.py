@@ -1,9 +1,29 @@
-"""Finding runs and checkpoints under logs/<experiment>/<date>_<run>/model_<iter>.pt."""
+"""Checkpoints: finding them under logs/<experiment>/<date>_<run>/model_<iter>.pt, loading them safely, and
+checking that one fits the task it is loaded into.
+
+A checkpoint is loaded with ``torch.load(weights_only=True)``: only tensors, numbers, strings and containers
+of them are unpickled, never arbitrary Python objects (rsl-rl's own ``OnPolicyRunner.load`` uses
+``weights_only=False``, with which opening a checkpoint can run code from it).
+"""
 
 from __future__ import annotations
 
+import importlib.resources
+import json
+import pickle
 import re
+import zipfile
 from pathlib import Path
+
+import torch
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be used: unreadable, refused by the safe loader, or made for another task."""
+
+
+class UnreadableCheckpoint(CheckpointError):
+    """A truncated or corrupt checkpoint file (resuming skips it for an older one)."""
 
 
 def _iteration(path: Path) -> int:
@@ -11,26 +31,158 @@ def _iteration(path: Path) -> int:
     return int(match.group(1)) if match else -1
 
 
+def _runs(experiment_root: Path | None) -> list[Path]:
+    if experiment_root is None or not Path(experiment_root).is_dir():
+        raise FileNotFoundError(f"no runs under {experiment_root}; train first, or pass --experiment_name (or "
+                                f"set $GENTE_LOG_ROOT) to point at the runs.")
+    runs = sorted(p for p in Path(experiment_root).iterdir() if p.is_dir() and any(p.glob("model_*.pt")))
+    if not runs:
+        raise FileNotFoundError(f"no checkpoints (model_*.pt) in any run under {experiment_root}; train first.")
+    return runs
+
+
+def _models(run: Path) -> list[Path]:
+    return sorted(run.glob("model_*.pt"), key=_iteration)
+
+
+def _run(root: Path, runs: list[Path], load_run) -> Path:
+    if load_run in (-1, "-1", None):
+        return runs[-1]
+    run = root / str(load_run)
+    if not run.is_dir():
+        raise FileNotFoundError(f"run {load_run!r} not found under {root}; runs: {[r.name for r in runs]}")
+    if not _models(run):
+        raise FileNotFoundError(f"run {run} has no model_*.pt checkpoints.")
+    return run
+
+
 def find_checkpoint(experiment_root: Path | None, load_run=-1, checkpoint=-1) -> Path:
     """The checkpoint file to load: the latest run and iteration unless named."""
-    if experiment_root is None or not Path(experiment_root).is_dir():
-        raise FileNotFoundError(f"no runs under {experiment_root}; train first or pass --experiment_name.")
+    return checkpoint_candidates(experiment_root, load_run, checkpoint)[0]
+
+
+def checkpoint_candidates(experiment_root: Path | None, load_run=-1, checkpoint=-1) -> list[Path]:
+    """Checkpoints to try, in order: a named checkpoint alone; else the run's checkpoints newest first, then
+    (when no run was named) those of the earlier runs, newest first."""
+    runs = _runs(experiment_root)
     root = Path(experiment_root)
-    runs = sorted(p for p in root.iterdir() if p.is_dir() and any(p.glob("model_*.pt")))
-    if not runs:
-        raise FileNotFoundError(f"no checkpoints (model_*.pt) in any run under {root}; train first.")
+    run = _run(root, runs, load_run)
+    models = _models(run)
+    if checkpoint not in (-1, "-1", None):
+        path = run / f"model_{checkpoint}.pt"
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} not found; available: {[m.name for m in models]}")
+        return [path]
+    candidates = models[::-1]
     if load_run in (-1, "-1", None):
-        run = runs[-1]
-    else:
-        run = root / str(load_run)
-        if not run.is_dir():
-            raise FileNotFoundError(f"run {load_run!r} not found under {root}; runs: {[r.name for r in runs]}")
-    models = sorted(run.glob("model_*.pt"), key=_iteration)
-    if not models:
-        raise FileNotFoundError(f"run {run} has no model_*.pt checkpoints.")
-    if checkpoint in (-1, "-1", None):
-        return models[-1]
-    path = run / f"model_{checkpoint}.pt"
+        for earlier in runs[-2::-1]:
+            candidates += _models(earlier)[::-1]
+    return candidates
+
+
+def load_checkpoint(path: str | Path, map_location=None) -> dict:
+    """The checkpoint's dict, loaded with ``weights_only=True``; an unreadable or unsafe file is a
+    CheckpointError that says which and why."""
+    path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{path} not found; available: {[m.name for m in models]}")
-    return path
+        raise FileNotFoundError(f"checkpoint {path}: no such file.")
+    try:
+        loaded = torch.load(path, map_location=map_location, weights_only=True)
+    except pickle.UnpicklingError as error:
+        # the safe unpickler names a refused object as a GLOBAL; anything else it stumbles on is a broken file
+        refused = [line.strip() for line in str(error).splitlines() if "global" in line.lower()]
+        if refused:
+            raise CheckpointError(f"checkpoint {path} holds Python objects that the safe loader refuses ("
+                                  f"{refused[0]}); legged_gente loads checkpoints with torch.load(weights_only=True), "
+                                  f"which unpickles tensors and plain values only, so a checkpoint cannot run code."
+                                  ) from None
+        reason = [line.strip() for line in str(error).splitlines() if line.strip()][-2:-1] or [type(error).__name__]
+        raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (corrupt: {reason[0]}).") from None
+    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError) as error:
+        first = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (truncated or corrupt: {first}).") from None
+    if not isinstance(loaded, dict) or "actor_state_dict" not in loaded:
+        raise CheckpointError(f"checkpoint {path} is not an rsl-rl training checkpoint (no actor_state_dict); "
+                              f"gente-play exports policies, checkpoints are the model_<iteration>.pt of a run.")
+    return loaded
+
+
+def checkpoint_summary(loaded: dict) -> str:
+    """'gente_quadruped (12 actions)' for a checkpoint saved by GenteOnPolicyRunner, else what its actor shows."""
+    infos = loaded.get("infos") or {}
+    actions = infos.get("num_actions", _actor_outputs(loaded["actor_state_dict"]))
+    return f"{infos.get('task') or 'an unnamed task'} ({actions} actions)"
+
+
+def _actor_outputs(state: dict) -> int | str:
+    """The actor's action count: the width of its distribution's std parameter, else of its last layer."""
+    for key, value in state.items():
+        if key.startswith("distribution.") and value.ndim == 1:
+            return int(value.shape[0])
+    weights = [v for k, v in state.items() if k.endswith(".weight") and v.ndim == 2]
+    return int(weights[-1].shape[0]) if weights else "?"
+
+
+def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int, actor_state: dict) -> None:
+    """A checkpoint made for another task (another robot or observation set) or another network size is a
+    one-line error naming both, instead of torch's 'size mismatch' list."""
+    saved = loaded["actor_state_dict"]
+    infos = loaded.get("infos") or {}
+    saved_task = infos.get("task")
+    saved_actions = infos.get("num_actions", _actor_outputs(saved))
+    if saved_actions != num_actions or (saved_task and task and saved_task != task
+                                        and _shapes(saved) != _shapes(actor_state)):
+        raise CheckpointError(f"checkpoint {path} is for {checkpoint_summary(loaded)}; this task is "
+                              f"{task or 'unnamed'} ({num_actions} actions). Pick a checkpoint of this task "
+                              f"(--task, --load_run, --checkpoint).")
+    for key, shape in _shapes(actor_state).items():
+        if key in saved and tuple(saved[key].shape) != shape:
+            raise CheckpointError(
+                f"checkpoint {path} does not fit this task's actor: {key} is {tuple(saved[key].shape)} in the "
+                f"checkpoint, {shape} here (another observation set or network size; use the run's own "
+                f"settings, e.g. --set actor.hidden_dims=[...] as recorded in its config.json).")
+
+
+def _shapes(state: dict) -> dict[str, tuple[int, ...]]:
+    return {key: tuple(value.shape) for key, value in state.items()}
+
+
+def policies_root() -> Path:
+    """Where the package's pretrained policies are: ``resources/policies/<task>/`` (model.pt, config.json)."""
+    return Path(str(importlib.resources.files("legged_gente"))) / "resources" / "policies"  # package data
+
+
+def pretrained_policy(task: str) -> tuple[Path, dict]:
+    """The shipped policy of ``task``: its checkpoint and its run's config (network sizes, code commit, note)."""
+    folder = policies_root() / task
+    if not (folder / "model.pt").is_file():
+        shipped = sorted(p.name for p in policies_root().iterdir() if (p / "model.pt").is_file()) \
+            if policies_root().is_dir() else []
+        raise FileNotFoundError(f"--pretrained: no policy is shipped for task {task!r} (shipped: "
+                                f"{', '.join(shipped) or 'none'}); train one with gente-train --task {task}, then "
+                                f"use --load_run/--checkpoint")
+    return folder / "model.pt", json.loads((folder / "config.json").read_text())
+
+
+def ship_policy(checkpoint: str | Path, task: str, note: str, destination: Path | None = None) -> Path:
+    """Copy a run's checkpoint into the package as the pretrained policy of ``task``: the actor only (what
+    playing needs; small and CPU-loadable) in ``model.pt``, and the run's config.json (network sizes, the command
+    and the code commit it was trained at) with ``note`` (how it was trained) in ``config.json``."""
+    checkpoint = Path(checkpoint)
+    loaded = load_checkpoint(checkpoint, map_location="cpu")
+    infos = loaded.get("infos") or {}
+    if infos.get("task") not in (None, task):
+        raise CheckpointError(f"checkpoint {checkpoint} is for {infos['task']}, not {task}")
+    config_path = checkpoint.parent / "config.json"
+    if not config_path.is_file():
+        raise FileNotFoundError(f"{config_path} not found: a shipped policy needs its run's config.json")
+    folder = Path(destination) if destination is not None else policies_root() / task
+    folder.mkdir(parents=True, exist_ok=True)
+    actor = {key: value.detach().cpu().clone() for key, value in loaded["actor_state_dict"].items()}
+    torch.save({"actor_state_dict": actor, "iter": loaded.get("iter"),
+                "infos": {"task": task, "num_actions": infos.get("num_actions", _actor_outputs(actor))}},
+               folder / "model.pt")
+    config = json.loads(config_path.read_text())
+    config.update(note=note, source_checkpoint=f"{checkpoint.parent.name}/{checkpoint.name}")
+    (folder / "config.json").write_text(json.dumps(config, indent=1))
+    return folder

@@ -170,14 +170,31 @@ class GenteOnPolicyRunner(OnPolicyRunner):
                   f"{launch.local_rank}) on {self.device}, backend {backend}, seed {self.cfg['seed']}"
                   f"{'' if launch.rank == 0 else ', logs on rank 0'}", flush=True)
 
+    task_name: str | None = None  # the registered task, recorded in checkpoints (set by the task registry)
+
     def save(self, path: str, infos: dict | None = None) -> None:
-        """rsl-rl's checkpoint plus the env's curriculum state (``infos["curriculum"]``)."""
-        super().save(path, {**(infos or {}), "curriculum": self.env.curriculum_state()})
+        """rsl-rl's checkpoint plus the env's curriculum state and what the checkpoint is for (task, action
+        count); written to a temporary file and renamed, so an interrupted save never leaves a truncated one."""
+        saved = self.alg.save()
+        saved["iter"] = self.current_learning_iteration
+        saved["infos"] = {**(infos or {}), "curriculum": self.env.curriculum_state(), "task": self.task_name,
+                          "num_actions": self.env.num_actions}
+        partial = f"{path}.partial"
+        torch.save(saved, partial)
+        os.replace(partial, path)
+        self.logger.save_model(path, self.current_learning_iteration)
 
     def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
-        """rsl-rl's load; also restores the env's curriculum when the checkpoint has one that fits
+        """rsl-rl's load, but safe (``torch.load(weights_only=True)``) and with a one-line error for a checkpoint
+        of another task; also restores the env's curriculum when the checkpoint has one that fits
         (``self.curriculum_message`` says what happened)."""
-        infos = super().load(path, load_cfg, strict, map_location)
+        from legged_gente.utils.checkpoints import check_checkpoint_fits, load_checkpoint
+
+        loaded = load_checkpoint(path, map_location)
+        check_checkpoint_fits(loaded, path, self.task_name, self.env.num_actions, self.alg.get_policy().state_dict())
+        if self.alg.load(loaded, load_cfg, strict):
+            self.current_learning_iteration = loaded["iter"]
+        infos = loaded["infos"]
         self.curriculum_message = (self.env.load_curriculum_state(infos["curriculum"])
                                    if infos and "curriculum" in infos else "the checkpoint has no curriculum state")
         return infos

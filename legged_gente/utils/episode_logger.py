@@ -32,6 +32,11 @@ class DeferredLogger(Logger):
         self.cur_reward_sum.masked_fill_(done, 0.0)
         self.cur_episode_length.masked_fill_(done, 0.0)
 
+    def _store_code_state(self) -> list[str]:
+        """Nothing: the run's config.json records the code version (commit or package version) instead of
+        rsl-rl's git/ folder, which stays empty outside a checkout of rsl-rl itself."""
+        return []
+
     def flush(self) -> None:
         """Move the episodes that finished since the last flush into the host-side buffers (one sync)."""
         if not self._finished:

@@ -1,0 +1,162 @@
+"""Checkpoints load safely (torch.load weights_only=True: a checkpoint cannot run code), --resume gets past a
+truncated latest checkpoint, SIGTERM saves one like Ctrl-C, and a run folder records how it was made."""
+
+import json
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import torch
+
+from legged_gente.envs.task_registry import load_newest_readable, task_registry
+from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.utils.checkpoints import CheckpointError, UnreadableCheckpoint, load_checkpoint
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def runner():
+    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "1"])
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    return runner
+
+
+class RunsCode:
+    """Unpickling this calls os.system: what weights_only=False would do with a hostile checkpoint."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.marker}",)
+
+
+def test_a_checkpoint_cannot_run_code(tmp_path):
+    marker = tmp_path / "code_ran"
+    path = tmp_path / "model_0.pt"
+    torch.save({"actor_state_dict": {}, "payload": RunsCode(marker)}, path)
+    with pytest.raises(CheckpointError, match="safe loader refuses"):
+        load_checkpoint(path)
+    assert not marker.exists()
+
+
+def test_saved_checkpoints_load_with_weights_only_and_say_what_they_are_for(runner, tmp_path):
+    path = tmp_path / "model_3.pt"
+    runner.current_learning_iteration = 3
+    runner.save(str(path))
+    assert not list(tmp_path.glob("*.partial"))  # written whole, then renamed
+    loaded = torch.load(path, weights_only=True)
+    assert loaded["iter"] == 3
+    assert loaded["infos"]["task"] == "gente_biped_flat" and loaded["infos"]["num_actions"] == 10
+
+
+def test_truncated_and_garbage_files_are_unreadable_checkpoints(runner, tmp_path):
+    good = tmp_path / "good.pt"
+    runner.save(str(good))
+    truncated = tmp_path / "truncated.pt"
+    truncated.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    garbage = tmp_path / "garbage.pt"
+    garbage.write_bytes(b"\x00not a checkpoint" * 10)
+    for path in (truncated, garbage):
+        with pytest.raises(UnreadableCheckpoint, match="unreadable"):
+            load_checkpoint(path)
+    plain = tmp_path / "plain.pt"
+    pickle.dump([1, 2], plain.open("wb"))
+    with pytest.raises(CheckpointError):
+        load_checkpoint(plain)
+
+
+def test_resume_falls_back_to_the_newest_readable_checkpoint(runner, tmp_path, capsys):
+    root = tmp_path / "gente_biped_flat"
+    older, newer = root / "2026-01-01_00-00-00", root / "2026-01-02_00-00-00"
+    older.mkdir(parents=True)
+    newer.mkdir()
+    for run, iteration in ((older, 7), (newer, 8), (newer, 9)):
+        runner.current_learning_iteration = iteration
+        runner.save(str(run / f"model_{iteration}.pt"))
+    latest = newer / "model_9.pt"
+    latest.write_bytes(latest.read_bytes()[:1000])  # killed while writing (before saves were atomic)
+    assert load_newest_readable(runner, root) == newer / "model_8.pt"
+    assert runner.current_learning_iteration == 8
+    out = capsys.readouterr().out
+    assert "model_9.pt is unreadable" in out and "skipped model_9.pt" in out
+    (newer / "model_8.pt").write_bytes(b"")
+    assert load_newest_readable(runner, root) == older / "model_7.pt"  # then the earlier run
+    # a checkpoint named explicitly is loaded or refused, never replaced by another
+    with pytest.raises(UnreadableCheckpoint):
+        load_newest_readable(runner, root, load_run=newer.name, checkpoint=9)
+
+
+@pytest.fixture(scope="module")
+def terminated_run(tmp_path_factory):
+    """train.py started in an empty folder (no $GENTE_LOG_ROOT), stopped with SIGTERM once it has logged."""
+    cwd = tmp_path_factory.mktemp("project")
+    env = {k: v for k, v in os.environ.items() if k != "GENTE_LOG_ROOT"}
+    env.update(PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1", OMP_NUM_THREADS="1")
+    cmd = [sys.executable, str(REPO / "legged_gente/scripts/train.py"), "--task", "gente_biped_flat", "--device",
+           "cpu", "--num-envs", "1", "--max_iterations", "100000", "--set", "runner.num_steps_per_env=2",
+           "--set", "actor.hidden_dims=[8]", "--set", "critic.hidden_dims=[8]", "--set", "runner.save_interval=1000"]
+    proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines, deadline = [], time.monotonic() + 240
+    for line in proc.stdout:
+        lines.append(line)
+        if "Learning iteration 0/" in line or time.monotonic() > deadline:
+            break
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate(timeout=120)
+    return cwd, proc.returncode, "".join(lines) + out
+
+
+def test_sigterm_saves_a_checkpoint(terminated_run):
+    cwd, code, out = terminated_run
+    assert code == 0, out
+    assert "Terminated (SIGTERM): saved" in out, out
+    run = next((cwd / "logs" / "gente_biped_flat").iterdir())
+    saved = sorted(run.glob("model_*.pt"))
+    assert saved and load_checkpoint(saved[-1])["infos"]["task"] == "gente_biped_flat"
+
+
+def test_runs_go_to_the_working_directory_and_record_how_they_were_made(terminated_run):
+    cwd, _, out = terminated_run
+    run = next((cwd / "logs" / "gente_biped_flat").iterdir())  # ./logs of the working directory
+    assert not (run / "git").exists()
+    config = json.loads((run / "config.json").read_text())
+    assert config["command"].startswith("train.py --task gente_biped_flat --device cpu --num-envs 1")
+    code = config["code"]
+    assert code["package_version"] or code["git_commit"]
+    if code["git_commit"]:
+        head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True).stdout
+        assert code["git_commit"] == head.strip()
+    assert config["terrain"] == {"mode": "plane"}
+    assert "Module " not in out  # Warp's per-module load lines stay quiet without --verbose
+
+
+def test_config_records_the_resolved_terrain_of_a_heightfield_run(tmp_path):
+    """The tile grid the robots got (names per tile) and a generated spec's content, not only the config."""
+    from types import SimpleNamespace
+
+    from legged_gente.scripts.train import resolved_terrain
+    from legged_gente.terrain.terrain import Terrain
+
+    env_cfg, _ = task_registry.get_cfgs("gente_biped")
+    env_cfg.terrain.num_rows, env_cfg.terrain.num_cols = 2, 3
+    terrain = Terrain(env_cfg.terrain, num_robots=2)
+    record = resolved_terrain(SimpleNamespace(terrain=terrain, cfg=env_cfg))
+    assert record["mode"] == terrain.mode and record["resolution_m"] == env_cfg.terrain.resolution
+    assert len(record["tiles"]) == 2 and all(len(row) == 3 for row in record["tiles"])
+    assert all(isinstance(name, str) and name for row in record["tiles"] for name in row)
+    json.dumps(record)  # serialisable as config.json
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"version": 1, "calls": []}))
+    env_cfg.terrain.generated_specs = [str(spec)]
+    record = resolved_terrain(SimpleNamespace(terrain=terrain, cfg=env_cfg))
+    assert record["generated_specs"] == {str(spec): {"version": 1, "calls": []}}

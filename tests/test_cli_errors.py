@@ -1,0 +1,133 @@
+"""A user's mistake on the command line is one line on stderr and exit status 2, never a traceback; flags take
+both spellings (--num_envs, --num-envs) in every command; the CPU default of 4096 robots is called out."""
+
+import pytest
+import torch
+
+from legged_gente.envs.task_registry import task_registry
+from legged_gente.scripts import evaluate as evaluate_script
+from legged_gente.scripts import generate as generate_script
+from legged_gente.scripts import play as play_script
+from legged_gente.scripts import train as train_script
+from legged_gente.utils.args import build_parser, flag, parse_args
+
+
+def one_line_error(capsys, main, argv) -> str:
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2, err
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.strip()]
+    return lines[-1]
+
+
+CPU = ["--device", "cpu", "--num_envs", "1", "--headless"]
+
+
+def test_unknown_task(capsys):
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_bipd", *CPU])
+    assert line.startswith("gente-train: error: unknown task 'gente_bipd'") and "gente_biped_flat" in line
+
+
+def test_bad_set_field(capsys):
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--set", "terrain.num_rowz=4"])
+    assert "terrain has no field 'num_rowz'" in line and "num_rows" in line
+
+
+@pytest.mark.parametrize("override, message", [
+    ("runner.save_interval=0", "runner.save_interval=0: must be >= 1"),
+    ("runner.num_steps_per_env=0", "runner.num_steps_per_env=0: must be >= 1"),
+    ("sim.dt=0", "sim.dt=0.0: must be > 0"),
+    ("algorithm.num_mini_batches=0", "algorithm.num_mini_batches=0: must be >= 1"),
+    ("env.episode_length_s=0", "env.episode_length_s=0.0: must be > 0"),
+])
+def test_zero_divisors_are_rejected_before_anything_runs(capsys, override, message):
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--set", override])
+    assert message in line
+
+
+def test_cuda_without_a_gpu_says_so(capsys, monkeypatch):
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    monkeypatch.setattr(torch.cuda, "device_count", lambda: 0)
+    for main in (train_script.main, play_script.main):
+        line = one_line_error(capsys, main, ["--task", "gente_biped_flat", "--device", "cuda"])
+        assert "no GPU visible, use --device cpu" in line
+    line = one_line_error(capsys, evaluate_script.main, ["--baseline", "zero", "--out", "x", "--device", "cuda:1"])
+    assert "no GPU visible, use --device cpu" in line
+
+
+def test_missing_checkpoint(capsys, tmp_path):
+    line = one_line_error(capsys, play_script.main, ["--task", "gente_biped_flat", *CPU, "--log_root", str(tmp_path)])
+    assert line.startswith("gente-play: error: no runs under") and "train first" in line
+    line = one_line_error(capsys, evaluate_script.main, ["--task", "gente_biped_flat", "--checkpoint",
+                                                         str(tmp_path / "model_9.pt"), "--out", str(tmp_path),
+                                                         "--device", "cpu", "--limit", "1"])
+    assert "no such file or run folder" in line
+
+
+def test_checkpoint_of_another_task(capsys, tmp_path):
+    """A quadruped checkpoint played as the biped: the tasks and action counts, not torch's size mismatch."""
+    args = parse_args(build_parser("test"), ["--task", "gente_quadruped_flat", *CPU])
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    run = tmp_path / "gente_biped_flat" / "2026-01-01_00-00-00"
+    run.mkdir(parents=True)
+    runner.save(str(run / "model_0.pt"))
+    line = one_line_error(capsys, play_script.main, ["--task", "gente_biped_flat", *CPU, "--log_root", str(tmp_path),
+                                                     "--steps", "1"])
+    assert "is for gente_quadruped_flat (12 actions); this task is gente_biped_flat (10 actions)" in line
+
+
+def test_every_command_takes_both_flag_spellings():
+    for spelling in ("--num_envs", "--num-envs"):
+        assert parse_args(build_parser("t"), ["--device", "cpu", spelling, "3"]).num_envs == 3
+    for spelling in ("--max-retries", "--max_retries"):
+        assert generate_script.build_parser().parse_args(["--out", "o", spelling, "2"]).max_retries == 2
+    for spelling in ("--robots_per_terrain", "--robots-per-terrain"):
+        args = evaluate_script.build_parser().parse_args(["--baseline", "zero", "--out", "o", spelling, "2"])
+        assert args.robots_per_terrain == 2
+    assert flag("--task") == ("--task",)
+
+
+def test_many_robots_on_the_cpu_are_called_out(capsys, monkeypatch):
+    """The task default (4096 robots) on the CPU prints a note with the fix before the (slow) env is built."""
+    env_class, env_cfg, train_cfg = task_registry.tasks["gente_biped_flat"]
+
+    class Built(Exception):
+        pass
+
+    def not_built(*args, **kwargs):
+        raise Built
+
+    monkeypatch.setitem(task_registry.tasks, "gente_biped_flat", (not_built, env_cfg, train_cfg))
+    with pytest.raises(Built):
+        task_registry.make_env("gente_biped_flat", parse_args(build_parser("t"), ["--task", "gente_biped_flat",
+                                                                                 "--device", "cpu"]))
+    out = capsys.readouterr().out
+    assert "4096 robots on the CPU" in out and "--num_envs" in out
+
+
+def test_known_noise_is_quiet_by_default_and_shown_with_verbose():
+    import warnings
+
+    import warp as wp
+
+    from legged_gente.envs.task_registry import shipped_task_warnings_quiet
+    from legged_gente.utils.args import quiet_third_party
+
+    level = wp.config.log_level
+    try:
+        quiet_third_party(verbose=False)
+        assert wp.config.log_level == wp.LOG_WARNING  # no "Module ... loaded" lines, no banner
+    finally:
+        wp.config.log_level = level
+    message = "forces: the added mass of leg geoms ['shin'] fully submerged reaches their bodies' mass"
+    for task, verbose, shown in (("gente_quadruped", False, 0), ("gente_quadruped", True, 1), ("my_robot", False, 1)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            with shipped_task_warnings_quiet(task, verbose):
+                warnings.warn(message, stacklevel=1)
+        assert len(caught) == shown, (task, verbose)

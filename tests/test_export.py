@@ -1,0 +1,91 @@
+"""The exported policy: one self-contained ONNX file whose outputs match the torch policy, with the metadata a
+robot-side controller needs, and which gente-evaluate --exported runs."""
+
+import numpy as np
+import onnx
+import onnxruntime
+import pytest
+import torch
+
+from legged_gente.envs.task_registry import task_registry
+from legged_gente.evaluation.evaluator import load_policy_and_file
+from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.utils.export import OnnxPolicy, deployment_metadata, export_onnx, read_metadata
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "3"])
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [16, 16]
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    policy = runner.alg.get_policy()
+    with torch.no_grad():  # a non-trivial normaliser and weights, as after training
+        policy.obs_normalizer._mean.uniform_(-0.5, 0.5)
+        policy.obs_normalizer._std.uniform_(0.5, 2.0)
+        for p in policy.mlp.parameters():
+            p.normal_(0.0, 0.3)
+    folder = tmp_path_factory.mktemp("exported")
+    path = export_onnx(policy, folder / "policy.onnx", deployment_metadata(env, "run/model_7.pt", args.task))
+    return env, runner, path
+
+
+def test_one_self_contained_file(exported):
+    _, _, path = exported
+    assert [p.name for p in path.parent.iterdir()] == ["policy.onnx"]  # no policy.onnx.data beside it
+    model = onnx.load(str(path))  # loads with its weights from this file alone
+    assert not any(t.data_location == onnx.TensorProto.EXTERNAL for t in model.graph.initializer)
+
+
+def test_onnx_runtime_matches_the_torch_policy(exported):
+    env, runner, path = exported
+    obs = env.get_observations()
+    obs["policy"] = obs["policy"] + torch.randn_like(obs["policy"])  # away from the normaliser's mean
+    with torch.inference_mode():
+        expected = runner.get_inference_policy()(obs).numpy()
+    session = onnxruntime.InferenceSession(str(path))
+    got = session.run(None, {"obs": obs["policy"].numpy()})[0]  # any batch size
+    np.testing.assert_allclose(got, expected, rtol=1e-4, atol=1e-5)
+    assert np.abs(expected).max() > 0.1  # a policy that outputs something
+    np.testing.assert_allclose(OnnxPolicy(path)(obs).numpy(), expected, rtol=1e-4, atol=1e-5)
+
+
+def test_metadata_a_deployment_needs(exported):
+    env, _, path = exported
+    meta = read_metadata(path)
+    # biped config (gente_biped_config.py): sim.dt 0.005 s, decimation 4 -> control period 0.02 s; action scale
+    # 0.25; hip and knee PD gains by joint name; obs scales of legged_gym (lin_vel 2.0, ang_vel 0.25, dof_vel 0.05)
+    assert meta["control_dt"] == pytest.approx(0.005 * 4)
+    assert meta["action_scale"] == 0.25
+    assert meta["task"] == "gente_biped_flat" and meta["checkpoint"] == "run/model_7.pt"
+    joints = meta["action_names"]
+    assert len(joints) == 10 and "left_knee" in joints
+    assert meta["joint_stiffness"][joints.index("left_knee")] == 200.0
+    assert meta["joint_stiffness"][joints.index("left_hip_yaw")] == 150.0
+    assert meta["joint_damping"][joints.index("left_knee")] == 5.0
+    assert meta["default_joint_pos"][joints.index("left_knee")] == pytest.approx(0.55)
+    names, scales = meta["observation_names"], meta["observation_scales"]
+    assert len(names) == len(scales) == env.get_observations()["policy"].shape[1]
+    assert scales[names.index("base_lin_vel_x")] == 2.0 and scales[names.index("base_ang_vel_z")] == 0.25
+    assert scales[names.index("dof_vel/left_knee")] == 0.05
+    first = names.index(f"last_action/{joints[0]}")
+    assert names[first:first + 10] == [f"last_action/{j}" for j in joints]
+    assert all(n.startswith("task_") for n in names[first + 10:])  # the biped's gait clock; no height scan on a plane
+
+
+def test_evaluate_exported_runs_the_onnx_file_and_checks_its_size(exported, tmp_path):
+    env, runner, path = exported
+
+    class Evaluation:  # what load_policy_and_file reads of an evaluation
+        pass
+
+    evaluation = Evaluation()
+    evaluation.env = env
+    policy, source = load_policy_and_file(evaluation, exported=str(path))
+    assert source == path.resolve()
+    assert policy(env.get_observations()).shape == (env.num_envs, env.num_actions)
+    with pytest.raises(ValueError, match="takes 44 observations; this task's policy observation has 50"):
+        OnnxPolicy(path, num_obs=50)
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        OnnxPolicy(tmp_path / "policy.onnx")

@@ -1,0 +1,78 @@
+"""--pretrained: gente-play and gente-evaluate load the policy shipped with the package for the task
+(resources/policies/<task>/); a task without one gets a one-line error."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from legged_gente.envs.task_registry import task_registry
+from legged_gente.scripts import evaluate as evaluate_script
+from legged_gente.scripts import play as play_script
+from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.utils.checkpoints import load_checkpoint, policies_root, pretrained_policy, ship_policy
+
+SHIPPED = "gente_biped_flat"
+
+
+def test_the_shipped_policy_is_small_cpu_loadable_and_says_how_it_was_made():
+    path, config = pretrained_policy(SHIPPED)
+    assert path.parent == policies_root() / SHIPPED
+    assert path.stat().st_size < 100_000
+    loaded = load_checkpoint(path, map_location="cpu")  # weights_only, on a machine without a GPU
+    assert set(loaded) == {"actor_state_dict", "iter", "infos"} and loaded["infos"]["task"] == SHIPPED
+    assert all(t.device.type == "cpu" for t in loaded["actor_state_dict"].values())
+    assert config["task"] == SHIPPED and config["note"]
+    assert len(config["code"]["git_commit"]) == 40  # the commit it was trained at
+    assert config["train"]["actor"]["hidden_dims"]
+
+
+def test_play_pretrained(tmp_path, capsys):
+    args = parse_args(play_script.build_play_parser(), ["--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless",
+                                             "--pretrained", "--steps", "3", "--log_root", str(tmp_path)])
+    out = play_script.play(args)
+    assert out["checkpoint"] == policies_root() / SHIPPED / "model.pt"
+    assert out["onnx"] == tmp_path / SHIPPED / "pretrained" / "exported" / "policy.onnx"
+    assert np.isfinite(out["log"]["vel"]).all()
+    # the played actor is the shipped one
+    shipped = load_checkpoint(out["checkpoint"])["actor_state_dict"]
+    for key, value in out["policy"].state_dict().items():
+        assert torch.equal(value, shipped[key])
+
+
+def test_evaluate_pretrained_records_the_file(tmp_path):
+    args = evaluate_script.build_parser().parse_args([
+        "--task", SHIPPED, "--pretrained", "--out", str(tmp_path), "--device", "cpu", "--limit", "1",
+        "--robots_per_terrain", "1", "--episode_s", "0.2", "--settle_s", "0", "--no_progress"])
+    report = evaluate_script.evaluate(args)
+    assert report["meta"]["policy"] == "pretrained"
+    assert report["meta"]["policy_file"] == str(policies_root() / SHIPPED / "model.pt")
+    assert json.loads((tmp_path / "report.json").read_text())["meta"]["policy_file"].endswith("model.pt")
+
+
+def test_a_task_without_a_shipped_policy(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        play_script.main(["--task", "gente_quadruped", "--device", "cpu", "--num_envs", "1", "--pretrained"])
+    assert exit_info.value.code == 2
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "no policy is shipped for task 'gente_quadruped'" in line and SHIPPED in line
+
+
+def test_ship_policy_keeps_the_actor_and_the_run_config(tmp_path):
+    args = parse_args(build_parser("t"), ["--task", SHIPPED, "--device", "cpu", "--num_envs", "1"])
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    run = tmp_path / "run"
+    run.mkdir()
+    runner.save(str(run / "model_4.pt"))
+    (run / "config.json").write_text(json.dumps({"task": SHIPPED, "code": {"git_commit": "0" * 40}}))
+    folder = ship_policy(run / "model_4.pt", SHIPPED, "a test", destination=tmp_path / "shipped")
+    loaded = load_checkpoint(folder / "model.pt")
+    assert set(loaded) == {"actor_state_dict", "iter", "infos"} and loaded["iter"] == 0
+    config = json.loads((folder / "config.json").read_text())
+    assert config["note"] == "a test" and config["source_checkpoint"] == "run/model_4.pt"
+    with pytest.raises(ValueError, match="is for gente_biped_flat, not gente_quadruped"):
+        ship_policy(run / "model_4.pt", "gente_quadruped", "wrong", destination=tmp_path / "other")
