@@ -39,6 +39,7 @@ def build_arg_parser():
     p.add_argument("--record", help="--play: also write the rollout to this .npz")
     p.add_argument("--traces", help="gente-evaluate's traces.npz (with the benchmark folder as source)")
     p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
+    p.add_argument("--step", type=int, help="open the rollout paused at this policy step")
     p.add_argument("--log_root", default=str(LOG_ROOT), help="where runs are (default: logs/)")
     return p
 
@@ -182,7 +183,11 @@ def main(argv=None) -> None:
     except (ValueError, FileNotFoundError, KeyError) as error:
         parser.exit(2, f"gente-view: error: {error}\n")
     if rollout is not None:
-        viewer.attach_rollout(rollout, mjm)
+        player = viewer.attach_rollout(rollout, mjm)
+        if args.step is not None:
+            player.play_gui.value = False
+            player.step_gui.value = args.step
+            player.draw(args.step)
     if play is not None:
         play.start()
     print(f"gente-view: serving {viewer.url}  (Ctrl-C stops)", flush=True)
@@ -194,6 +199,9 @@ def main(argv=None) -> None:
             time.sleep(0.2)
     except KeyboardInterrupt:
         pass
+    if play is not None and args.record:
+        print("gente-view: finishing the rollout to record it", flush=True)
+        play.join()
     viewer.stop()
 
 

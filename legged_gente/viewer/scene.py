@@ -31,6 +31,7 @@ from legged_gente.terrain.terrain import (
     WATER_COLOUR,
     Terrain,
 )
+from legged_gente.terrain.preview import material_legend
 
 MAX_VERTICES = 250_000
 """Largest ground mesh sent to the browser; bigger grids are subsampled (every ``stride``-th cell)."""
@@ -97,20 +98,11 @@ def material_colours(material: MaterialMap) -> tuple[np.ndarray, list[tuple[str,
     """(nx, ny, 3) float colours of the ground by material and the legend of the materials present."""
     rgb = np.empty(material.shape + (3,))
     rgb[:] = GROUND_COLOUR
-    legend = [("ground", _rgb255(GROUND_COLOUR))]
     for k, name in enumerate(material.soil_presets):
-        mask = material.soil == k
-        if mask.any():
-            colour = SOIL_COLOURS.get(name, CUSTOM_SOIL_COLOUR)
-            rgb[mask] = colour
-            legend.append((name.replace("_", " "), _rgb255(colour)))
-    icy = material.friction < LOW_FRICTION_TINT_BELOW
-    if icy.any():
-        rgb[icy] = LOW_FRICTION_COLOUR
-        legend.append((f"low friction (mu < {LOW_FRICTION_TINT_BELOW})", _rgb255(LOW_FRICTION_COLOUR)))
-    if material.has_water().any():
-        legend.append(("water (surface at its level)", _rgb255(WATER_COLOUR)))
-    return rgb, legend
+        rgb[material.soil == k] = SOIL_COLOURS.get(name, CUSTOM_SOIL_COLOUR)
+    rgb[material.friction < LOW_FRICTION_TINT_BELOW] = LOW_FRICTION_COLOUR
+    legend = [("ground", GROUND_COLOUR)] + material_legend(material)
+    return rgb, [(label, _rgb255(c)) for label, c in legend]
 
 
 def height_colours(heights: np.ndarray) -> tuple[np.ndarray, list[tuple[str, tuple[int, int, int]]]]:

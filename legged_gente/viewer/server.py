@@ -48,7 +48,8 @@ def push_scene(server, scene: Scene) -> dict[str, object]:
             handles[name] = server.scene.add_arrows(name, node.points, node.color, shaft_radius=0.02,
                                                     head_radius=0.05, head_length=0.1)
         elif isinstance(node, Lines):
-            handles[name] = server.scene.add_line_segments(name, node.points, node.color, line_width=2.0)
+            handles[name] = server.scene.add_line_segments(name, node.points, node.color, thickness=2.0,
+                                                            thickness_units="screen")
         elif isinstance(node, Label):
             handles[name] = server.scene.add_label(name, node.text, position=node.position, anchor="bottom-center")
         elif isinstance(node, Points):
