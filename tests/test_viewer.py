@@ -150,6 +150,23 @@ def test_server_serves_its_page(grid):
         assert len(viewer.scene.nodes["/terrain/ground"].vertices) == 41 * 41
         viewer.colour_gui.value = "heights"
         assert viewer.scene.legend[0][0].endswith(" m")
+        # a rollout: robot r at step t stands at x = t, y = r; a 200 N buoyancy on robot 1 is a 2 m arrow
+        mjm = robot_model("gente_biped")
+        t, r = 4, 2
+        qpos = np.tile(mjm.qpos0, (t, r, 1))
+        qpos[..., 0] = np.arange(t)[:, None]
+        qpos[..., 1] = np.arange(r)[None, :]
+        forces = np.zeros((t, r, 1, 3), np.float32)
+        forces[:, 1, 0, 2] = 200.0
+        rollout = Rollout("gente_biped", 0.02, qpos, np.zeros((t, r, 3)), np.zeros((t, r, 3)), np.zeros((t, r), bool),
+                          np.zeros((t, r), bool), ["buoyancy:shin"], forces, np.zeros((t, r, 1, 3), np.float32),
+                          grid.height_field, grid.origin_xy, grid.resolution, grid.material)
+        player = viewer.attach_rollout(rollout, mjm, play=False)
+        player.draw(3)
+        base = int(mjm.jnt_bodyid[0])
+        np.testing.assert_allclose(player.bodies[1, base].position, (3.0, 1.0, mjm.qpos0[2]), atol=1e-6)
+        arrows = player.force_handles["buoyancy"]
+        np.testing.assert_allclose(arrows.points[0, 1] - arrows.points[0, 0], (0.0, 0.0, 2.0), atol=1e-5)
     finally:
         viewer.stop()
 

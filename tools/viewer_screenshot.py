@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
-WINDOW = (1200, 750)
+WINDOW = (960, 640)
 PANEL_WIDTH = 340
 """px of viser's control panel on the right, left out of the terrain-pixel count."""
 
@@ -71,6 +71,7 @@ def screenshot(url: str, path: Path, wait: float = 180.0, min_fraction: float = 
     driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
     deadline = time.monotonic() + wait
     fraction = 0.0
+    path.parent.mkdir(parents=True, exist_ok=True)
     try:
         driver.set_page_load_timeout(60)
         driver.get(url)
@@ -78,11 +79,13 @@ def screenshot(url: str, path: Path, wait: float = 180.0, min_fraction: float = 
             time.sleep(5.0)
             try:
                 png = driver.get_screenshot_as_png()
-            except WebDriverException:  # the renderer is still busy with the first frame
+            except WebDriverException as error:  # the renderer is still busy with the first frame
+                print(f"  no frame yet ({type(error).__name__})", flush=True)
                 continue
             fraction = scene_fraction(png)
+            print(f"  frame: scene on {fraction:.1%} of the view", flush=True)
+            path.with_suffix(".last.png").write_bytes(png)
             if fraction >= min_fraction:
-                path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_bytes(png)
                 return fraction
     finally:

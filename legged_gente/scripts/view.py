@@ -183,9 +183,8 @@ def main(argv=None) -> None:
     except (ValueError, FileNotFoundError, KeyError) as error:
         parser.exit(2, f"gente-view: error: {error}\n")
     if rollout is not None:
-        player = viewer.attach_rollout(rollout, mjm)
+        player = viewer.attach_rollout(rollout, mjm, play=args.step is None)
         if args.step is not None:
-            player.play_gui.value = False
             player.step_gui.value = args.step
             player.draw(args.step)
     if play is not None:

@@ -170,9 +170,9 @@ class Viewer:
                 handle.visible = self.tiles_gui.value
 
     # ------------------------------------------------------------------------------------------- rollout
-    def attach_rollout(self, source, mjm) -> "RolloutPlayer":
+    def attach_rollout(self, source, mjm, play: bool = True) -> "RolloutPlayer":
         """Show ``source`` (a :class:`~.rollout.Rollout`, or a :class:`~.rollout.Recorder` that is filling)."""
-        self.player = RolloutPlayer(self.server, source, mjm)
+        self.player = RolloutPlayer(self.server, source, mjm, play)
         return self.player
 
     def stop(self) -> None:
@@ -193,7 +193,7 @@ def _frames(source) -> dict:
 class RolloutPlayer:
     """Robots from their MJCF geoms, force arrows, a step slider, play/pause and the velocity plot."""
 
-    def __init__(self, server, source, mjm):
+    def __init__(self, server, source, mjm, play: bool = True):
         import viser.uplot as uplot  # noqa: F401  (the plot's option types)
 
         self.server, self.source = server, source
@@ -203,6 +203,7 @@ class RolloutPlayer:
         frames = _frames(source)
         self.num_robots = frames["qpos"][0].shape[0] if len(frames["qpos"]) else len(source.robots)
         self.bodies: dict[tuple[int, int], object] = {}
+        self.force_handles: dict[str, object] = {}
         for r in range(self.num_robots):
             for body in sorted({s.body for s in self.shapes}):
                 self.bodies[r, body] = server.scene.add_frame(f"/robots/{r}/body_{body}", show_axes=False)
@@ -212,7 +213,7 @@ class RolloutPlayer:
         gui = server.gui
         with gui.add_folder("Rollout"):
             self.step_gui = gui.add_slider("step", 0, max(len(frames["qpos"]) - 1, 1), 1, 0)
-            self.play_gui = gui.add_checkbox("play", True)
+            self.play_gui = gui.add_checkbox("play", play)
             self.follow_gui = gui.add_checkbox("camera follows robot 0", False)
             self.forces_gui = gui.add_checkbox("force arrows", True)
             self.time_gui = gui.add_markdown("")
@@ -220,6 +221,7 @@ class RolloutPlayer:
                                       for k in FORCE_KINDS]))
             self.plot_gui = None
         self.step_gui.on_update(lambda _: self.draw(int(self.step_gui.value)))
+        self._draw_lock = threading.Lock()  # the GUI's callbacks and the play loop both draw
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._loop, daemon=True)
         self.thread.start()
@@ -242,6 +244,10 @@ class RolloutPlayer:
         self.thread.join(timeout=2.0)
 
     def draw(self, t: int) -> None:
+        with self._draw_lock:
+            self._draw(t)
+
+    def _draw(self, t: int) -> None:
         f = _frames(self.source)
         if not len(f["qpos"]):
             return
@@ -263,15 +269,15 @@ class RolloutPlayer:
                 cols = [k for k, label in enumerate(labels) if label.split(":")[0] == kind]
                 name = f"/forces/{kind}"
                 if not cols or not self.forces_gui.value:
-                    self.server.scene.add_arrows(name, np.zeros((0, 2, 3), np.float32), FORCE_COLOURS[kind],
-                                                 visible=False)
+                    self.force_handles[kind] = self.server.scene.add_arrows(
+                        name, np.zeros((0, 2, 3), np.float32), FORCE_COLOURS[kind], visible=False)
                     continue
                 force = np.asarray(f["forces"][t])[:, cols].reshape(-1, 3)
                 point = np.asarray(f["force_points"][t])[:, cols].reshape(-1, 3)
                 keep = np.linalg.norm(force, axis=1) > 1.0  # N: below it, no arrow
                 arrows = np.stack([point[keep], point[keep] + FORCE_SCALE * force[keep]], 1).astype(np.float32)
-                self.server.scene.add_arrows(name, arrows, FORCE_COLOURS[kind], shaft_radius=0.012,
-                                             head_radius=0.03, head_length=0.05)
+                self.force_handles[kind] = self.server.scene.add_arrows(
+                    name, arrows, FORCE_COLOURS[kind], shaft_radius=0.012, head_radius=0.03, head_length=0.05)
         falls = int(np.asarray(f["fell"])[: t + 1, 0].sum())
         resets = int(np.asarray(f["done"])[: t + 1, 0].sum())
         self.time_gui.content = (f"t = {t * self.dt:.2f} s of {(len(f['qpos']) - 1) * self.dt:.2f} s; robot 0: "
