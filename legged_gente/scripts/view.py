@@ -2,10 +2,10 @@
 
     gente-view terrains/beach/spec.json                  # a generated spec (or its terrain_cfg.py)
     gente-view --task gente_biped                        # the task's curriculum grid
-    gente-view benchmarks/gente100                       # a benchmark folder: one item at a time
+    gente-view gente100                                # a benchmark folder: one item at a time
     gente-view --task gente_biped --play --num_envs 4    # play the latest checkpoint live on the CPU
     gente-view rollout.npz                               # replay a recorded rollout
-    gente-view benchmarks/gente100 --traces eval/traces.npz --item text_00_sandy_beach_where_gentle
+    gente-view gente100 --traces eval/traces.npz --item text_00_sandy_beach_where_gentle
 
 Open the printed address in a browser. ``--headless`` only serves (no browser is opened).
 """
@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from legged_gente.envs.task_registry import LOG_ROOT
-from legged_gente.utils.args import apply_args, build_parser, parse_args
+from legged_gente.envs.task_registry import LOG_ROOT, apply_args
+from legged_gente.utils.args import build_parser, parse_args
 
 
 def build_arg_parser():
@@ -53,7 +53,7 @@ def _task_terrain(args, terrain_arg=None):
         env_cfg, _ = task_registry.get_cfgs(args.task)
         apply_args(args, env_cfg, None)
         if terrain_arg:
-            from legged_gente.utils.terrain_arg import apply_terrain_arg
+            from legged_gente.envs.terrain_arg import apply_terrain_arg
 
             apply_terrain_arg(str(terrain_arg), env_cfg)
         return Terrain(env_cfg.terrain, num_robots=1)
@@ -151,7 +151,11 @@ def main(argv=None) -> None:
     from legged_gente.viewer.scene import BareTerrain
     from legged_gente.viewer.server import TerrainItem, Viewer
 
+    from legged_gente.evaluation.benchmark import benchmark_root
+
     source = Path(args.source) if args.source else None
+    if source is not None and not source.suffix:
+        source = benchmark_root(source)  # a folder, or a shipped benchmark by name (gente100)
     rollout, mjm, play = None, None, None
     try:
         if args.play:
