@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
-WINDOW = (960, 640)
+WINDOW = (900, 600)
 PANEL_WIDTH = 340
 """px of viser's control panel on the right, left out of the terrain-pixel count."""
 
@@ -104,7 +104,7 @@ def main() -> None:
     args, view_args = parser.parse_args(argv[:split]), argv[split + 1:]
     port = free_port()
     server = subprocess.Popen([sys.executable, "-m", "legged_gente.scripts.view", *view_args, "--headless",
-                               "--port", str(port), "--seconds", str(args.wait + 300)])
+                               "--no_shadows", "--port", str(port), "--seconds", str(args.wait + 300)])
     try:
         wait_for_page(f"http://127.0.0.1:{port}", 300.0, server)
         fraction = screenshot(f"http://127.0.0.1:{port}", args.out, args.wait)

@@ -30,6 +30,7 @@ def build_arg_parser():
                                              "(default: the task's terrain grid)")
     p.add_argument("--port", type=int, default=8080, help="port of the web page (default 8080)")
     p.add_argument("--host", default="127.0.0.1", help="address to serve on (0.0.0.0: every interface)")
+    p.add_argument("--no_shadows", action="store_true", help="no shadows (faster in software WebGL)")
     p.add_argument("--seconds", type=float, default=None, help="stop serving after this many seconds")
     p.add_argument("--play", action="store_true", help="roll the task's policy out live (CPU by default)")
     p.add_argument("--policy", choices=("checkpoint", "zero"), default="checkpoint",
@@ -183,7 +184,7 @@ def main(argv=None) -> None:
                                  _task_terrain(args, source))]
         else:
             parser.error(f"{source}: pass a spec .json, a terrain_cfg.py, a benchmark folder or a rollout .npz")
-        viewer = Viewer(items, host=args.host, port=args.port)
+        viewer = Viewer(items, host=args.host, port=args.port, shadows=not args.no_shadows)
     except (ValueError, FileNotFoundError, KeyError) as error:
         parser.exit(2, f"gente-view: error: {error}\n")
     if rollout is not None:

@@ -71,7 +71,7 @@ def legend_html(legend: list[tuple[str, tuple[int, int, int]]]) -> str:
 class Viewer:
     """A viser server showing ``items`` (terrains) and, after :meth:`attach_rollout`, a rollout."""
 
-    def __init__(self, items: list[TerrainItem], host: str = "127.0.0.1", port: int = 8080):
+    def __init__(self, items: list[TerrainItem], host: str = "127.0.0.1", port: int = 8080, shadows: bool = True):
         import viser
 
         if not items:
@@ -82,7 +82,7 @@ class Viewer:
         self._built: dict[str, object] = {}
         self.server = viser.ViserServer(host=host, port=port, label="legged_gente", verbose=False)
         self.server.scene.set_up_direction("+z")
-        self.server.scene.configure_default_lights(enabled=True, cast_shadow=True)
+        self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows)
         self.lock = threading.Lock()
         self.scene: Scene | None = None
         self.handles: dict[str, object] = {}
