@@ -70,7 +70,7 @@ def screenshot(url: str, path: Path, wait: float = 180.0, min_fraction: float = 
         options.add_argument(flag)
     driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
     deadline = time.monotonic() + wait
-    fraction = 0.0
+    fraction, notice_removed = 0.0, False
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
         driver.set_page_load_timeout(60)
@@ -81,6 +81,12 @@ def screenshot(url: str, path: Path, wait: float = 180.0, min_fraction: float = 
                 png = driver.get_screenshot_as_png()
             except WebDriverException as error:  # the renderer is still busy with the first frame
                 print(f"  no frame yet ({type(error).__name__})", flush=True)
+                continue
+            if not notice_removed and "Software WebGL" in driver.page_source:
+                notice_removed = True  # viser's notice about software rendering is not part of the scene
+                driver.execute_script(
+                    "for (const n of document.querySelectorAll('[class*=Notification-root], [class*=notification]'))"
+                    " if (n.textContent.includes('Software WebGL')) n.remove();")
                 continue
             fraction = scene_fraction(png)
             print(f"  frame: scene on {fraction:.1%} of the view", flush=True)
