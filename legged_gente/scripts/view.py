@@ -192,6 +192,9 @@ def main(argv=None) -> None:
         if args.step is not None:
             player.step_gui.value = args.step
             player.draw(args.step)
+            player.focus(args.step)
+        elif isinstance(rollout, Rollout):
+            player.focus(0)
     if play is not None:
         play.start()
     print(f"gente-view: serving {viewer.url}  (Ctrl-C stops)", flush=True)

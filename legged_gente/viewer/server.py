@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import threading
-import time
 from typing import Callable
 
 import numpy as np
@@ -194,7 +193,6 @@ class RolloutPlayer:
     """Robots from their MJCF geoms, force arrows, a step slider, play/pause and the velocity plot."""
 
     def __init__(self, server, source, mjm, play: bool = True):
-        import viser.uplot as uplot  # noqa: F401  (the plot's option types)
 
         self.server, self.source = server, source
         self.dt = float(getattr(source, "dt", None) or source.env.dt)
@@ -238,6 +236,16 @@ class RolloutPlayer:
                 self.step_gui.value = (int(self.step_gui.value) + 1) % n if not hasattr(self.source, "frames") \
                     else n - 1
             self._stop.wait(self.dt)
+
+    def focus(self, t: int, distance: float = 2.5) -> None:
+        """Point the camera (initial and connected clients') at robot 0's base at step ``t``."""
+        f = _frames(self.source)
+        base = np.asarray(f["qpos"][min(t, len(f["qpos"]) - 1)][0][:3], np.float64)
+        position = base + distance * np.array([-0.6, -0.75, 0.45])
+        self.server.initial_camera.look_at = tuple(base)
+        self.server.initial_camera.position = tuple(position)
+        for client in self.server.get_clients().values():
+            client.camera.look_at, client.camera.position = base, position
 
     def stop(self) -> None:
         self._stop.set()
