@@ -35,6 +35,8 @@ from legged_gente.terrain.preview import material_legend
 
 MAX_VERTICES = 250_000
 """Largest ground mesh sent to the browser; bigger grids are subsampled (every ``stride``-th cell)."""
+MAX_TILE_LABELS = 60
+"""More tiles than this get one label per column (its type) and per row instead of one per tile."""
 FLOW_ARROW_SECONDS = 1.0
 """A flow arrow is as long as the water travels in this time (m)."""
 FLOW_ARROW_SPACING = 1.0
@@ -185,17 +187,20 @@ def terrain_scene(
             legend.append((f"flow: arrow = {FLOW_ARROW_SECONDS:g} s of travel", (20, 60, 200)))
 
     if terrain.mode not in ("plane", "bare"):
-        rows = range(terrain.num_rows) if tile is None else [tile[0]]
-        cols = range(terrain.num_cols) if tile is None else [tile[1]]
+        rows = list(range(terrain.num_rows)) if tile is None else [tile[0]]
+        cols = list(range(terrain.num_cols)) if tile is None else [tile[1]]
         nodes[f"{prefix}/tiles/outlines"] = Lines(_tile_outlines(terrain, rows, cols, stride, offset), (30, 30, 30))
         spawns = terrain.terrain_origins[np.ix_(list(rows), list(cols))].reshape(-1, 3).astype(np.float32)
         spawns[:, :2] += offset
         nodes[f"{prefix}/tiles/spawns"] = Points(spawns + np.float32([0, 0, 0.05]), (230, 30, 30))
         legend.append(("spawn point", (230, 30, 30)))
-        for r in rows if terrain.num_rows * terrain.num_cols > 1 else []:  # one tile: its name is the item's
-            for c in cols:
+        labels = [(r, c, f"({r}, {c}) {terrain.tile_names[r, c]}") for r in rows for c in cols]
+        if len(labels) > MAX_TILE_LABELS:  # a large grid: its columns' types along row 0, its rows along column 0
+            labels = ([(rows[0], c, f"col {c}: {terrain.tile_names[rows[0], c]}") for c in cols]
+                      + [(r, cols[0], f"row {r}") for r in rows[1:]])
+        if terrain.num_rows * terrain.num_cols > 1:  # one tile: its name is the item's
+            for r, c, text in labels:
                 sx, sy, sz = terrain.terrain_origins[r, c]
-                text = f"({r}, {c}) {terrain.tile_names[r, c]}"
                 nodes[f"{prefix}/tiles/label_{r}_{c}"] = Label(text, (float(sx + offset[0]), float(sy + offset[1]),
                                                                      float(sz) + 1.2))
     lo = np.array([x[0], y[0], float(h.min())], np.float32)
