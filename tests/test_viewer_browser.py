@@ -56,7 +56,7 @@ def test_browser_shows_the_terrain(browser, tmp_path):
         max_init_terrain_level, curriculum, static_friction, seed = 0, True, 1.0, 0
 
     terrain = Terrain(Cfg, num_robots=1)
-    viewer = Viewer([TerrainItem("sand and river", lambda: terrain)], port=browser.free_port())
+    viewer = Viewer([TerrainItem("sand and river", lambda: terrain)], port=browser.free_port(), shadows=False)
     try:
         out = tmp_path / "viewer.png"
         fraction = browser.screenshot(viewer.url, out, wait=300.0)
