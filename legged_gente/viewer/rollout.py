@@ -34,7 +34,7 @@ from legged_gente.terrain.materials import MaterialMap
 
 ROLLOUT_VERSION = 1
 FORCE_KINDS = ("buoyancy", "drag", "soil")
-FORCE_COLOURS = {"buoyancy": (40, 120, 255), "drag": (255, 140, 0), "soil": (150, 75, 0)}
+FORCE_COLOURS = {"buoyancy": (0, 200, 80), "drag": (255, 140, 0), "soil": (150, 75, 0)}
 _MATERIAL_FIELDS = ("water_surface", "flow_kind", "flow_speed", "flow_direction", "flow_omega", "flow_phase",
                     "soil", "friction")
 

@@ -44,8 +44,8 @@ def push_scene(server, scene: Scene) -> dict[str, object]:
                                                          opacity=node.opacity, side="double", cast_shadow=False,
                                                          receive_shadow=False)
         elif isinstance(node, Arrows):
-            handles[name] = server.scene.add_arrows(name, node.points, node.color, shaft_radius=0.02,
-                                                    head_radius=0.05, head_length=0.1)
+            handles[name] = server.scene.add_arrows(name, node.points, node.color, shaft_radius=0.008,
+                                                    head_radius=0.025, head_length=0.06)
         elif isinstance(node, Lines):
             handles[name] = server.scene.add_line_segments(name, node.points, node.color, thickness=2.0,
                                                             thickness_units="screen")
