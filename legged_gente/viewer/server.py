@@ -152,8 +152,7 @@ class Viewer:
             self.legend_gui.content = legend_html(scene.legend)
             centre, extent = (lo + hi) / 2, float(max(hi[0] - lo[0], hi[1] - lo[1]))
             self.server.initial_camera.look_at = tuple(centre)
-            # from behind the first row (-x), looking forward over the grid: columns run across the screen
-            self.server.initial_camera.position = (float(lo[0] - 0.3 * extent), float(centre[1]),
+            self.server.initial_camera.position = (float(centre[0] - 0.15 * extent), float(centre[1] - 0.75 * extent),
                                                    float(hi[2] + 0.45 * extent))
             for client in self.server.get_clients().values():
                 client.camera.look_at = self.server.initial_camera.look_at
