@@ -64,8 +64,9 @@ def test_browser_shows_the_terrain(browser, tmp_path):
         viewer.stop()
     assert fraction >= 0.05
     rgb = np.asarray(Image.open(out).convert("RGB"), np.int32)[:, : -browser.PANEL_WIDTH]
-    # sand pixels: the dry-sand tint (237, 212, 143) as lit by the scene's lights: yellow, red > blue by 40+
-    sandy = (rgb[..., 0] - rgb[..., 2] > 40) & (rgb[..., 1] - rgb[..., 2] > 25)
+    # sand pixels: the dry-sand tint (237, 212, 143) as the scene's lights render it, pale but warm (about
+    # (239, 235, 224)): red and green above blue; the grey border and the white background are neutral
+    sandy = (rgb[..., 0] - rgb[..., 2] > 8) & (rgb[..., 1] - rgb[..., 2] > 5)
     assert sandy.mean() > 0.01, f"no sand-coloured terrain on screen ({sandy.mean():.2%} of the pixels)"
     if os.environ.get("GENTE_BROWSER_SHOT"):  # where to keep the screenshot (docs/img/viewer_browser_test.png)
         shutil.copy(out, os.environ["GENTE_BROWSER_SHOT"])
