@@ -87,6 +87,7 @@ def test_evaluate_writes_reports(tmp_path, mode):
     traces = np.load(out / "traces.npz")
     steps = round(0.6 / 0.02)
     assert traces["pos"].shape == (2, steps, 2) and traces["cmd"].shape == (2, steps, 3)
+    np.testing.assert_allclose(traces["qpos"][..., :2], traces["pos"], atol=1e-5)  # gente-view --traces replays it
     assert list(traces["ids"]) == ITEMS
     if mode == "waypoints":
         assert traces["waypoints"].shape == (2, 4, 2)

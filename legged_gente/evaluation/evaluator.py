@@ -94,7 +94,7 @@ class Recorder:
         self.last_xy = self.start_xy.clone()
         self.step = 0
         self.trace_robots = trace_robots
-        self.trace: dict[str, list[torch.Tensor]] = {"cmd": [], "vel": [], "pos": [], "active": []}
+        self.trace: dict[str, list[torch.Tensor]] = {"cmd": [], "vel": [], "pos": [], "active": [], "qpos": []}
 
     def record(self, env) -> None:
         a = self.active
@@ -126,6 +126,7 @@ class Recorder:
         self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
         self.trace["pos"].append(xy[r].clone())
         self.trace["active"].append(a[r].clone())
+        self.trace["qpos"].append(env.sim.qpos[r].clone())  # gente-view replays the robot from it
 
 
 @dataclasses.dataclass

@@ -93,16 +93,11 @@ def build():
 '''
 
 
-def save_preview(heights: np.ndarray, material, resolution: float, path: Path, max_size: int = 600) -> Path:
-    """Hillshaded, material-tinted PNG via the terrain library's ``preview_rgb`` (x to the right, y up)."""
-    from legged_gente.terrain.terrain import preview_rgb
+def save_preview(heights: np.ndarray, material, resolution: float, path: Path, title: str | None = None) -> Path:
+    """The terrain library's preview figure: +x up and +y left like an input picture, legend, axes, scale bar."""
+    from legged_gente.terrain.preview import save_preview_figure
 
-    image = Image.fromarray((preview_rgb(heights, material, resolution) * 255).round().astype(np.uint8))
-    scale = min(1.0, max_size / max(image.size))
-    if scale < 1.0:
-        image = image.resize((round(image.width * scale), round(image.height * scale)), Image.Resampling.LANCZOS)
-    image.save(path, optimize=True)
-    return path
+    return save_preview_figure(heights, material, resolution, path, title=title)
 
 
 def load_module(path: str | Path):
@@ -152,7 +147,7 @@ def emit(
     module_path = out / "terrain_cfg.py"
     module_path.write_text(text)
     heights, material = spec.build()
-    preview = save_preview(heights, material, spec.resolution, out / "preview.png")
+    preview = save_preview(heights, material, spec.resolution, out / "preview.png", title=spec.name)
     mesh_path = None
     if mesh:
         cfg_class = getattr(load_module(module_path), class_name)

@@ -37,6 +37,9 @@ def plot_tracking(log: dict[str, np.ndarray], dt: float, path: Path) -> None:
         ax.plot(t, log["vel"][:, i], label="actual", color="tab:blue")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
+        for key, colour, style in (("reset", "tab:gray", ":"), ("fall", "tab:red", "-")):
+            for n, when in enumerate(t[np.asarray(log.get(key, []), bool)]):  # a fall is also a reset
+                ax.axvline(when, color=colour, linestyle=style, linewidth=1.2, label=f"robot 0 {key}" if n == 0 else None)
     axes[0].legend(loc="upper right")
     axes[-1].set_xlabel("time (s)")
     fig.suptitle("commanded vs actual base velocity (robot 0)")
@@ -59,14 +62,16 @@ class VideoRecorder:
         except Exception as error:  # no GL context: say how to get one
             raise RuntimeError(f"offscreen rendering failed ({error}); on a CPU machine install OSMesa "
                                "(apt-get install libosmesa6) and set MUJOCO_GL=osmesa, on a GPU set MUJOCO_GL=egl") from error
-        self.camera = mujoco.MjvCamera()
+        self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = True  # the model's sun casts shadows
+        self.camera = mujoco.MjvCamera()  # follows robot 0's base (a tracking camera keeps its offset)
+        self.camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+        self.camera.trackbodyid = int(env.base)
         self.camera.distance, self.camera.elevation, self.camera.azimuth = 3.0, -20.0, 135.0
         self.frames: list[np.ndarray] = []
 
     def capture(self) -> None:
         self.data.qpos[:] = self.env.sim.qpos[0].cpu().numpy()
         self.mujoco.mj_forward(self.env.mjm, self.data)
-        self.camera.lookat[:] = self.data.qpos[:3]
         self.renderer.update_scene(self.data, self.camera)
         self.frames.append(self.renderer.render().copy())
 
@@ -108,12 +113,14 @@ def play(args) -> dict:
     recorder = VideoRecorder(env) if args.video else None
     viewer = _open_viewer(env) if not args.headless and os.environ.get("DISPLAY") else None
     obs = env.get_observations()
-    log = {"cmd": [], "vel": []}
+    log = {"cmd": [], "vel": [], "reset": [], "fall": []}
     with torch.inference_mode():
         for _ in range(args.steps):
             obs, _, _, _ = env.step(policy(obs))
             log["cmd"].append(env.commands[0, :3].cpu().numpy())
             log["vel"].append(torch.cat([env.base_lin_vel[0, :2], env.base_ang_vel[0, 2:3]]).cpu().numpy())
+            log["reset"].append(bool(env.reset_buf[0]))  # the episode of robot 0 ended at this step
+            log["fall"].append(bool(env.reset_buf[0] & ~env.time_out_buf[0]))
             if recorder is not None:
                 recorder.capture()
             if viewer is not None:

@@ -159,11 +159,26 @@ def _configure_options(spec: mujoco.MjSpec, sim) -> None:
     spec.option.ls_iterations = sim.ls_iterations
 
 
+def _add_ground_look(spec: mujoco.MjSpec) -> str:
+    """A 1 m checker material for the terrain and a shadow-casting sun, so a rendered gait is visible on any
+    terrain (rendering only: no effect on the physics). Returns the material's name."""
+    spec.add_texture(name="terrain_checker", type=mujoco.mjtTexture.mjTEXTURE_2D,
+                     builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, rgb1=[0.62, 0.64, 0.66], rgb2=[0.42, 0.45, 0.48],
+                     mark=mujoco.mjtMark.mjMARK_EDGE, markrgb=[0.3, 0.3, 0.3], width=256, height=256)
+    material = spec.add_material(name="terrain_checker", texrepeat=[0.5, 0.5], texuniform=True, reflectance=0.05)
+    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "terrain_checker"  # builtin checker: 2 x 2 squares
+    spec.worldbody.add_light(name="sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0, 0, 20],
+                             dir=[0.3, 0.4, -1.0], castshadow=True, diffuse=[0.7, 0.7, 0.7])
+    return "terrain_checker"
+
+
 def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
     friction = [cfg_terrain.static_friction, 0.005, 0.0001]
+    material = _add_ground_look(spec)
     if terrain is None:
         spec.worldbody.add_geom(name=TERRAIN_GEOM, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
-                                friction=friction, contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY, rgba=[0.5, 0.55, 0.6, 1])
+                                friction=friction, contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY,
+                                material=material)
         return
     heights = np.asarray(terrain.height_field, dtype=np.float64)
     nx, ny = heights.shape
@@ -177,7 +192,7 @@ def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
     ox, oy = terrain.origin_xy
     spec.worldbody.add_geom(name=TERRAIN_GEOM, type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="terrain_hfield",
                             pos=[ox + half_x, oy + half_y, h_min], friction=friction, contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY,
-                            rgba=[0.5, 0.55, 0.6, 1])
+                            material=material)
 
 
 def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) -> None:

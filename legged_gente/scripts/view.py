@@ -1,0 +1,222 @@
+"""gente-view: terrains and rollouts in the browser (viser).
+
+    gente-view terrains/beach/spec.json                  # a generated spec (or its terrain_cfg.py)
+    gente-view --task gente_biped                        # the task's curriculum grid
+    gente-view gente100                                # a benchmark folder: one item at a time
+    gente-view --task gente_biped --play --num_envs 4    # play the latest checkpoint live on the CPU
+    gente-view rollout.npz                               # replay a recorded rollout
+    gente-view gente100 --traces eval/traces.npz --item text_00_sandy_beach_where_gentle
+
+Open the printed address in a browser. ``--headless`` only serves (no browser is opened).
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+import webbrowser
+from pathlib import Path
+
+import numpy as np
+
+from legged_gente.envs.task_registry import LOG_ROOT, apply_args
+from legged_gente.utils.args import build_parser, parse_args
+
+
+def build_arg_parser():
+    p = build_parser("See terrains and rollouts in the browser.")
+    p.add_argument("source", nargs="?", help="spec.json, terrain_cfg.py, benchmark folder or rollout .npz "
+                                             "(default: the task's terrain grid)")
+    p.add_argument("--port", type=int, default=8080, help="port of the web page (default 8080)")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on (0.0.0.0: every interface)")
+    p.add_argument("--no_shadows", action="store_true", help="no shadows (faster in software WebGL)")
+    p.add_argument("--seconds", type=float, default=None, help="stop serving after this many seconds")
+    p.add_argument("--play", action="store_true", help="roll the task's policy out live (CPU by default)")
+    p.add_argument("--policy", choices=("checkpoint", "zero"), default="checkpoint",
+                   help="--play: the run's checkpoint (--load_run/--checkpoint, default the latest) or zero actions")
+    p.add_argument("--steps", type=int, default=500, help="--play: policy steps")
+    p.add_argument("--robots", type=int, default=4, help="--play: robots drawn and recorded")
+    p.add_argument("--record", help="--play: also write the rollout to this .npz")
+    p.add_argument("--traces", help="gente-evaluate's traces.npz (with the benchmark folder as source)")
+    p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
+    p.add_argument("--step", type=int, help="open the rollout paused at this policy step")
+    p.add_argument("--log_root", default=str(LOG_ROOT), help="where runs are (default: logs/)")
+    return p
+
+
+def _task_terrain(args, terrain_arg=None):
+    """Builder of the task's terrain, with ``terrain_arg`` (a spec or terrain_cfg.py) applied if given."""
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.terrain.terrain import Terrain
+
+    def build():
+        env_cfg, _ = task_registry.get_cfgs(args.task)
+        apply_args(args, env_cfg, None)
+        if terrain_arg:
+            from legged_gente.envs.terrain_arg import apply_terrain_arg
+
+            apply_terrain_arg(str(terrain_arg), env_cfg)
+        return Terrain(env_cfg.terrain, num_robots=1)
+
+    return build
+
+
+def _benchmark_items(root: Path, args):
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import grid_shape
+    from legged_gente.viewer.server import TerrainItem
+
+    items = load_benchmark(root)
+    specs = {i.id: i for i in items}
+    if args.traces is None:
+        return [TerrainItem(i.id, _task_terrain(args, i.spec_path)) for i in items], None
+    with np.load(args.traces) as f:
+        if "qpos" not in f.files:
+            raise ValueError(f"{args.traces} has no qpos (written by an older gente-evaluate); evaluate again to "
+                             f"replay the robots.")
+        ids = [str(i) for i in f["ids"]]
+        item = args.item or ids[0]
+        if item not in ids:
+            raise ValueError(f"--item {item!r} is not in {args.traces}; it has {ids[:5]}...")
+        k = ids.index(item)
+        trace = {key: f[key][k] for key in ("qpos", "cmd", "vel", "active")} | {"dt": float(f["dt"])}
+    if item not in specs:
+        raise ValueError(f"{args.traces} item {item!r} is not in the benchmark {root}; pass the folder it was "
+                         f"evaluated on.")
+    size_x, size_y = specs[item].spec().size_x, specs[item].spec().size_y
+    _, cols = grid_shape(len(ids))
+    offset = ((k // cols) * size_x, (k % cols) * size_y)  # the tile the evaluation put the item on
+    return [TerrainItem(item, _task_terrain(args, specs[item].spec_path), offset)], trace
+
+
+def _trace_rollout(trace: dict, task: str, terrain):
+    """One robot of gente-evaluate's traces as a Rollout (no force arrows: evaluation does not keep them)."""
+    from legged_gente.viewer.rollout import Rollout
+
+    active = trace["active"].astype(bool)
+    steps = max(int(active.sum()), 1)  # the robot's first episode
+    ended = np.zeros((steps, 1), bool)
+    ended[-1] = steps < len(active)
+    return Rollout(task, trace["dt"], trace["qpos"][:steps, None], trace["cmd"][:steps, None],
+                   trace["vel"][:steps, None], ended, ended.copy(), [], np.zeros((steps, 1, 0, 3), np.float32),
+                   np.zeros((steps, 1, 0, 3), np.float32), terrain.height_field, terrain.origin_xy,
+                   terrain.resolution, terrain.material)
+
+
+def _make_play(args):
+    """The env, the policy and a recorder for ``--play`` (gente-play's settings: no noise, no pushes)."""
+    import torch
+
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.viewer.rollout import Recorder
+
+    env_cfg, train_cfg = task_registry.get_cfgs(args.task)
+    env_cfg.env.num_envs = args.num_envs or args.robots
+    env_cfg.noise.add_noise = False
+    env_cfg.domain_rand.push_robots = False
+    env_cfg.terrain.num_rows = min(env_cfg.terrain.num_rows, 5)
+    env_cfg.terrain.num_cols = min(env_cfg.terrain.num_cols, 5)
+    env_cfg.terrain.curriculum = False
+    env_cfg.sim.torch_compile = False
+    apply_args(args, env_cfg, train_cfg)
+    env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
+    if args.policy == "zero":
+        policy = lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)  # noqa: E731
+    else:
+        train_cfg.runner.resume = True
+        runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=args.log_root)
+        policy = runner.get_inference_policy(device=env.device)
+    return env, policy, Recorder(env, args.task, min(args.robots, env.num_envs))
+
+
+def _run_play(env, policy, recorder, steps: int, record: str | None) -> None:
+    import torch
+
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for _ in range(steps):
+            obs, _, _, _ = env.step(policy(obs))
+            recorder.add()
+    if record:
+        print(f"wrote {recorder.rollout().save(record)}")
+
+
+def main(argv=None) -> None:
+    parser = build_arg_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if "--device" not in argv:
+        argv += ["--device", "cpu"]  # the viewer runs on the CPU unless told otherwise
+    args = parse_args(parser, argv)
+    from legged_gente.viewer.rollout import Rollout, robot_model
+    from legged_gente.viewer.scene import BareTerrain
+    from legged_gente.viewer.server import TerrainItem, Viewer
+
+    from legged_gente.evaluation.benchmark import benchmark_root
+
+    source = Path(args.source) if args.source else None
+    if source is not None and not source.suffix:
+        source = benchmark_root(source)  # a folder, or a shipped benchmark by name (gente100)
+    rollout, mjm, play = None, None, None
+    try:
+        if args.play:
+            if source is not None:
+                parser.error("--play rolls out on the task's terrain: give --terrain, not a source file")
+            env, policy, recorder = _make_play(args)
+            items = [TerrainItem(f"{args.task} (play)", lambda: env.terrain or BareTerrain(*_plane()))]
+            rollout, mjm = recorder, env.mjm
+            play = threading.Thread(target=_run_play, args=(env, policy, recorder, args.steps, args.record), daemon=True)
+        elif source is None:
+            items = [TerrainItem(args.task, _task_terrain(args))]
+        elif source.is_dir():
+            items, trace = _benchmark_items(source, args)
+            if trace is not None:
+                terrain = items[0].build()
+                items[0].build = lambda: terrain
+                rollout, mjm = _trace_rollout(trace, args.task, terrain), robot_model(args.task)
+        elif source.suffix == ".npz":
+            rollout = Rollout.load(source)
+            items = [TerrainItem(source.stem, lambda: BareTerrain(rollout.heights, rollout.material,
+                                                                  rollout.resolution, rollout.origin))]
+            mjm = robot_model(rollout.task)
+        elif source.suffix in (".json", ".py"):
+            items = [TerrainItem(source.parent.name or source.stem,
+                                 _task_terrain(args, source))]
+        else:
+            parser.error(f"{source}: pass a spec .json, a terrain_cfg.py, a benchmark folder or a rollout .npz")
+        viewer = Viewer(items, host=args.host, port=args.port, shadows=not args.no_shadows)
+    except (ValueError, FileNotFoundError, KeyError) as error:
+        parser.exit(2, f"gente-view: error: {error}\n")
+    if rollout is not None:
+        player = viewer.attach_rollout(rollout, mjm, play=args.step is None)
+        if args.step is not None:
+            player.step_gui.value = args.step
+            player.draw(args.step)
+            player.focus(args.step)
+        elif isinstance(rollout, Rollout):
+            player.focus(0)
+    if play is not None:
+        play.start()
+    print(f"gente-view: serving {viewer.url}  (Ctrl-C stops)", flush=True)
+    if not args.headless:
+        webbrowser.open(viewer.url)
+    deadline = None if args.seconds is None else time.monotonic() + args.seconds
+    try:
+        while deadline is None or time.monotonic() < deadline:
+            time.sleep(0.2)
+    except KeyboardInterrupt:
+        pass
+    if play is not None and args.record:
+        print("gente-view: finishing the rollout to record it", flush=True)
+        play.join()
+    viewer.stop()
+
+
+def _plane():
+    from legged_gente.terrain.materials import MaterialMap
+
+    return np.zeros((2, 2), np.float32), MaterialMap.rigid((2, 2)), 100.0, (-50.0, -50.0)
+
+
+if __name__ == "__main__":
+    main()

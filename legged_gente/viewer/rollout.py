@@ -1,0 +1,279 @@
+"""Rollouts to replay in the viewer: a small npz format, a recorder, and the robot drawn from its MJCF geoms.
+
+Rollout file (``np.savez_compressed``; T policy steps, R robots, K force arrows per robot)::
+
+    version          ()            int, ROLLOUT_VERSION
+    task             ()            str, the registered task (its MJCF draws the robot)
+    dt               ()            float, s per policy step
+    qpos             (T, R, nq)    float32, MuJoCo qpos of each robot (free joint: world x y z, quaternion w x y z)
+    cmd              (T, R, 3)     float32, commanded vx, vy (m/s, base frame) and yaw rate (rad/s)
+    vel              (T, R, 3)     float32, actual vx, vy (m/s, base frame) and yaw rate (rad/s)
+    done             (T, R)        bool, the episode ended at this step (the robot is reset after it)
+    fell             (T, R)        bool, ended by a termination (fall), not by the time-out
+    force_labels     (K,)          str, "<kind>:<geom or body>", kind one of FORCE_KINDS
+    forces           (T, R, K, 3)  float32, N, world frame (last substep of the policy step)
+    force_points     (T, R, K, 3)  float32, m, where each force acts
+    terrain_heights  (nx, ny)      float32, m; terrain_origin (2,) m; terrain_resolution () m
+    terrain_<field>  (nx, ny)      the material map (water_surface, flow_kind, flow_speed, flow_direction,
+                                   flow_omega, flow_phase, soil, friction) and terrain_soil_presets (S,) str
+
+Force kinds: ``buoyancy`` (Archimedes on each leg segment's submerged part, at its centre of buoyancy),
+``drag`` (the rest of the water force on the segment: drag, added mass, flow), ``soil`` (bulldozing and shear
+under each foot, at the sole).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from legged_gente.terrain.materials import MaterialMap
+
+ROLLOUT_VERSION = 1
+FORCE_KINDS = ("buoyancy", "drag", "soil")
+FORCE_COLOURS = {"buoyancy": (0, 200, 80), "drag": (255, 140, 0), "soil": (150, 75, 0)}
+_MATERIAL_FIELDS = ("water_surface", "flow_kind", "flow_speed", "flow_direction", "flow_omega", "flow_phase",
+                    "soil", "friction")
+
+
+@dataclasses.dataclass
+class Rollout:
+    task: str
+    dt: float
+    qpos: np.ndarray
+    cmd: np.ndarray
+    vel: np.ndarray
+    done: np.ndarray
+    fell: np.ndarray
+    force_labels: list[str]
+    forces: np.ndarray
+    force_points: np.ndarray
+    heights: np.ndarray
+    origin: tuple[float, float]
+    resolution: float
+    material: MaterialMap
+
+    @property
+    def num_steps(self) -> int:
+        return self.qpos.shape[0]
+
+    @property
+    def num_robots(self) -> int:
+        return self.qpos.shape[1]
+
+    def save(self, path: str | Path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        m = self.material
+        np.savez_compressed(
+            path, version=ROLLOUT_VERSION, task=self.task, dt=self.dt, qpos=self.qpos.astype(np.float32),
+            cmd=self.cmd.astype(np.float32), vel=self.vel.astype(np.float32), done=self.done, fell=self.fell,
+            force_labels=np.array(self.force_labels, dtype=str), forces=self.forces.astype(np.float32),
+            force_points=self.force_points.astype(np.float32), terrain_heights=self.heights.astype(np.float32),
+            terrain_origin=np.asarray(self.origin, np.float64), terrain_resolution=self.resolution,
+            terrain_soil_presets=np.array(m.soil_presets, dtype=str),
+            **{f"terrain_{f}": getattr(m, f) for f in _MATERIAL_FIELDS},
+        )
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> "Rollout":
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"rollout {path} does not exist; record one with `gente-view --play ... "
+                                    f"--record {path.name}`.")
+        with np.load(path) as f:
+            keys = set(f.files)
+            if "version" not in keys or "qpos" not in keys:
+                hint = " (this is gente-evaluate's traces.npz: open it with --traces)" if "pos" in keys else ""
+                raise ValueError(f"{path} is not a rollout file{hint}; it has {sorted(keys)[:8]}.")
+            if int(f["version"]) != ROLLOUT_VERSION:
+                raise ValueError(f"{path}: rollout version {int(f['version'])}, this viewer reads {ROLLOUT_VERSION}; "
+                                 f"record it again.")
+            material = MaterialMap(**{k: f[f"terrain_{k}"] for k in _MATERIAL_FIELDS},
+                                   soil_presets=[str(s) for s in f["terrain_soil_presets"]])
+            return cls(str(f["task"]), float(f["dt"]), f["qpos"], f["cmd"], f["vel"], f["done"], f["fell"],
+                       [str(s) for s in f["force_labels"]], f["forces"], f["force_points"], f["terrain_heights"],
+                       tuple(f["terrain_origin"].tolist()), float(f["terrain_resolution"]), material)
+
+
+# ------------------------------------------------------------------------------------------------ the robot
+@dataclasses.dataclass
+class GeomShape:
+    body: int
+    vertices: np.ndarray  # (N, 3) in the body frame
+    faces: np.ndarray
+    color: tuple[int, int, int]
+
+
+def robot_geoms(mjm: mujoco.MjModel) -> list[GeomShape]:
+    """Triangle meshes of the robot's visible geoms (boxes, spheres, capsules, cylinders, ellipsoids, meshes)
+    in their bodies' frames; the world body's geoms (terrain, floor) are left out."""
+    import trimesh
+
+    G = mujoco.mjtGeom
+    shapes = []
+    for g in range(mjm.ngeom):
+        body = int(mjm.geom_bodyid[g])
+        if body == 0 or mjm.geom_rgba[g, 3] == 0:
+            continue
+        t, size = int(mjm.geom_type[g]), mjm.geom_size[g]
+        if t == G.mjGEOM_BOX:
+            mesh = trimesh.creation.box(extents=2 * size)
+        elif t == G.mjGEOM_SPHERE:
+            mesh = trimesh.creation.icosphere(subdivisions=2, radius=size[0])
+        elif t == G.mjGEOM_CAPSULE:
+            mesh = trimesh.creation.capsule(height=2 * size[1], radius=size[0], count=[12, 8])
+        elif t == G.mjGEOM_CYLINDER:
+            mesh = trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=12)
+        elif t == G.mjGEOM_ELLIPSOID:
+            mesh = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+            mesh.apply_scale(size)
+        elif t == G.mjGEOM_MESH:
+            mid = int(mjm.geom_dataid[g])
+            v0, nv = mjm.mesh_vertadr[mid], mjm.mesh_vertnum[mid]
+            f0, nf = mjm.mesh_faceadr[mid], mjm.mesh_facenum[mid]
+            mesh = trimesh.Trimesh(mjm.mesh_vert[v0:v0 + nv], mjm.mesh_face[f0:f0 + nf], process=False)
+        else:
+            continue  # planes, heightfields: not part of a robot
+        rot = np.eye(4)
+        mujoco.mju_quat2Mat(rot[:3, :3].reshape(-1), mjm.geom_quat[g])
+        rot[:3, 3] = mjm.geom_pos[g]
+        mesh.apply_transform(rot)
+        color = tuple(int(round(255 * c)) for c in mjm.geom_rgba[g, :3])
+        shapes.append(GeomShape(body, np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32), color))
+    return shapes
+
+
+class Kinematics:
+    """Body poses from qpos with ``mj_kinematics`` on the CPU (no dynamics)."""
+
+    def __init__(self, mjm: mujoco.MjModel):
+        self.mjm, self.data = mjm, mujoco.MjData(mjm)
+
+    def __call__(self, qpos: np.ndarray) -> mujoco.MjData:
+        if qpos.shape[-1] != self.mjm.nq:
+            raise ValueError(f"qpos has {qpos.shape[-1]} values, the robot model {self.mjm.nq}; the rollout was "
+                             f"recorded with another robot: open it with its own --task.")
+        self.data.qpos[:] = qpos
+        mujoco.mj_kinematics(self.mjm, self.data)
+        return self.data
+
+
+def robot_model(task: str) -> mujoco.MjModel:
+    """The robot's MJCF alone (the qpos layout of the task's worlds: the terrain adds no joints)."""
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.sim.assembly import resolve_path
+
+    if task not in task_registry.tasks:
+        raise ValueError(f"task {task!r} is not registered; use one of {sorted(task_registry.tasks)}.")
+    env_cfg, _ = task_registry.get_cfgs(task)
+    return mujoco.MjModel.from_xml_path(str(resolve_path(env_cfg.asset.file)))
+
+
+# ------------------------------------------------------------------------------------------------ recording
+def force_layout(env) -> list[str]:
+    """The force arrows of one robot of ``env``: buoyancy and drag per wading segment, soil per foot."""
+    forces = env.forces
+    if forces is None:
+        return []
+    name = lambda obj, i: mujoco.mj_id2name(env.mjm, obj, int(i)) or str(int(i))  # noqa: E731
+    segs = [name(mujoco.mjtObj.mjOBJ_GEOM, g) for g in forces.seg_geom.numpy()[: forces.nseg]]
+    feet = [name(mujoco.mjtObj.mjOBJ_BODY, b) for b in forces.foot_body.numpy()[: forces.nfoot]]
+    return [f"buoyancy:{s}" for s in segs] + [f"drag:{s}" for s in segs] + [f"soil:{f}" for f in feet]
+
+
+def robot_forces(env, robots: np.ndarray, kin: Kinematics) -> tuple[np.ndarray, np.ndarray]:
+    """(R, K, 3) forces (N) and their points (m) for ``robots`` now, in :func:`force_layout`'s order.
+
+    The water force of a segment is split into buoyancy, eps * rho g pi r^2 L_sub (Archimedes; the kernel's
+    noise factor eps included), at the submerged part's centroid, and the rest (drag, added mass, flow).
+    """
+    from legged_gente.external_forces.models import buoyancy
+
+    f = env.forces
+    if f is None:
+        return np.zeros((len(robots), 0, 3), np.float32), np.zeros((len(robots), 0, 3), np.float32)
+    cfg, nseg, nfoot = f.cfg, f.nseg, f.nfoot
+    seg_geom, seg_r, seg_half = f.seg_geom.numpy(), f.seg_radius.numpy(), f.seg_halflen.numpy()
+    total = f.seg_force.numpy()[robots, :nseg]
+    soil = f.foot_force.numpy()[robots, :nfoot]
+    eps = f.eps.numpy()[robots]
+    foot_body, foot_offset = f.foot_body.numpy()[:nfoot], f.foot_offset.numpy()[:nfoot]
+    surface = env.terrain.material.water_surface if env.terrain is not None else None
+    qpos = env.sim.qpos[robots].cpu().numpy()
+    out_f = np.zeros((len(robots), 2 * nseg + nfoot, 3), np.float32)
+    out_p = np.zeros_like(out_f)
+    for k, q in enumerate(qpos):  # a handful of robots, outside the env's step
+        d = kin(q)
+        centre, axis = d.geom_xpos[seg_geom[:nseg]], d.geom_xmat[seg_geom[:nseg]].reshape(-1, 3, 3)[:, :, 2]
+        half = (seg_half[:nseg] + seg_r[:nseg])[:, None]
+        ends = np.stack([centre - half * axis, centre + half * axis], 1)
+        lo = ends[np.arange(nseg), ends[:, :, 2].argmin(1)]
+        hi = ends[np.arange(nseg), ends[:, :, 2].argmax(1)]
+        zw = _surface_at(env.terrain, surface, centre) if surface is not None else np.full(nseg, -np.inf)
+        span = np.maximum(hi[:, 2] - lo[:, 2], 1e-9)
+        frac = np.clip((zw - lo[:, 2]) / span, 0.0, 1.0)
+        frac = np.where(hi[:, 2] <= zw, 1.0, frac)
+        lsub = frac * 2 * half[:, 0]
+        point = lo + 0.5 * frac[:, None] * (hi - lo)
+        lift = eps[k] * buoyancy(cfg.water_density, f.g, seg_r[:nseg], lsub)
+        b = np.zeros((nseg, 3))
+        b[:, 2] = np.where(lsub > 0, lift, 0.0)
+        out_f[k, :nseg], out_p[k, :nseg] = b, point
+        out_f[k, nseg:2 * nseg], out_p[k, nseg:2 * nseg] = np.where(lsub[:, None] > 0, total[k] - b, 0.0), point
+        rot = d.xmat[foot_body].reshape(-1, 3, 3)
+        out_f[k, 2 * nseg:] = soil[k]
+        out_p[k, 2 * nseg:] = d.xpos[foot_body] + np.einsum("fij,fj->fi", rot, foot_offset)
+    return out_f, out_p
+
+
+def _surface_at(terrain, surface: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Water surface z of the cells under ``points`` (the kernel's nearest cell)."""
+    i = np.clip(np.round((points[:, 0] - terrain.origin_xy[0]) / terrain.resolution).astype(int), 0, surface.shape[0] - 1)
+    j = np.clip(np.round((points[:, 1] - terrain.origin_xy[1]) / terrain.resolution).astype(int), 0, surface.shape[1] - 1)
+    return surface[i, j]
+
+
+class Recorder:
+    """Collects a :class:`Rollout` of the first ``num_robots`` robots of ``env``, one :meth:`add` per policy step."""
+
+    def __init__(self, env, task: str, num_robots: int):
+        if not 1 <= num_robots <= env.num_envs:
+            raise ValueError(f"num_robots={num_robots}: record between 1 and the env's {env.num_envs} robots.")
+        self.env, self.task = env, task
+        self.robots = np.arange(num_robots)
+        self.kin = Kinematics(env.mjm)
+        self.labels = force_layout(env)
+        self.frames: dict[str, list[np.ndarray]] = {k: [] for k in ("qpos", "cmd", "vel", "done", "fell", "forces",
+                                                                     "force_points")}
+
+    def add(self) -> None:
+        import torch
+
+        env, r = self.env, self.robots
+        vel = torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1)
+        forces, points = robot_forces(env, r, self.kin)
+        done = env.reset_buf[r].cpu().numpy()
+        for key, value in (("qpos", env.sim.qpos[r].cpu().numpy()), ("cmd", env.commands[r, :3].cpu().numpy()),
+                           ("vel", vel.cpu().numpy()), ("done", done),
+                           ("fell", done & ~env.time_out_buf[r].cpu().numpy()), ("forces", forces),
+                           ("force_points", points)):
+            self.frames[key].append(value)
+
+    def rollout(self) -> Rollout:
+        if not self.frames["qpos"]:
+            raise ValueError("no steps recorded yet; call add() after env.step().")
+        t = self.env.terrain
+        if t is not None:
+            heights, origin, res, material = t.height_field, t.origin_xy, t.resolution, t.material
+        else:  # a plane: a flat patch around the robots
+            heights, origin, res = np.zeros((2, 2), np.float32), (-50.0, -50.0), 100.0
+            material = MaterialMap.rigid((2, 2))
+        arrays = {k: np.stack(v) for k, v in self.frames.items()}
+        return Rollout(self.task, float(self.env.dt), arrays["qpos"], arrays["cmd"], arrays["vel"],
+                       arrays["done"].astype(bool), arrays["fell"].astype(bool), list(self.labels), arrays["forces"],
+                       arrays["force_points"], heights, tuple(origin), float(res), material)
