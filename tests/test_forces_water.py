@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import warp as wp
 
+from legged_gente.external_forces import water as W
 from legged_gente.external_forces import water_models as WM
 from legged_gente.external_forces.field import ForcesConfig, TerrainForces
 from legged_gente.terrain.materials import FLOW_TIDE, MaterialMap
@@ -365,3 +366,70 @@ def test_water_kernels_match_references():
         dense = np.zeros((mjm.nv, mjm.nv))
         mujoco.mju_sym2dense(dense, dm[w].astype(np.float64), mjm.M_rownnz, mjm.M_rowadr, mjm.M_colind)
         np.testing.assert_allclose(dense, ref_m, atol=2e-4 * max(np.abs(ref_m).max(), 1e-3))
+
+
+@wp.kernel
+def _eval_water(x: wp.array2d[float], out: wp.array2d[float]):
+    i = wp.tid()
+    r = x[i, 0]
+    v = wp.vec3(x[i, 6], x[i, 7], x[i, 8])
+    a = wp.normalize(wp.vec3(x[i, 9], x[i, 10], x[i, 11]))
+    half = wp.vec3(x[i, 12], x[i, 13], x[i, 14])
+    rot = wp.quat_to_matrix(wp.normalize(wp.quat(x[i, 16], x[i, 17], x[i, 18], x[i, 15])))  # (w, x, y, z) in x
+    out[i, 0] = W.circle_wet_area_fn(r, x[i, 1])
+    out[i, 1] = W.cylinder_slice_volume_fn(r, x[i, 2], x[i, 3], x[i, 4], x[i, 5], 0.1)
+    out[i, 2] = W.sphere_cap_volume_fn(r, x[i, 1] + r)
+    d = W.crossflow_drag_fn(1000.0, 1.1, r, 1.0e-3, v, a, 0)
+    fi = W.inertia_force_fn(1000.0, 1.0, 1.0e-3, v, a)
+    pd = W.plate_drag_fn(1000.0, 1.17, half, rot, x[i, 1] + r, v)
+    sd = W.sphere_drag_fn(1000.0, 0.47, r, 0.5, v)
+    for k in range(3):
+        out[i, 3 + k] = d[k]
+        out[i, 6 + k] = fi[k]
+        out[i, 9 + k] = pd[k]
+        out[i, 12 + k] = sd[k]
+
+
+def test_water_functions_match_references():
+    rng = np.random.default_rng(0)
+    n = 300
+    u = lambda lo, hi: rng.uniform(lo, hi, n)  # noqa: E731
+    x = np.stack([u(0.01, 0.06), u(-0.08, 0.08), u(0.0, 1.0), u(-0.2, 0.2), u(-0.2, 0.2), u(-0.1, 0.1),
+                  *[u(-1, 1) for _ in range(6)], u(0.01, 0.1), u(0.01, 0.1), u(0.01, 0.1),
+                  *[u(-1, 1) for _ in range(4)]], 1).astype(np.float32)
+    x[:30, 2] = 0.0  # vertical slices
+    x[30:60, 4] = x[30:60, 3] + 1e-3  # nearly level slices
+    out = wp.zeros((n, 15), dtype=float, device=DEV)
+    wp.launch(_eval_water, dim=n, inputs=[wp.array(x, dtype=float, device=DEV), out], device=DEV)
+    got = out.numpy()
+    x = x.astype(np.float64)
+    ref = []
+    for row in x:
+        r, v, a = row[0], row[6:9], row[9:12] / np.linalg.norm(row[9:12])
+        q = row[15:19] / np.linalg.norm(row[15:19])
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, q)
+        rot = rot.reshape(3, 3)
+        ref.append(np.r_[WM.circle_wet_area(r, row[1]), WM.cylinder_slice_volume(r, row[2], row[3], row[4], row[5], 0.1),
+                         WM.sphere_cap_volume(r, row[1] + r), WM.crossflow_drag(1000.0, 1.1, r, 1e-3, v, a),
+                         WM.inertia_force(1000.0, 1.0, 1e-3, v, a), WM.plate_drag(1000.0, 1.17, row[12:15], rot,
+                                                                                  row[1] + r, v),
+                         WM.sphere_drag(1000.0, 0.47, r, 0.5, v)])
+    ref = np.asarray(ref)
+    scale = np.abs(ref).max(0) + 1e-12
+    err = (np.abs(got - ref) / scale).max(0)
+    assert np.all(err < 2e-4), err
+
+
+def test_water_references_textbook_values():
+    r = 0.05
+    # a chord through the centre halves the circle; a sphere wet to its centre is a hemisphere
+    assert WM.circle_wet_area(r, 0.0) == pytest.approx(math.pi * r * r / 2)
+    assert WM.sphere_cap_volume(r, r) == pytest.approx(2 / 3 * math.pi * r**3)
+    assert WM.sphere_cap_volume(r, 3 * r) == pytest.approx(4 / 3 * math.pi * r**3)
+    # a vertical slice from z = -0.1 to 0.1 under a surface at 0.02: pi r^2 * 0.12
+    assert WM.cylinder_slice_volume(r, 0.0, -0.1, 0.1, 0.02, 0.2) == pytest.approx(math.pi * r * r * 0.12)
+    # tilted 45 deg with its middle at the surface: by symmetry half the slice is under water
+    lv = 0.3 * math.cos(math.pi / 4)
+    assert WM.cylinder_slice_volume(r, math.sin(math.pi / 4), -lv / 2, lv / 2, 0.0, 0.3) == pytest.approx(
+        math.pi * r * r * 0.15)

@@ -309,7 +309,7 @@ def segment_water_kernel(
         total = total + f
     seg_force[w, s] = total
 
-    if paper_added_mass != 0 or top < 0:
+    if paper_added_mass != 0 or top < 0 or mass[0] + mass[1] + mass[2] <= 0.0:
         return
     # implicit added mass: M[i, j] += sum_k m_k J_i(p_k) . P J_j(p_k), j ancestor of i (or i itself)
     i = top
