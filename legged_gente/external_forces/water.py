@@ -246,11 +246,11 @@ def segment_water_kernel(
                 apply_force(xfrc, xipos, w, b, fb, q)
                 total = total + fb
 
-    low = c + half * axis
-    if a_z > 0.0:
-        low = c - half * axis
-    lcell = water_cell(water, low)
-    iv = wet_interval_fn(c[2], a_z, sin_t, r, half, water.surface[lcell[0], lcell[1]])
+    # the wet interval under the higher of the surfaces at the two ends (a leg across a water border)
+    cell_a = water_cell(water, c - half * axis)
+    cell_b = water_cell(water, c + half * axis)
+    z_ref = wp.max(water.surface[cell_a[0], cell_a[1]], water.surface[cell_b[0], cell_b[1]])
+    iv = wet_interval_fn(c[2], a_z, sin_t, r, half, z_ref)
     if iv[1] <= iv[0]:
         seg_force[w, s] = total
         return

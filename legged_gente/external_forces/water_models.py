@@ -95,13 +95,14 @@ def segment_slices(c, axis, r, half, surface_at):
     """Slices of a leg segment: list of (Gauss point p_k, length l_k, submerged volume V_k).
 
     ``surface_at(p)`` returns the water surface height at world point p. The wet interval is found with the
-    surface at the segment's lower end; each slice's volume uses the surface at its own Gauss point.
+    higher of the surfaces at the segment's two ends (a leg across a water border); each slice's volume uses the
+    surface at its own Gauss point, so the volume is exact wherever the surface is level over each slice.
     """
     c, axis = np.asarray(c, float), np.asarray(axis, float)
     a_z = axis[2]
     sin_t = np.sqrt(max(1.0 - a_z * a_z, 0.0))
-    low = c - half * axis if a_z > 0 else c + half * axis
-    s0, s1 = wet_interval(c[2], a_z, sin_t, r, half, surface_at(low))
+    z_ref = max(surface_at(c - half * axis), surface_at(c + half * axis))
+    s0, s1 = wet_interval(c[2], a_z, sin_t, r, half, z_ref)
     if s1 <= s0:
         return []
     mid, hw = 0.5 * (s0 + s1), 0.5 * (s1 - s0)
