@@ -223,7 +223,8 @@ def test_horizontal_capsule_buoyancy_is_continuous_through_the_surface():
     # the slide axis is the body's x = world -z (euler 0 90 0): qpos = -(centre height)
     assign(d.qpos, -(z_w - hs + R)[:, None])
     mjw.step(m, d)
-    expect = RHO * G * (circle_wet_area(R, hs) * L + math.pi * np.clip(hs, 0, 2 * R)**2 * (3 * R - np.clip(hs, 0, 2 * R)) / 3)
+    hc = np.clip(hs, 0, 2 * R)
+    expect = RHO * G * (circle_wet_area(R, hs) * L + math.pi * hc**2 * (3 * R - hc) / 3)
     got = f.seg_force.numpy()[:, 0, 2]
     np.testing.assert_allclose(got, expect, rtol=1e-3, atol=1e-4)
     assert np.all(np.diff(got) >= -1e-6)
@@ -410,7 +411,8 @@ def test_water_functions_match_references():
         rot = np.zeros(9)
         mujoco.mju_quat2Mat(rot, q)
         rot = rot.reshape(3, 3)
-        ref.append(np.r_[WM.circle_wet_area(r, row[1]), WM.cylinder_slice_volume(r, row[2], row[3], row[4], row[5], 0.1),
+        ref.append(np.r_[WM.circle_wet_area(r, row[1]),
+                         WM.cylinder_slice_volume(r, row[2], row[3], row[4], row[5], 0.1),
                          WM.sphere_cap_volume(r, row[1] + r), WM.crossflow_drag(1000.0, 1.1, r, 1e-3, v, a),
                          WM.inertia_force(1000.0, 1.0, 1e-3, v, a), WM.plate_drag(1000.0, 1.17, row[12:15], rot,
                                                                                   row[1] + r, v),

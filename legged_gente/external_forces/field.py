@@ -176,8 +176,16 @@ class TerrainForces:
         for i in range(mjm.nv):
             depth[i] = 1 + (depth[mjm.dof_parentid[i]] if mjm.dof_parentid[i] >= 0 else 0)
         cut = depth > mjm.M_rownnz
-        legs = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in seg
-                if cut[mjm.dof_bodyid == mjm.geom_bodyid[g]].any()]
+
+        def chain_cut(body):  # any dof moving the body (its own or its ancestors') with a shortened row
+            while body > 0 and mjm.body_dofnum[body] == 0:
+                body = mjm.body_parentid[body]
+            dof = mjm.body_dofadr[body] + mjm.body_dofnum[body] - 1 if body > 0 else -1
+            while dof >= 0 and not cut[dof]:
+                dof = mjm.dof_parentid[dof]
+            return dof >= 0
+
+        legs = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in seg if chain_cut(mjm.geom_bodyid[g])]
         if legs:
             warnings.warn(f"forces: leg geoms {legs} are on bodies whose mass matrix MuJoCo keeps diagonal; their "
                           f"added mass enters per dof, without the coupling between dofs (exact only for a leg "

@@ -1,4 +1,4 @@
-"""Warp kernels of the terrain force fields, batched over (worlds x leg segments) and (worlds x feet).
+"""Warp kernels of the terrain force fields (soil, friction, noise; the water kernels are in ``water.py``).
 
 The ``*_fn`` functions are the device twins of the numpy references in ``models.py`` (same names without
 the suffix) and are tested against them. The kernels are launched by ``field.TerrainForces`` from
