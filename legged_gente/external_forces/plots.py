@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 
 from legged_gente.external_forces import models  # noqa: E402
 from legged_gente.external_forces import water_models as WM  # noqa: E402
-from legged_gente.external_forces.soil import SOIL_PRESETS  # noqa: E402
+from legged_gente.terrain.soil import SOIL_PRESETS  # noqa: E402
 
 RHO, G, CD, CM = 1000.0, 9.81, 1.1, 1.0
 
