@@ -189,7 +189,6 @@ def test_light_floating_body_stays_bounded_and_heaves_at_the_added_mass_period()
     up = np.nonzero((zs[:-1] < 0) & (zs[1:] >= 0))[0]
     t_up = (up + zs[up] / (zs[up] - zs[up + 1])) * mjm.opt.timestep  # interpolated upward zero crossings
     assert len(up) >= 3
-    print("heave period", np.mean(np.diff(t_up)), "hand", period)
     assert np.mean(np.diff(t_up)) == pytest.approx(period, rel=0.03)
 
 
