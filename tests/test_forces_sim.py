@@ -67,7 +67,7 @@ def test_constant_speed_drag_matches_reference():
     for _ in range(3):
         set_qvel(d, speeds)
         mjw.step(m, d)
-    lsub = 0.3 - (0.3 - H - R)  # surface at the capsule centre: lower half (tip included) is submerged
+    lsub = H  # surface at the capsule centre: the lower half of its cylinder part is wet (caps: buoyancy only)
     ref = models.cylinder_drag(1000.0, Cfg.drag_coefficient, R, lsub, speeds[:, 0])
     fx = f.seg_force.numpy()[:, 0, 0]
     np.testing.assert_allclose(fx, -np.sign(speeds[:, 0]) * ref, rtol=1e-4)
@@ -101,14 +101,12 @@ def test_floating_capsule_settles_at_analytic_draft():
     wp.set_device(DEV)
     rho_body = 500.0
     mjm = world(leg("--z", z=0.45, density=rho_body, damping=20.0))
-    cfg = type("C", (Cfg,), {"vertical_drag": True})
-    # the capsule axis is z: make it vertical
-    with pytest.warns(UserWarning, match="added mass"):  # 500 kg/m^3: lighter than its added mass
-        m, d, f = make(mjm, water_map(surface=0.5), cfg(), nworld=2)
+    m, d, f = make(mjm, water_map(surface=0.5), Cfg(), nworld=2)  # 500 kg/m^3: lighter than its added mass
     for _ in range(300):
         mjw.step(m, d)
     mass = mjm.body_mass[1]
-    draft = mass / (1000.0 * np.pi * R**2)  # submerged length where buoyancy = weight
+    # buoyancy = weight: the bottom hemisphere (2/3 pi r^3) and x of the cylinder under water, draft = r + x
+    draft = R + (mass / 1000.0 - 2 / 3 * np.pi * R**3) / (np.pi * R**2)
     bottom = 0.45 + d.qpos.numpy()[:, 0] - H - R
     np.testing.assert_allclose(0.5 - bottom, draft, rtol=0.02)
 
@@ -119,17 +117,16 @@ def test_tide_follows_cos_morison_and_paper_flow_term():
     amp, omega, phase = 0.8, 2.0, 0.4
     cfg = type("C", (Cfg,), {"paper_flow_force": True})
     m, d, f = make(mjm, water_map(surface=1.0, kind=FLOW_TIDE, speed=amp, omega=omega, phase=phase), cfg())
-    L = 2 * (H + R)
-    for step in range(20):
+    L = 2 * H  # the cylinder part (the caps get buoyancy only)
+    for _ in range(20):
         set_qvel(d, np.zeros((2, 1)))
         t = d.time.numpy()[0]
         mjw.step(m, d)
-        if step == 0:
-            continue  # no velocity history yet: no added mass on the first substep
         u = models.flow_force("tide", t, amp, omega, phase)
         du = -amp * omega * np.sin(omega * t + phase)
+        # Morison's inertia on a fixed cylinder: Froude-Krylov rho V du/dt plus added mass ca rho V du/dt (cm = 1 + ca)
         morison = (models.cylinder_drag(1000.0, cfg.drag_coefficient, R, L, u) * np.sign(u)
-                   + models.added_mass(1000.0, 1.0, R, L) * du)
+                   + (1000.0 * np.pi * R**2 * L + models.added_mass(1000.0, 1.0, R, L)) * du)
         np.testing.assert_allclose(f.seg_force.numpy()[:, 0, 0], morison + u, rtol=1e-3, atol=1e-4)
     f.after_substep()  # no feet: nothing to do, must not fail
 

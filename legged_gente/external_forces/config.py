@@ -6,15 +6,19 @@ from __future__ import annotations
 class ForcesConfig:
     """Attributes TerrainForces reads (subclass or copy these onto your env config's ``forces`` class).
 
-    wading: bool          drag, buoyancy, added mass (and paper flow force) on leg segments in water
+    wading: bool          drag, buoyancy, added mass (and paper flow force) on leg segments and feet in water
     soil: bool            Bekker sinkage, bulldozing and pre-sliding friction on feet on soil cells
     friction_from_map: bool  ground contacts' tangential friction scaled by the cell's MaterialMap.friction
     friction_reference: float  friction of the MJCF ground geom (1): a cell of this friction changes nothing
     water_density: float  rho, kg/m^3
     drag_coefficient: float  cd of a cylinder across the flow (1), ~1.0-1.2 at leg Reynolds numbers (Hoerner)
-    added_mass_coefficient: float  cm (1), 1.0 for a circular cylinder
+    added_mass_coefficient: float  ca (1), 1.0 for a circular cylinder; a fixed leg in accelerating flow feels
+                           Morison's inertia with cm = 1 + ca (Froude-Krylov + added mass)
+    plate_drag_coefficient: float  cd of a box sole's faces as flat plates normal to the flow (1.17, Hoerner)
+    sphere_drag_coefficient: float  cd of a sphere sole (0.47, Hoerner, subcritical)
     noise_std: float      std of the paper's eps (per episode, drag and vertical forces) and xi (per step, flow)
-    vertical_drag: bool   drag on the vertical relative velocity too (default: horizontal only)
+    vertical_drag: bool   cross-flow drag on the full relative velocity (True); False drops its vertical part
+                           first (the paper's horizontal-only drag)
     paper_drag_area: bool  GenTe's A = 2 pi r h instead of the projected 2 r h
     paper_added_mass: bool GenTe's effective weight (added mass only adds weight) instead of the reaction
                            -m_a * relative acceleration
@@ -23,6 +27,8 @@ class ForcesConfig:
     leg_geom_names: list[str]   capsule (or cylinder) geoms of the legs that feel water
     foot_geom_names: list[str]  colliding geoms of the feet that sink into soil; geoms on one body form one
                            foot (a box sole, or e.g. the spheres at its corners)
+    foot_water_geom_names: list[str] | None  sphere or box geoms of the feet that feel water (buoyancy, drag);
+                           None: the foot_geom_names
     sole_length, sole_width: float | None  sole size (m); None: the footprint of the first foot's geoms in its
                            body's x-y plane (box: its extent; sphere/capsule/cylinder: a disc of its radius)
     contact_threshold: float  foot normal force (N) above which a foot counts as in contact (slip resets below)
@@ -41,12 +47,15 @@ class ForcesConfig:
     drag_coefficient = 1.1
     added_mass_coefficient = 1.0
     noise_std = 0.1
-    vertical_drag = False
+    plate_drag_coefficient = 1.17
+    sphere_drag_coefficient = 0.47
+    vertical_drag = True
     paper_drag_area = False
     paper_added_mass = False
     paper_flow_force = False
     leg_geom_names: list[str] = []
     foot_geom_names: list[str] = []
+    foot_water_geom_names: list[str] | None = None
     sole_length = None
     sole_width = None
     contact_threshold = 1.0

@@ -26,6 +26,7 @@ import numpy as np
 import warp as wp
 
 from legged_gente.external_forces import kernels as K
+from legged_gente.external_forces import water as W
 from legged_gente.external_forces.config import ForcesConfig
 from legged_gente.terrain.soil import preset_table
 from legged_gente.terrain.materials import MaterialMap
@@ -124,10 +125,9 @@ class TerrainForces:
         self.seg_geom = arr(seg, int)
         self.seg_body = arr(mjm.geom_bodyid[seg].astype(np.int32), int)
         self.seg_radius = arr(mjm.geom_size[seg, 0].astype(np.float32), float)
-        halflen = np.where(mjm.geom_type[seg] == int(mujoco.mjtGeom.mjGEOM_CAPSULE), mjm.geom_size[seg, 1],
-                           mjm.geom_size[seg, 1] - mjm.geom_size[seg, 0])
-        self.seg_halflen = arr(halflen.astype(np.float32), float)
-        self._check_added_mass(mjm, seg, halflen)
+        self.seg_halflen = arr(mjm.geom_size[seg, 1].astype(np.float32), float)  # cylinder part's half-length
+        self.seg_caps = arr((mjm.geom_type[seg] == int(mujoco.mjtGeom.mjGEOM_CAPSULE)).astype(np.int32), int)
+        self._check_diagonal_mass(mjm, seg)
 
         bodies, groups = foot_groups(mjm, cfg.foot_geom_names)
         self.nfoot = len(bodies)
@@ -140,6 +140,7 @@ class TerrainForces:
             geom_foot[g] = f
         self.geom_foot = arr(geom_foot, int)
         self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
+        self.foot_water_geom = arr(self._foot_water_geoms(mjm, groups), int)
         self.sole_length, self.sole_width = self._sole(mjm, groups)
 
         n, nf, ns = self.nworld, max(self.nfoot, 1), max(self.nseg, 1)
@@ -148,9 +149,8 @@ class TerrainForces:
         self.eps = z(n, float)
         self.xi = z(n, float)
         self.soil_params = z((n, npreset, K.NSOILPARAM), float)
-        self.seg_vel = z((n, ns), wp.vec3)
-        self.seg_vel_valid = z((n, ns), int)
         self.seg_force = z((n, ns), wp.vec3)
+        self.foot_water_force = z((n, max(len(self.foot_water_geom), 1)), wp.vec3)
         self.foot_fn = z((n, nf), float)
         self.foot_vel = z((n, nf), wp.vec3)
         self.foot_slip = z((n, nf), wp.vec3)
@@ -167,20 +167,42 @@ class TerrainForces:
         self.new_policy_step()
 
     # ------------------------------------------------------------------ setup helpers
-    def _check_added_mass(self, mjm, seg, halflen):
-        """The added mass is applied explicitly (from last substep's acceleration): stable only while it is
-        smaller than the mass it acts on. Warn where a fully submerged segment would break that."""
+    def _check_diagonal_mass(self, mjm, seg):
+        """MuJoCo stores only the diagonal of M for "simple" bodies (children of the world with a diagonal inertia,
+        e.g. a lone free body or slide joints): the added mass of legs on them loses its coupling between dofs."""
         if not self.cfg.wading or self.cfg.paper_added_mass:
             return
-        r = mjm.geom_size[seg, 0]
-        ma = self.cfg.added_mass_coefficient * self.cfg.water_density * np.pi * r**2 * 2 * (halflen + r)
-        body_mass = mjm.body_subtreemass[mjm.geom_bodyid[seg]]
-        heavy = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g, a, b in zip(seg, ma, body_mass)
-                 if a >= b]
-        if heavy:
-            warnings.warn(f"forces: the added mass of leg geoms {heavy} fully submerged reaches their bodies' "
-                          f"mass; the explicit added-mass force may oscillate. Use paper_added_mass=True or a "
-                          f"smaller added_mass_coefficient for such light legs.", stacklevel=3)
+        depth = np.zeros(mjm.nv, int)
+        for i in range(mjm.nv):
+            depth[i] = 1 + (depth[mjm.dof_parentid[i]] if mjm.dof_parentid[i] >= 0 else 0)
+        cut = depth > mjm.M_rownnz
+
+        def chain_cut(body):  # any dof moving the body (its own or its ancestors') with a shortened row
+            while body > 0 and mjm.body_dofnum[body] == 0:
+                body = mjm.body_parentid[body]
+            dof = mjm.body_dofadr[body] + mjm.body_dofnum[body] - 1 if body > 0 else -1
+            while dof >= 0 and not cut[dof]:
+                dof = mjm.dof_parentid[dof]
+            return dof >= 0
+
+        legs = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in seg if chain_cut(mjm.geom_bodyid[g])]
+        if legs:
+            warnings.warn(f"forces: leg geoms {legs} are on bodies whose mass matrix MuJoCo keeps diagonal; their "
+                          f"added mass enters per dof, without the coupling between dofs (exact only for a leg "
+                          f"across its slide axes). Put such a body under another body to get the full matrix.",
+                          stacklevel=3)
+
+    def _foot_water_geoms(self, mjm, groups) -> np.ndarray:
+        """The foot geoms that feel water (``foot_water_geom_names``, else the feet's geoms): spheres or boxes."""
+        names = self.cfg.foot_water_geom_names
+        geoms = (_geom_ids(mjm, names, "foot_water_geom_names") if names is not None
+                 else np.concatenate(groups).astype(np.int32) if groups else np.zeros(0, np.int32))
+        ok = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_BOX))
+        bad = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in geoms if mjm.geom_type[g] not in ok]
+        if self.cfg.wading and bad:
+            raise ValueError(f"forces: foot geoms {bad} feel water but are neither spheres nor boxes; list sphere or "
+                             f"box soles in forces.foot_water_geom_names (or [] for no water force on the feet).")
+        return geoms
 
     def _sole(self, mjm, groups):
         """Sole length and width (m): from the config, else the footprint of the first foot's geoms in its
@@ -233,14 +255,25 @@ class TerrainForces:
         d.xfrc_applied.zero_()
         if cfg.wading and self.nseg:
             wp.launch(
-                K.wading_kernel, dim=(self.nworld, self.nseg), device=dev,
-                inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, m.body_rootid,
-                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time,
-                        self.water,
+                W.segment_water_kernel, dim=(self.nworld, self.nseg), device=dev,
+                inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, self.seg_caps,
+                        m.body_rootid, m.body_parentid, m.body_dofnum, m.body_dofadr, m.dof_parentid,
+                        m.M_rownnz, m.M_rowadr,
+                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof, d.cdof_dot, d.qvel, d.subtree_com,
+                        d.time, self.water,
                         float(cfg.water_density), float(cfg.drag_coefficient), float(cfg.added_mass_coefficient),
-                        self.g, self.dt, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
+                        self.g, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
-                        self.seg_vel, self.seg_vel_valid, d.xfrc_applied, self.seg_force],
+                        d.xfrc_applied, d.M, self.seg_force],
+            )
+        if cfg.wading and len(self.foot_water_geom):
+            wp.launch(
+                W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev,
+                inputs=[self.foot_water_geom, m.geom_type, m.geom_size, m.geom_bodyid, m.body_rootid,
+                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time, self.water,
+                        float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
+                        float(cfg.sphere_drag_coefficient), self.eps, self.xi, d.xfrc_applied,
+                        self.foot_water_force],
             )
         if cfg.soil and self.nfoot:
             wp.launch(
@@ -274,10 +307,10 @@ class TerrainForces:
 
     def reset(self, mask):
         """Redraw eps ~ N(1, noise_std) and the soil parameters of the envs in ``mask`` (wp bool, nworld);
-        forget their segment velocities and foot slip. Device-only: safe inside a captured graph."""
+        forget their foot slip. Device-only: safe inside a captured graph."""
         wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
                   inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
-                          self.soil_params, self.seg_vel_valid, self.foot_slip])
+                          self.soil_params, self.foot_slip])
         wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])
 
     def new_policy_step(self):

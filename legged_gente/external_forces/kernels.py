@@ -1,4 +1,4 @@
-"""Warp kernels of the terrain force fields, batched over (worlds x leg segments) and (worlds x feet).
+"""Warp kernels of the terrain force fields (soil, friction, noise; the water kernels are in ``water.py``).
 
 The ``*_fn`` functions are the device twins of the numpy references in ``models.py`` (same names without
 the suffix) and are tested against them. The kernels are launched by ``field.TerrainForces`` from
@@ -180,7 +180,6 @@ def reset_kernel(
     soil_table: wp.array3d[float],  # (npreset, NSOILPARAM, 2) mean, std
     eps: wp.array[float],
     soil_params: wp.array3d[float],  # (nworld, npreset, NSOILPARAM)
-    seg_vel_valid: wp.array2d[int],
     foot_slip: wp.array2d[wp.vec3],
 ):
     """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset.
@@ -200,8 +199,6 @@ def reset_kernel(
             if mean > 0.0 and value < floor:
                 value = floor
             soil_params[w, s, q] = value
-    for i in range(seg_vel_valid.shape[1]):
-        seg_vel_valid[w, i] = 0
     for f in range(foot_slip.shape[1]):
         foot_slip[w, f] = wp.vec3(0.0)
 
@@ -217,116 +214,6 @@ def flow_noise_kernel(seed: int, counter: wp.array[int], noise_std: float, xi: w
 @wp.kernel
 def increment_kernel(counter: wp.array[int]):
     counter[0] = counter[0] + 1
-
-
-# --------------------------------------------------------------------------------------------------------
-# Wading
-
-
-@wp.kernel
-def wading_kernel(
-    # segments (host constants)
-    seg_geom: wp.array[int],
-    seg_body: wp.array[int],
-    seg_radius: wp.array[float],
-    seg_halflen: wp.array[float],
-    body_rootid: wp.array[int],
-    # sim state
-    geom_xpos: wp.array2d[wp.vec3],
-    geom_xmat: wp.array2d[wp.mat33],
-    xipos: wp.array2d[wp.vec3],
-    cvel: wp.array2d[wp.spatial_vector],
-    subtree_com: wp.array2d[wp.vec3],
-    time: wp.array[float],
-    water: WaterMap,
-    # parameters
-    rho: float,
-    cd: float,
-    cm: float,
-    g: float,
-    dt: float,
-    vertical_drag: int,
-    paper_area: int,
-    paper_added_mass: int,
-    paper_flow_force: int,
-    eps: wp.array[float],
-    xi: wp.array[float],
-    # state kept across substeps
-    seg_vel: wp.array2d[wp.vec3],
-    seg_vel_valid: wp.array2d[int],
-    # out
-    xfrc: wp.array2d[wp.spatial_vector],
-    seg_force: wp.array2d[wp.vec3],
-):
-    """Drag, buoyancy, added mass (and the paper's flow force) on the submerged part of each leg capsule.
-
-    The capsule is the segment c +- (halflen + radius) * axis (its tips included); its submerged length
-    follows from the endpoints' heights and the water surface at the capsule centre's cell.
-    """
-    w, s = wp.tid()
-    gid = seg_geom[s]
-    b = seg_body[s]
-    r = seg_radius[s]
-    c = geom_xpos[w, gid]
-    xm = geom_xmat[w, gid]
-    axis = wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
-    half = seg_halflen[s] + r
-    pa = c - half * axis
-    pb = c + half * axis
-    lo = pa
-    hi = pb
-    if pa[2] > pb[2]:
-        lo = pb
-        hi = pa
-    cell = water_cell(water, c)
-    zw = water.surface[cell[0], cell[1]]
-    length = 2.0 * half
-    frac = float(1.0)
-    if hi[2] > zw:
-        if lo[2] >= zw:
-            frac = 0.0
-        else:
-            frac = (zw - lo[2]) / (hi[2] - lo[2])
-    lsub = frac * length
-    force = wp.vec3(0.0)
-    if lsub <= 0.0:
-        seg_vel_valid[w, s] = 0
-        seg_force[w, s] = force
-        return
-    centroid = lo + 0.5 * frac * (hi - lo)  # centre of buoyancy of the submerged part
-    t = time[w]
-    kind = water.flow_kind[cell[0], cell[1]]
-    amp = water.flow_speed[cell[0], cell[1]]
-    fdir = water.flow_dir[cell[0], cell[1]]
-    om = water.flow_omega[cell[0], cell[1]]
-    ph = water.flow_phase[cell[0], cell[1]]
-    u = water_flow(water, cell, t, xi[w])
-    v = point_velocity(cvel, subtree_com, body_rootid, w, b, centroid)
-    vrel = v - u
-    if vertical_drag == 0:
-        vrel = wp.vec3(vrel[0], vrel[1], 0.0)
-    speed = wp.length(vrel)
-    if speed > 1.0e-9:
-        force = force - (eps[w] * cylinder_drag_fn(rho, cd, r, lsub, speed, paper_area) / speed) * vrel
-    force = force + wp.vec3(0.0, 0.0, eps[w] * buoyancy_fn(rho, g, r, lsub))
-    ma = added_mass_fn(rho, cm, r, lsub)
-    if paper_added_mass != 0:
-        # GenTe's effective weight m_eff = m + m_a: the added mass only adds weight.
-        force = force - wp.vec3(0.0, 0.0, eps[w] * ma * g)
-    else:
-        if seg_vel_valid[w, s] != 0:
-            # Relative acceleration = body acceleration (finite difference) - the flow's own acceleration.
-            du = xi[w] * flow_rate_fn(kind, t, amp, om, ph)
-            arel = (v - seg_vel[w, s]) / dt - wp.vec3(du * wp.cos(fdir), du * wp.sin(fdir), 0.0)
-            arel = arel - wp.dot(arel, axis) * axis  # cross-flow: no added mass along the cylinder axis
-            force = force - ma * wp.vec3(arel[0], arel[1], eps[w] * arel[2])
-    if paper_flow_force != 0:
-        fl = xi[w] * flow_force_fn(kind, t, amp, om, ph)
-        force = force + wp.vec3(fl * wp.cos(fdir), fl * wp.sin(fdir), 0.0)
-    seg_vel[w, s] = v
-    seg_vel_valid[w, s] = 1
-    seg_force[w, s] = force
-    apply_force(xfrc, xipos, w, b, force, centroid)
 
 
 # --------------------------------------------------------------------------------------------------------

@@ -57,6 +57,7 @@ class GenteBipedCfg(LeggedRobotCfg):
         # the four sole spheres of each foot (the box is visual; docs/robots.md says why)
         foot_geom_names = [f"{side}_sole_{corner}" for side in ("left", "right")
                            for corner in ("toe_l", "toe_r", "heel_l", "heel_r")]
+        foot_water_geom_names = ["left_foot_geom", "right_foot_geom"]  # the foot's volume feels the water
 
     class commands(LeggedRobotCfg.commands):
         class ranges(LeggedRobotCfg.commands.ranges):

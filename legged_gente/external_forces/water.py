@@ -1,0 +1,387 @@
+"""Warp kernels of the strip-theory water forces (twins of ``water_models.py``), launched from the passive callback.
+
+``segment_water_kernel`` (worlds x leg segments) writes drag, buoyancy and the flow's inertia force to
+``xfrc_applied`` at each slice's Gauss point, and adds each slice's added mass to the joint-space mass matrix
+``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each
+substep), calls the passive callback in ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and
+builds the constraint solver's Hessian and the implicit integrators' matrices from it, so an addition made here is
+seen by the whole step: the added mass is implicit, acts in the same substep and cannot destabilise a light body
+(an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a exceeds the body's mass, and
+its finite-difference acceleration also sees contact impulses). The velocity-product part of the point's
+acceleration (Jdot qvel: centripetal and Coriolis terms) is applied explicitly. ``mjw.step1``/``step2`` factorise
+M before the callback and are not supported.
+
+M is stored by rows of ancestor dofs (``M_rowadr``, ``M_rownnz``, diagonal last). MuJoCo stores only the diagonal
+of "simple" bodies (bodies of the world with a diagonal inertia, e.g. a lone free body or slide joints): there the
+coupling terms between their dofs cannot be stored and are left out (``TerrainForces`` warns).
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+from legged_gente.external_forces.kernels import (
+    PI,
+    WaterMap,
+    apply_force,
+    cylinder_drag_fn,
+    flow_force_fn,
+    flow_rate_fn,
+    point_velocity,
+    water_cell,
+    water_flow,
+)
+
+GX = wp.constant(wp.vec3(-0.7745966692414834, 0.0, 0.7745966692414834))
+GW = wp.constant(wp.vec3(5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0))
+NGAUSS = 3
+TINY = wp.constant(1.0e-6)
+GEOM_SPHERE = wp.constant(2)
+GEOM_BOX = wp.constant(6)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Formulas (twins of water_models.py)
+
+
+@wp.func
+def circle_wet_area_fn(r: float, d: float) -> float:
+    """Circular segment below a chord d above the centre: r^2 acos(-d/r) + d sqrt(r^2 - d^2), d clipped to +-r."""
+    dc = wp.clamp(d, -r, r)
+    return r * r * wp.acos(wp.clamp(-dc / r, -1.0, 1.0)) + dc * wp.sqrt(wp.max(r * r - dc * dc, 0.0))
+
+
+@wp.func
+def wet_primitive_fn(r: float, sin_t: float, u: float) -> float:
+    if u >= r * sin_t:
+        return PI * r * r * u
+    if u <= -r * sin_t:
+        return 0.0
+    d = u / sin_t
+    q = wp.max(r * r - d * d, 0.0)
+    return sin_t * (r * r * (d * wp.acos(wp.clamp(-d / r, -1.0, 1.0)) + wp.sqrt(q)) - q * wp.sqrt(q) / 3.0)
+
+
+@wp.func
+def cylinder_slice_volume_fn(r: float, sin_t: float, z_a: float, z_b: float, z_w: float, length: float) -> float:
+    """Exact submerged volume of a tilted cylinder slice (see water_models.cylinder_slice_volume)."""
+    dz = z_b - z_a
+    if wp.abs(dz) < 0.05 * r:
+        zm = 0.5 * (z_a + z_b)
+        if sin_t < TINY:
+            if zm < z_w:
+                return length * PI * r * r
+            return 0.0
+        return length * circle_wet_area_fn(r, (z_w - zm) / sin_t)
+    return length * (wet_primitive_fn(r, sin_t, z_w - z_a) - wet_primitive_fn(r, sin_t, z_w - z_b)) / dz
+
+
+@wp.func
+def sphere_cap_volume_fn(r: float, depth: float) -> float:
+    """pi h^2 (3r - h) / 3, h = clip(depth, 0, 2r)."""
+    h = wp.clamp(depth, 0.0, 2.0 * r)
+    return PI * h * h * (3.0 * r - h) / 3.0
+
+
+@wp.func
+def wet_interval_fn(c_z: float, a_z: float, sin_t: float, r: float, half: float, z_ref: float) -> wp.vec2:
+    if wp.abs(a_z) < TINY:
+        if c_z - r * sin_t < z_ref:
+            return wp.vec2(-half, half)
+        return wp.vec2(half, -half)
+    s_star = (z_ref - c_z + r * sin_t) / a_z
+    if a_z > 0.0:
+        return wp.vec2(-half, wp.min(half, s_star))
+    return wp.vec2(wp.max(-half, s_star), half)
+
+
+@wp.func
+def crossflow_drag_fn(rho: float, cd: float, r: float, volume: float, v_rel: wp.vec3, axis: wp.vec3,
+                      paper_area: int) -> wp.vec3:
+    """-0.5 rho cd (2 r V / (pi r^2)) |v_n| v_n (projected area; the paper's when paper_area != 0)."""
+    vn = v_rel - wp.dot(v_rel, axis) * axis
+    speed = wp.length(vn)
+    if speed < 1.0e-9:
+        return wp.vec3(0.0)
+    return -(cylinder_drag_fn(rho, cd, r, volume / (PI * r * r), speed, paper_area) / speed) * vn
+
+
+@wp.func
+def inertia_force_fn(rho: float, ca: float, volume: float, du: wp.vec3, axis: wp.vec3) -> wp.vec3:
+    """Froude-Krylov + added mass in accelerating flow: rho V du + ca rho V (du - (du.a) a)."""
+    return rho * volume * du + ca * rho * volume * (du - wp.dot(du, axis) * axis)
+
+
+@wp.func
+def box_submerged_fraction_fn(half: wp.vec3, rot: wp.mat33, c_z: float, z_w: float) -> float:
+    e_z = wp.abs(rot[2, 0]) * half[0] + wp.abs(rot[2, 1]) * half[1] + wp.abs(rot[2, 2]) * half[2]
+    return wp.clamp((z_w - (c_z - e_z)) / (2.0 * e_z), 0.0, 1.0)
+
+
+@wp.func
+def plate_drag_fn(rho: float, cd: float, half: wp.vec3, rot: wp.mat33, depth: float, v_rel: wp.vec3) -> wp.vec3:
+    """Flat-plate drag on each face pair, weighted by the wetted part of its lower face (water_models.plate_drag)."""
+    f = wp.vec3(0.0)
+    if depth <= 0.0:
+        return f
+    e_z = wp.abs(rot[2, 0]) * half[0] + wp.abs(rot[2, 1]) * half[1] + wp.abs(rot[2, 2]) * half[2]
+    for i in range(3):
+        n = wp.vec3(rot[0, i], rot[1, i], rot[2, i])
+        ext = 2.0 * (e_z - wp.abs(n[2]) * half[i])
+        wet = float(1.0)
+        if ext >= TINY:
+            wet = wp.min(depth / ext, 1.0)
+        vi = wp.dot(v_rel, n)
+        area = 4.0 * half[(i + 1) % 3] * half[(i + 2) % 3]
+        f = f - (0.5 * cd * rho * area * wet * wp.abs(vi) * vi) * n
+    return f
+
+
+@wp.func
+def sphere_drag_fn(rho: float, cd: float, r: float, frac: float, v_rel: wp.vec3) -> wp.vec3:
+    return -(0.5 * cd * rho * PI * r * r * frac * wp.length(v_rel)) * v_rel
+
+
+# --------------------------------------------------------------------------------------------------------
+# Kinematics helpers
+
+
+@wp.func
+def flow_accel(water: WaterMap, cell: wp.vec2i, t: float, xi: float) -> wp.vec3:
+    i = cell[0]
+    j = cell[1]
+    du = xi * flow_rate_fn(water.flow_kind[i, j], t, water.flow_speed[i, j], water.flow_omega[i, j],
+                           water.flow_phase[i, j])
+    return wp.vec3(du * wp.cos(water.flow_dir[i, j]), du * wp.sin(water.flow_dir[i, j]), 0.0)
+
+
+@wp.func
+def last_dof(body_parentid: wp.array[int], body_dofnum: wp.array[int], body_dofadr: wp.array[int], b: int) -> int:
+    """The last dof moving body b (its own, else its nearest moving ancestor's); -1 if fixed to the world."""
+    bb = b
+    while bb > 0 and body_dofnum[bb] == 0:
+        bb = body_parentid[bb]
+    if bb <= 0:
+        return -1
+    return body_dofadr[bb] + body_dofnum[bb] - 1
+
+
+@wp.func
+def dof_jac(cdof: wp.array2d[wp.spatial_vector], w: int, i: int, r: wp.vec3) -> wp.vec3:
+    """Column i of the translational Jacobian of a point at r from the tree's subtree_com."""
+    c = cdof[w, i]
+    return wp.cross(wp.vec3(c[0], c[1], c[2]), r) + wp.vec3(c[3], c[4], c[5])
+
+
+# --------------------------------------------------------------------------------------------------------
+# Kernels
+
+
+@wp.kernel
+def segment_water_kernel(
+    # segments (host constants)
+    seg_geom: wp.array[int],
+    seg_body: wp.array[int],
+    seg_radius: wp.array[float],
+    seg_halflen: wp.array[float],
+    seg_caps: wp.array[int],
+    # model
+    body_rootid: wp.array[int],
+    body_parentid: wp.array[int],
+    body_dofnum: wp.array[int],
+    body_dofadr: wp.array[int],
+    dof_parentid: wp.array[int],
+    M_rownnz: wp.array[int],
+    M_rowadr: wp.array[int],
+    # sim state
+    geom_xpos: wp.array2d[wp.vec3],
+    geom_xmat: wp.array2d[wp.mat33],
+    xipos: wp.array2d[wp.vec3],
+    cvel: wp.array2d[wp.spatial_vector],
+    cdof: wp.array2d[wp.spatial_vector],
+    cdof_dot: wp.array2d[wp.spatial_vector],
+    qvel: wp.array2d[float],
+    subtree_com: wp.array2d[wp.vec3],
+    time: wp.array[float],
+    water: WaterMap,
+    # parameters
+    rho: float,
+    cd: float,
+    ca: float,
+    g: float,
+    vertical_drag: int,
+    paper_area: int,
+    paper_added_mass: int,
+    paper_flow_force: int,
+    eps: wp.array[float],
+    xi: wp.array[float],
+    # out
+    xfrc: wp.array2d[wp.spatial_vector],
+    M: wp.array2d[float],
+    seg_force: wp.array2d[wp.vec3],
+):
+    """Strip-theory water forces on one leg segment (3 Gauss slices along its wet part, see water_models.py)."""
+    w, s = wp.tid()
+    gid = seg_geom[s]
+    b = seg_body[s]
+    r = seg_radius[s]
+    half = seg_halflen[s]
+    c = geom_xpos[w, gid]
+    xm = geom_xmat[w, gid]
+    axis = wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    a_z = axis[2]
+    sin_t = wp.sqrt(wp.max(1.0 - a_z * a_z, 0.0))
+    t = time[w]
+    com = subtree_com[w, body_rootid[b]]
+    total = wp.vec3(0.0)
+
+    # hemispherical caps: buoyancy of half a sphere at each end
+    if seg_caps[s] != 0:
+        for e in range(2):
+            q = c + (2.0 * float(e) - 1.0) * half * axis
+            cell = water_cell(water, q)
+            vol = 0.5 * sphere_cap_volume_fn(r, water.surface[cell[0], cell[1]] - (q[2] - r))
+            if vol > 0.0:
+                fb = wp.vec3(0.0, 0.0, eps[w] * rho * g * vol)
+                apply_force(xfrc, xipos, w, b, fb, q)
+                total = total + fb
+
+    # the wet interval under the higher of the surfaces at the two ends (a leg across a water border)
+    cell_a = water_cell(water, c - half * axis)
+    cell_b = water_cell(water, c + half * axis)
+    z_ref = wp.max(water.surface[cell_a[0], cell_a[1]], water.surface[cell_b[0], cell_b[1]])
+    iv = wet_interval_fn(c[2], a_z, sin_t, r, half, z_ref)
+    if iv[1] <= iv[0]:
+        seg_force[w, s] = total
+        return
+    mid = 0.5 * (iv[0] + iv[1])
+    hw = 0.5 * (iv[1] - iv[0])
+
+    # spatial acceleration of the body at qacc = 0 (velocity-product terms), for the explicit part of the added mass
+    top = last_dof(body_parentid, body_dofnum, body_dofadr, b)
+    sacc = wp.spatial_vector()
+    i = top
+    while i >= 0:
+        sacc = sacc + cdof_dot[w, i] * qvel[w, i]
+        i = dof_parentid[i]
+    vb = cvel[w, b]
+    omega = wp.vec3(vb[0], vb[1], vb[2])
+
+    pts = wp.mat33()
+    mass = wp.vec3()
+    e0 = iv[0]
+    for k in range(NGAUSS):
+        length = hw * GW[k]
+        p = c + (mid + hw * GX[k]) * axis
+        cell = water_cell(water, p)
+        z_w = water.surface[cell[0], cell[1]]
+        vol = cylinder_slice_volume_fn(r, sin_t, c[2] + e0 * a_z, c[2] + (e0 + length) * a_z, z_w, length)
+        e0 = e0 + length
+        pts[k] = p
+        if vol <= 0.0:
+            continue
+        v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+        vrel = v - water_flow(water, cell, t, xi[w])
+        if vertical_drag == 0:
+            vrel = wp.vec3(vrel[0], vrel[1], 0.0)
+        f = eps[w] * crossflow_drag_fn(rho, cd, r, vol, vrel, axis, paper_area)
+        f = f + wp.vec3(0.0, 0.0, eps[w] * rho * g * vol)
+        ma = ca * rho * vol
+        if paper_added_mass != 0:
+            # GenTe's effective weight m_eff = m + m_a: the added mass only adds weight.
+            f = f - wp.vec3(0.0, 0.0, eps[w] * ma * g)
+        else:
+            f = f + inertia_force_fn(rho, ca, vol, flow_accel(water, cell, t, xi[w]), axis)
+            # explicit velocity-product part of -m_a P a_p: a_p(qacc = 0) = a_lin + alpha x rp + omega x v_p
+            rp = p - com
+            avp = wp.spatial_bottom(sacc) + wp.cross(wp.spatial_top(sacc), rp) + wp.cross(omega, v)
+            f = f - ma * (avp - wp.dot(avp, axis) * axis)
+            mass[k] = ma
+        if paper_flow_force != 0:
+            # GenTe's flow term as a force, shared by the slices in proportion to their submerged volume
+            i0 = cell[0]
+            j0 = cell[1]
+            fl = xi[w] * flow_force_fn(water.flow_kind[i0, j0], t, water.flow_speed[i0, j0],
+                                       water.flow_omega[i0, j0], water.flow_phase[i0, j0])
+            share = vol / (PI * r * r * 2.0 * half)
+            f = f + share * fl * wp.vec3(wp.cos(water.flow_dir[i0, j0]), wp.sin(water.flow_dir[i0, j0]), 0.0)
+        apply_force(xfrc, xipos, w, b, f, p)
+        total = total + f
+    seg_force[w, s] = total
+
+    if paper_added_mass != 0 or top < 0 or mass[0] + mass[1] + mass[2] <= 0.0:
+        return
+    # implicit added mass: M[i, j] += sum_k m_k J_i(p_k) . P J_j(p_k), j ancestor of i (or i itself)
+    i = top
+    while i >= 0:
+        ji0 = dof_jac(cdof, w, i, pts[0] - com)
+        ji1 = dof_jac(cdof, w, i, pts[1] - com)
+        ji2 = dof_jac(cdof, w, i, pts[2] - com)
+        rowadr = M_rowadr[i]
+        adr = rowadr + M_rownnz[i] - 1
+        j = i
+        while j >= 0 and adr >= rowadr:
+            jj0 = dof_jac(cdof, w, j, pts[0] - com)
+            jj1 = dof_jac(cdof, w, j, pts[1] - com)
+            jj2 = dof_jac(cdof, w, j, pts[2] - com)
+            mij = (mass[0] * (wp.dot(ji0, jj0) - wp.dot(ji0, axis) * wp.dot(jj0, axis))
+                   + mass[1] * (wp.dot(ji1, jj1) - wp.dot(ji1, axis) * wp.dot(jj1, axis))
+                   + mass[2] * (wp.dot(ji2, jj2) - wp.dot(ji2, axis) * wp.dot(jj2, axis)))
+            wp.atomic_add(M, w, adr, mij)
+            adr = adr - 1
+            j = dof_parentid[j]
+        i = dof_parentid[i]
+
+
+@wp.kernel
+def foot_water_kernel(
+    foot_geom: wp.array[int],
+    geom_type: wp.array[int],
+    geom_size: wp.array2d[wp.vec3],
+    geom_bodyid: wp.array[int],
+    body_rootid: wp.array[int],
+    geom_xpos: wp.array2d[wp.vec3],
+    geom_xmat: wp.array2d[wp.mat33],
+    xipos: wp.array2d[wp.vec3],
+    cvel: wp.array2d[wp.spatial_vector],
+    subtree_com: wp.array2d[wp.vec3],
+    time: wp.array[float],
+    water: WaterMap,
+    rho: float,
+    g: float,
+    cd_plate: float,
+    cd_sphere: float,
+    eps: wp.array[float],
+    xi: wp.array[float],
+    xfrc: wp.array2d[wp.spatial_vector],
+    foot_water_force: wp.array2d[wp.vec3],
+):
+    """Buoyancy and drag of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag)."""
+    w, k = wp.tid()
+    gid = foot_geom[k]
+    b = geom_bodyid[gid]
+    c = geom_xpos[w, gid]
+    rot = geom_xmat[w, gid]
+    size = geom_size[w % geom_size.shape[0], gid]
+    cell = water_cell(water, c)
+    z_w = water.surface[cell[0], cell[1]]
+    vrel = point_velocity(cvel, subtree_com, body_rootid, w, b, c) - water_flow(water, cell, time[w], xi[w])
+    f = wp.vec3(0.0)
+    p = c
+    if geom_type[gid] == GEOM_SPHERE:
+        r = size[0]
+        vol = sphere_cap_volume_fn(r, z_w - (c[2] - r))
+        frac = vol / (4.0 / 3.0 * PI * r * r * r)
+        if frac > 0.0:
+            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, frac, vrel) + wp.vec3(0.0, 0.0, eps[w] * rho * g * vol)
+    else:
+        frac = box_submerged_fraction_fn(size, rot, c[2], z_w)
+        if frac > 0.0:
+            vol = 8.0 * size[0] * size[1] * size[2] * frac
+            e_z = wp.abs(rot[2, 0]) * size[0] + wp.abs(rot[2, 1]) * size[1] + wp.abs(rot[2, 2]) * size[2]
+            f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), vrel)
+            f = f + wp.vec3(0.0, 0.0, eps[w] * rho * g * vol)
+            p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # middle of the submerged height
+    if frac > 0.0:
+        apply_force(xfrc, xipos, w, b, f, p)
+    foot_water_force[w, k] = f

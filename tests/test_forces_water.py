@@ -1,0 +1,436 @@
+"""Strip-theory water forces in tiny MuJoCo-Warp worlds on the CPU, against hand-computed strip theory, Morison and
+Archimedes; and the water kernels against their numpy references (water_models.py)."""
+
+import math
+
+import mujoco
+import mujoco_warp as mjw
+import numpy as np
+import pytest
+import warp as wp
+
+from legged_gente.external_forces import water as W
+from legged_gente.external_forces import water_models as WM
+from legged_gente.external_forces.field import ForcesConfig, TerrainForces
+from legged_gente.terrain.materials import FLOW_TIDE, MaterialMap
+
+wp.config.quiet = True
+DEV = "cpu"
+RES, ORIGIN, SHAPE = 0.1, (-2.0, -2.0), (41, 41)
+RHO, CD, G = 1000.0, 1.1, 9.81
+R, H = 0.04, 0.15  # leg radius and cylinder half-length: L = 0.3 m
+L = 2 * H
+DIAGONAL_M = "ignore:forces. leg geoms"  # a lone free body: MuJoCo keeps its M diagonal (warned, exact here)
+
+
+class Cfg(ForcesConfig):
+    noise_std = 0.0
+    drag_coefficient = CD
+    soil = False
+    friction_from_map = False
+    leg_geom_names = ["leg"]
+    foot_geom_names: list = []
+
+
+def model(body: str, gravity: bool = False, dt: float = 0.005):
+    opt = "" if gravity else 'gravity="0 0 0"'
+    return mujoco.MjModel.from_xml_string(
+        f'<mujoco><option timestep="{dt}" {opt}/><worldbody>{body}</worldbody></mujoco>')
+
+
+def water(surface=2.0, kind=0, speed=0.0, direction=0.0, omega=0.0, phase=0.0):
+    mat = MaterialMap.rigid(SHAPE)
+    mat.water_surface[:] = surface
+    mat.flow_kind[:] = kind
+    mat.flow_speed[:] = speed
+    mat.flow_direction[:] = direction
+    mat.flow_omega[:] = omega
+    mat.flow_phase[:] = phase
+    return mat
+
+
+def make(mjm, mat, cfg=Cfg, nworld=1):
+    wp.set_device(DEV)
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=nworld, nconmax=8, njmax=32)
+    f = TerrainForces(mjm, m, d, np.zeros(SHAPE, np.float32), ORIGIN, RES, mat, cfg(), seed=1)
+    f.install()
+    return m, d, f
+
+
+def assign(arr, values):
+    arr.assign(wp.array(np.asarray(values, np.float32), dtype=float, device=DEV))
+
+
+def circle_wet_area(r, h):
+    """Hand formula: circular segment of height h (0..2r): r^2 acos((r - h)/r) - (r - h) sqrt(2 r h - h^2)."""
+    h = np.clip(h, 0.0, 2 * r)
+    return r * r * np.arccos((r - h) / r) - (r - h) * np.sqrt(2 * r * h - h * h)
+
+
+def tilted_wet_volume(r, half, tilt, z_surface_above_centre):
+    """Hand strip integral: V = int_{-H}^{H} A(h(s)) ds, the cross-section at s (axis tilted `tilt` from the
+    vertical) cut by the surface at height h(s) = r + (z_w - s cos(tilt)) / sin(tilt) above its lowest chord."""
+    s = np.linspace(-half, half, 200001)
+    h = r + (z_surface_above_centre - s * np.cos(tilt)) / np.sin(tilt)
+    return np.trapezoid(circle_wet_area(r, h), s)
+
+
+def leg_body(joints: str, euler="0 0 0", z=1.0, density=3000.0, geom="cylinder"):
+    """A body at height z with ``joints`` (in world axes) and a leg geom rotated by ``euler`` about its centre."""
+    return (f'<body name="b" pos="0 0 {z}">{joints}<geom name="leg" type="{geom}" size="{R} {H}" euler="{euler}" '
+            f'density="{density}" contype="0" conaffinity="0"/></body>')
+
+
+SLIDE_X = '<joint type="slide" axis="1 0 0"/>'
+
+
+# ------------------------------------------------------------------------------------------------ item 4: drag
+
+
+@pytest.mark.parametrize("tilt_deg", [0.0, 30.0, 60.0, 90.0])
+def test_crossflow_drag_on_tilted_legs(tilt_deg):
+    # A leg tilted by theta from the vertical in the x-z plane, axis a = (sin, 0, cos), towed along x at v: the
+    # cross-flow is v_n = v cos(theta) (cos(theta), 0, -sin(theta)); strip theory: F = -0.5 rho cd (2 r L) |v_n| v_n.
+    # At 90 deg the leg moves along its axis: no cross-flow, no drag (no axial skin term is modelled).
+    th, v = math.radians(tilt_deg), 0.8
+    mjm = model(leg_body(SLIDE_X, euler=f"0 {tilt_deg} 0"))
+    m, d, f = make(mjm, water(surface=2.0))
+    assign(d.qvel, [[v]])
+    mjw.step(m, d)
+    vn = v * math.cos(th) * np.array([math.cos(th), 0.0, -math.sin(th)])
+    expect = -0.5 * RHO * CD * (2 * R * L) * np.linalg.norm(vn) * vn
+    got = f.seg_force.numpy()[0, 0]
+    np.testing.assert_allclose(got, expect, rtol=1e-3, atol=1e-4)
+    # uniform load on a symmetric leg: no torque about its centre
+    np.testing.assert_allclose(d.xfrc_applied.numpy()[0, 1, 3:], 0.0, atol=1e-4)
+
+
+def test_crossflow_drag_on_tilted_leg_crossing_the_surface():
+    # 45 deg, surface 5 cm above the centre: the drag acts on the wetted volume V (strip integral of circular
+    # segments, by hand below) as on a wetted length V / (pi r^2): F = -0.5 rho cd 2 r V/(pi r^2) |v_n| v_n.
+    th, v, dz = math.radians(45.0), 0.6, 0.05
+    mjm = model(leg_body(SLIDE_X, euler="0 45 0", z=1.0))
+    m, d, f = make(mjm, water(surface=1.0 + dz))
+    assign(d.qvel, [[v]])
+    mjw.step(m, d)
+    vol = tilted_wet_volume(R, H, th, dz)
+    vn = v * math.cos(th) * np.array([math.cos(th), 0.0, -math.sin(th)])
+    expect = -0.5 * RHO * CD * 2 * R * vol / (math.pi * R**2) * np.linalg.norm(vn) * vn
+    np.testing.assert_allclose(f.seg_force.numpy()[0, 0], expect, rtol=1e-2)
+
+
+def test_rotating_leg_damping_torque_and_spin_down():
+    # A leg of length L hinged at its top end spins at omega about y in still water. Strip theory: the damping
+    # torque is int_0^L 0.5 rho cd (2 r) (omega s)^2 s ds = 0.5 rho cd 2 r omega^2 L^4 / 4.
+    w0 = 3.0
+    mjm = model(f'<body name="b" pos="0 0 1"><joint type="hinge" axis="0 1 0"/><geom name="leg" type="cylinder" '
+                f'size="{R} {H}" pos="0 0 {-H}" density="3000" contype="0" conaffinity="0"/></body>')
+    m, d, f = make(mjm, water(surface=3.0))
+    assign(d.qvel, [[w0]])
+    mjw.step(m, d)
+    c = 0.5 * RHO * CD * 2 * R * L**4 / 4
+    xf = d.xfrc_applied.numpy()[0, 1]
+    lever = np.array([0.0, 0.0, -H])  # body CoM relative to the hinge
+    torque = xf[3:] + np.cross(lever, xf[:3])
+    np.testing.assert_allclose(torque[1], -c * w0**2, rtol=1e-3)
+    # Spin-down: (I + I_a) dw/dt = -c w^2 -> w(t) = w0 / (1 + c w0 t / (I + I_a)), with the leg's inertia about its
+    # end I = m (r^2/4 + L^2/3) and the added inertia of its strips I_a = int_0^L ca rho pi r^2 s^2 ds.
+    mass = 3000.0 * math.pi * R**2 * L
+    inertia = mass * (R**2 / 4 + L**2 / 3)
+    added = RHO * math.pi * R**2 * L**3 / 3
+    steps = 200
+    for _ in range(steps - 1):
+        mjw.step(m, d)
+    t = steps * mjm.opt.timestep
+    expect = w0 / (1 + c * w0 * t / (inertia + added))
+    np.testing.assert_allclose(d.qvel.numpy()[0, 0], expect, rtol=1e-2)
+
+
+# ------------------------------------------------------------------------------- item 5: added mass and tide
+
+
+@pytest.mark.filterwarnings(DIAGONAL_M)
+def test_light_free_body_with_twice_its_mass_added_is_stable_and_coasts_down():
+    # A free horizontal cylinder of density 500 kg/m^3 in water: added mass m_a = ca rho pi r^2 L = 2 m.
+    # Coast-down across its axis: (m + m_a) dv/dt = -k v|v|, k = 0.5 rho cd 2 r L -> v = v0 / (1 + k v0 t/(m + m_a)).
+    v0 = 1.0
+    mjm = model(leg_body("<freejoint/>", euler="0 90 0", density=500.0), dt=0.002)
+    m, d, f = make(mjm, water(surface=3.0))
+    mass = 500.0 * math.pi * R**2 * L
+    m_a = RHO * math.pi * R**2 * L
+    assert m_a == pytest.approx(2 * mass)
+    k = 0.5 * RHO * CD * 2 * R * L
+    assign(d.qvel, [[0.0, v0, 0.0, 0.0, 0.0, 0.0]])
+    dt, got = mjm.opt.timestep, []
+    for _ in range(4):
+        for _ in range(125):
+            mjw.step(m, d)
+        got.append(d.qvel.numpy()[0, 1])
+    t = dt * 125 * np.arange(1, 5)
+    np.testing.assert_allclose(got, v0 / (1 + k * v0 * t / (mass + m_a)), rtol=1e-2)
+
+
+@pytest.mark.filterwarnings(DIAGONAL_M)
+def test_light_floating_body_stays_bounded_and_heaves_at_the_added_mass_period():
+    # Dropped from 1 cm above its floating position (axis at the surface: half its volume's buoyancy equals its
+    # weight at density 500), the same light cylinder bobs with heave stiffness rho g (2 r L) (its waterplane) and
+    # mass m + m_a, m_a = ca rho V_sub = m there: period 2 pi sqrt(2 m / (rho g 2 r L)), bounded, around z = 0.5.
+    mjm = model(leg_body("<freejoint/>", euler="0 90 0", density=500.0, z=0.51), gravity=True, dt=0.002)
+    m, d, f = make(mjm, water(surface=0.5))
+    mass = 500.0 * math.pi * R**2 * L
+    period = 2 * math.pi * math.sqrt(2 * mass / (RHO * G * 2 * R * L))
+    zs = []
+    for _ in range(1000):
+        mjw.step(m, d)
+        zs.append(d.qpos.numpy()[0, 2] - 0.5)
+    zs = np.asarray(zs)
+    assert np.all(np.isfinite(zs)) and np.abs(zs).max() < 0.015
+    up = np.nonzero((zs[:-1] < 0) & (zs[1:] >= 0))[0]
+    t_up = (up + zs[up] / (zs[up] - zs[up + 1])) * mjm.opt.timestep  # interpolated upward zero crossings
+    assert len(up) >= 3
+    assert np.mean(np.diff(t_up)) == pytest.approx(period, rel=0.03)
+
+
+def test_fixed_leg_in_tide_feels_morison_with_cm_one_plus_ca():
+    # A fixed vertical leg in a tide u = A cos(w t + p): Morison's force with cm = 1 + ca (Froude-Krylov + added mass)
+    # F = 0.5 rho cd (2 r L) |u| u + rho (1 + ca) pi r^2 L du/dt, from the first substep on.
+    amp, om, ph = 0.8, 2.0, 0.4
+    mjm = model(leg_body(SLIDE_X))
+    m, d, f = make(mjm, water(surface=3.0, kind=FLOW_TIDE, speed=amp, omega=om, phase=ph))
+    for _ in range(20):
+        assign(d.qvel, [[0.0]])
+        t = float(d.time.numpy()[0])
+        mjw.step(m, d)
+        u, du = amp * math.cos(om * t + ph), -amp * om * math.sin(om * t + ph)
+        morison = 0.5 * RHO * CD * 2 * R * L * abs(u) * u + RHO * (1 + 1.0) * math.pi * R**2 * L * du
+        assert f.seg_force.numpy()[0, 0, 0] == pytest.approx(morison, rel=1e-3, abs=1e-3)
+
+
+# -------------------------------------------------------------------------------------- item 6: buoyancy
+
+
+def test_horizontal_capsule_buoyancy_is_continuous_through_the_surface():
+    # A horizontal capsule (axis x) whose lowest point is h below the surface displaces
+    # A(h) * L (circular segment, hand formula) + pi h^2 (3 r - h) / 3 (its two caps make one sphere).
+    hs = np.linspace(-0.01, 2 * R + 0.01, 23)
+    z_w = 1.0
+    mjm = model('<body name="b" pos="0 0 0" euler="0 90 0"><joint type="slide" axis="1 0 0"/>'
+                f'<geom name="leg" type="capsule" size="{R} {H}" density="3000" contype="0" conaffinity="0"/></body>',
+                gravity=True)
+    m, d, f = make(mjm, water(surface=z_w), nworld=len(hs))
+    # the slide axis is the body's x = world -z (euler 0 90 0): qpos = -(centre height)
+    assign(d.qpos, -(z_w - hs + R)[:, None])
+    mjw.step(m, d)
+    hc = np.clip(hs, 0, 2 * R)
+    expect = RHO * G * (circle_wet_area(R, hs) * L + math.pi * hc**2 * (3 * R - hc) / 3)
+    got = f.seg_force.numpy()[:, 0, 2]
+    np.testing.assert_allclose(got, expect, rtol=1e-3, atol=1e-4)
+    assert np.all(np.diff(got) >= -1e-6)
+    assert np.abs(np.diff(got)).max() < 0.1 * RHO * G * (math.pi * R**2 * L)  # no jump as the axis crosses
+
+
+@pytest.mark.parametrize("tilt_deg", [20.0, 45.0, 70.0])
+def test_tilted_cylinder_buoyancy_matches_the_strip_integral(tilt_deg):
+    th = math.radians(tilt_deg)
+    for dz in (-0.1, 0.0, 0.07):
+        mjm = model(leg_body(SLIDE_X, euler=f"0 {tilt_deg} 0", z=1.0), gravity=True)
+        m, d, f = make(mjm, water(surface=1.0 + dz))
+        mjw.step(m, d)
+        expect = RHO * G * tilted_wet_volume(R, H, th, dz)
+        assert f.seg_force.numpy()[0, 0, 2] == pytest.approx(expect, rel=1e-3, abs=1e-4)
+
+
+def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
+    # A level box sole 0.2 x 0.1 x 0.04 m and a sphere sole r = 3 cm, each with its centre at the surface:
+    # buoyancy rho g V/2. The box moving down at 0.5 m/s: its bottom face (0.2 x 0.1, all wet) takes plate drag
+    # 0.5 rho 1.17 A v^2 upwards (Hoerner's flat plate); the sphere moving down: 0.5 rho 0.47 (pi r^2 / 2) v^2.
+    z_w, v = 0.5, 0.5
+    mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
+                '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
+                f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
+                '<geom name="ball" type="sphere" size=".03" mass="1"/></body>', gravity=True)
+    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"]})
+    m, d, f = make(mjm, water(surface=z_w), cfg)
+    mjw.step(m, d)
+    box_v, ball_v = 0.2 * 0.1 * 0.04, 4 / 3 * math.pi * 0.03**3
+    np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], [RHO * G * box_v / 2, RHO * G * ball_v / 2],
+                               rtol=1e-4)
+    f2 = make(mjm, water(surface=z_w), cfg)
+    m, d, f = f2
+    assign(d.qvel, [[-v, -v]])
+    mjw.step(m, d)
+    expect = [RHO * G * box_v / 2 + 0.5 * RHO * 1.17 * 0.2 * 0.1 * v * v,
+              RHO * G * ball_v / 2 + 0.5 * RHO * 0.47 * math.pi * 0.03**2 / 2 * v * v]
+    np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], expect, rtol=1e-4)
+
+
+# ----------------------------------------------------------------------------- kernels vs numpy references
+
+
+def test_water_kernels_match_references():
+    """Free base, thigh (capsule) and shank (cylinder) on hinges, a box and a sphere foot, in a tide over a water
+    surface with a step: forces and torques per body and the mass-matrix addition against water_models with
+    MuJoCo's own Jacobians (mj_jac, mj_jacDot)."""
+    mjm = model(
+        '<body name="base" pos="0 0 0.6"><freejoint/><geom type="box" size=".1 .1 .05" mass="5"/>'
+        '<body name="thigh" pos="0 0 -0.05"><joint type="hinge" axis="0 1 0"/><joint type="hinge" axis="1 0 0"/>'
+        '<geom name="thigh" type="capsule" fromto="0 0 0 0.05 0 -0.2" size="0.04" mass="2"/>'
+        '<body name="shank" pos="0.05 0 -0.2"><joint type="hinge" axis="0 1 0"/>'
+        '<geom name="shank" type="cylinder" fromto="0 0 0 -0.03 0.02 -0.2" size="0.03" mass="1"/>'
+        '<geom name="ball" type="sphere" pos="-0.03 0.02 -0.22" size="0.025" mass="0.2"/>'
+        '<geom name="sole" type="box" pos="0 0 -0.24" euler="10 5 20" size=".06 .03 .015" mass="0.2"/>'
+        '</body></body></body>', gravity=True)
+    mat = water(kind=FLOW_TIDE, speed=0.5, direction=0.7, omega=1.5, phase=0.3)
+    mat.water_surface[:] = 0.45
+    mat.water_surface[20:] = 0.3  # x >= 0: a step in the surface under the leg
+    cfg = type("C", (Cfg,), {"leg_geom_names": ["thigh", "shank"], "foot_geom_names": ["ball", "sole"]})
+    nworld = 6
+    rng = np.random.default_rng(3)
+    qpos = np.tile(mjm.qpos0, (nworld, 1))
+    qpos[:, 2] += rng.uniform(-0.4, 0.1, nworld)
+    qpos[:, 3:7] = [np.r_[1.0, rng.normal(0, 0.2, 3)] for _ in range(nworld)]
+    qpos[:, 3:7] /= np.linalg.norm(qpos[:, 3:7], axis=1, keepdims=True)
+    qpos[:, 7:] = rng.uniform(-0.8, 0.8, (nworld, 3))
+    qvel = rng.normal(0, 1.0, (nworld, mjm.nv))
+    times = rng.uniform(0, 3, nworld)
+    m, d, f = make(mjm, mat, cfg, nworld=nworld)
+    m.callback.passive = None
+    assign(d.qpos, qpos)
+    assign(d.qvel, qvel)
+    assign(d.time, times)
+    mjw.forward(m, d)
+    m0 = d.M.numpy().copy()
+    f.passive(m, d)
+    dm, xfrc = d.M.numpy() - m0, d.xfrc_applied.numpy()
+
+    md = mujoco.MjData(mjm)
+    surface = mat.water_surface
+
+    def surface_at(p):
+        i = int(np.clip(np.round((p[0] - ORIGIN[0]) / RES), 0, SHAPE[0] - 1))
+        j = int(np.clip(np.round((p[1] - ORIGIN[1]) / RES), 0, SHAPE[1] - 1))
+        return float(surface[i, j])
+
+    for w in range(nworld):
+        md.qpos[:], md.qvel[:], md.time = qpos[w], qvel[w], times[w]
+        mujoco.mj_forward(mjm, md)
+        t = times[w]
+        direction = np.array([math.cos(0.7), math.sin(0.7), 0.0])
+        flow_at = lambda p: 0.5 * math.cos(1.5 * t + 0.3) * direction  # noqa: E731
+        flow_accel_at = lambda p: -0.5 * 1.5 * math.sin(1.5 * t + 0.3) * direction  # noqa: E731
+        ref_x, ref_m = np.zeros((mjm.nbody, 6)), np.zeros((mjm.nv, mjm.nv))
+        for name in ("thigh", "shank", "ball", "sole"):
+            g = mjm.geom(name)
+            b = int(g.bodyid[0])
+            jp, jd = np.zeros((3, mjm.nv)), np.zeros((3, mjm.nv))
+
+            def jac(p, b=b, jp=jp):
+                mujoco.mj_jac(mjm, md, jp, None, p, b)
+                return jp.copy()
+
+            def jacdot(p, b=b, jd=jd):
+                mujoco.mj_jacDot(mjm, md, jd, None, p, b)
+                return jd.copy()
+
+            c, rot = md.geom_xpos[g.id].copy(), md.geom_xmat[g.id].reshape(3, 3)
+            if name in ("thigh", "shank"):
+                axis = rot[:, 2]
+                loads, masses = WM.segment_loads(
+                    c, axis, g.size[0], g.size[1], name == "thigh", surface_at, lambda p: jac(p) @ md.qvel,
+                    lambda p: jacdot(p) @ md.qvel, flow_at, flow_accel_at, rho=RHO, cd=CD, ca=1.0, g=G)
+                for p, mk in masses:
+                    jk = jac(p)
+                    pj = jk - np.outer(axis, axis @ jk)
+                    ref_m += mk * jk.T @ pj
+            else:
+                vrel = jac(c) @ md.qvel - flow_at(c)
+                z_w = surface_at(c)
+                if name == "ball":
+                    r = g.size[0]
+                    vol = WM.sphere_cap_volume(r, z_w - (c[2] - r))
+                    fr = WM.sphere_drag(RHO, 0.47, r, vol / (4 / 3 * math.pi * r**3), vrel)
+                    p = c
+                else:
+                    vol = WM.box_submerged_volume(g.size, rot, c[2], z_w)
+                    e_z = float(np.abs(rot[2]) @ g.size)
+                    fr = WM.plate_drag(RHO, 1.17, g.size, rot, z_w - (c[2] - e_z), vrel)
+                    p = c - np.array([0, 0, e_z * (1 - vol / (8 * np.prod(g.size)))])
+                loads = [(p, fr + np.array([0, 0, RHO * G * vol]))] if vol > 0 else []
+            for p, fk in loads:
+                ref_x[b, :3] += fk
+                ref_x[b, 3:] += np.cross(p - md.xipos[b], fk)
+        scale = np.abs(ref_x).max()
+        assert scale > 1.0  # the worlds are wet
+        np.testing.assert_allclose(xfrc[w], ref_x, atol=2e-4 * scale)
+        dense = np.zeros((mjm.nv, mjm.nv))
+        mujoco.mju_sym2dense(dense, dm[w].astype(np.float64), mjm.M_rownnz, mjm.M_rowadr, mjm.M_colind)
+        np.testing.assert_allclose(dense, ref_m, atol=2e-4 * max(np.abs(ref_m).max(), 1e-3))
+
+
+@wp.kernel
+def _eval_water(x: wp.array2d[float], out: wp.array2d[float]):
+    i = wp.tid()
+    r = x[i, 0]
+    v = wp.vec3(x[i, 6], x[i, 7], x[i, 8])
+    a = wp.normalize(wp.vec3(x[i, 9], x[i, 10], x[i, 11]))
+    half = wp.vec3(x[i, 12], x[i, 13], x[i, 14])
+    rot = wp.quat_to_matrix(wp.normalize(wp.quat(x[i, 16], x[i, 17], x[i, 18], x[i, 15])))  # (w, x, y, z) in x
+    out[i, 0] = W.circle_wet_area_fn(r, x[i, 1])
+    out[i, 1] = W.cylinder_slice_volume_fn(r, x[i, 2], x[i, 3], x[i, 4], x[i, 5], 0.1)
+    out[i, 2] = W.sphere_cap_volume_fn(r, x[i, 1] + r)
+    d = W.crossflow_drag_fn(1000.0, 1.1, r, 1.0e-3, v, a, 0)
+    fi = W.inertia_force_fn(1000.0, 1.0, 1.0e-3, v, a)
+    pd = W.plate_drag_fn(1000.0, 1.17, half, rot, x[i, 1] + r, v)
+    sd = W.sphere_drag_fn(1000.0, 0.47, r, 0.5, v)
+    for k in range(3):
+        out[i, 3 + k] = d[k]
+        out[i, 6 + k] = fi[k]
+        out[i, 9 + k] = pd[k]
+        out[i, 12 + k] = sd[k]
+
+
+def test_water_functions_match_references():
+    rng = np.random.default_rng(0)
+    n = 300
+    u = lambda lo, hi: rng.uniform(lo, hi, n)  # noqa: E731
+    x = np.stack([u(0.01, 0.06), u(-0.08, 0.08), u(0.0, 1.0), u(-0.2, 0.2), u(-0.2, 0.2), u(-0.1, 0.1),
+                  *[u(-1, 1) for _ in range(6)], u(0.01, 0.1), u(0.01, 0.1), u(0.01, 0.1),
+                  *[u(-1, 1) for _ in range(4)]], 1).astype(np.float32)
+    x[:30, 2] = 0.0  # vertical slices
+    x[30:60, 4] = x[30:60, 3] + 1e-3  # nearly level slices
+    out = wp.zeros((n, 15), dtype=float, device=DEV)
+    wp.launch(_eval_water, dim=n, inputs=[wp.array(x, dtype=float, device=DEV), out], device=DEV)
+    got = out.numpy()
+    x = x.astype(np.float64)
+    ref = []
+    for row in x:
+        r, v, a = row[0], row[6:9], row[9:12] / np.linalg.norm(row[9:12])
+        q = row[15:19] / np.linalg.norm(row[15:19])
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, q)
+        rot = rot.reshape(3, 3)
+        ref.append(np.r_[WM.circle_wet_area(r, row[1]),
+                         WM.cylinder_slice_volume(r, row[2], row[3], row[4], row[5], 0.1),
+                         WM.sphere_cap_volume(r, row[1] + r), WM.crossflow_drag(1000.0, 1.1, r, 1e-3, v, a),
+                         WM.inertia_force(1000.0, 1.0, 1e-3, v, a), WM.plate_drag(1000.0, 1.17, row[12:15], rot,
+                                                                                  row[1] + r, v),
+                         WM.sphere_drag(1000.0, 0.47, r, 0.5, v)])
+    ref = np.asarray(ref)
+    scale = np.abs(ref).max(0) + 1e-12
+    err = (np.abs(got - ref) / scale).max(0)
+    assert np.all(err < 2e-4), err
+
+
+def test_water_references_textbook_values():
+    r = 0.05
+    # a chord through the centre halves the circle; a sphere wet to its centre is a hemisphere
+    assert WM.circle_wet_area(r, 0.0) == pytest.approx(math.pi * r * r / 2)
+    assert WM.sphere_cap_volume(r, r) == pytest.approx(2 / 3 * math.pi * r**3)
+    assert WM.sphere_cap_volume(r, 3 * r) == pytest.approx(4 / 3 * math.pi * r**3)
+    # a vertical slice from z = -0.1 to 0.1 under a surface at 0.02: pi r^2 * 0.12
+    assert WM.cylinder_slice_volume(r, 0.0, -0.1, 0.1, 0.02, 0.2) == pytest.approx(math.pi * r * r * 0.12)
+    # tilted 45 deg with its middle at the surface: by symmetry half the slice is under water
+    lv = 0.3 * math.cos(math.pi / 4)
+    assert WM.cylinder_slice_volume(r, math.sin(math.pi / 4), -lv / 2, lv / 2, 0.0, 0.3) == pytest.approx(
+        math.pi * r * r * 0.15)
