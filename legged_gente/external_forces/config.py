@@ -29,6 +29,9 @@ class ForcesConfig:
     contact_threshold: float  foot normal force (N) above which a foot counts as in contact
     liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
                           off: its slip and rut are forgotten (shorter dips are solver chatter, not lift-off)
+    min_friction: float   a ground contact whose friction is below this is made frictionless (condim 1): as mu -> 0
+                          MuJoCo's pyramidal cone holds a tangential load by inflating the normal force (the foot
+                          is launched) and its elliptic cone divides by mu
     soil_friction_cap: float  most friction coefficient a soil contact gets: its traction (c A + F_N tan phi)
                           over F_N grows without bound as F_N -> 0 through the cohesion term
     sole_contact: bool    sphere and capsule foot geoms touch the terrain through analytic contacts
@@ -62,6 +65,7 @@ class ForcesConfig:
     contact_threshold = 1.0
     liftoff_time = 0.02
     soil_friction_cap = 2.0
+    min_friction = 0.01
     sole_contact = True
     bulldozing_speed_reg = 0.05
     sinkage_rate = 0.5

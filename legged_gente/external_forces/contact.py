@@ -273,6 +273,7 @@ def sole_contact_kernel(
     sole_area: float,
     sole_width: float,
     friction_cap: float,
+    min_friction: float,
     sink_step: float,
     soil_params: wp.array3d[float],
     foot_load: wp.array2d[float],
@@ -283,6 +284,7 @@ def sole_contact_kernel(
     # out
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
+    foot_inrut: wp.array2d[int],
     contact_dist: wp.array[float],
     contact_pos: wp.array[wp.vec3],
     contact_frame: wp.array[wp.mat33],
@@ -322,9 +324,11 @@ def sole_contact_kernel(
     gid = w % geom_gap.shape[0]
     margin = geom_margin[mid, terrain_geom] + geom_margin[mid, g]
     gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
-    res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut,
-                            radius + wp.max(margin + gap, 0.0))
+    # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
+    res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, radius + wp.max(margin + gap, 0.0) + rut)
     dist = res[3]
+    if dist - rut < margin and rut > 0.0:
+        foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
     if dist >= margin + gap:
         return
     normal = wp.vec3(res[0], res[1], res[2])
@@ -341,8 +345,8 @@ def sole_contact_kernel(
     cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
     friction = ground_friction(friction, cell, f, w, soilmap.soil, soilmap.friction, friction_reference, use_friction,
                                use_soil, sole_area, friction_cap, soil_params, foot_load, foot_slip)
-    if friction[0] <= 0.0:
-        condim = 1  # frictionless: MuJoCo's elliptic cone divides by the friction
+    if friction[0] < min_friction:
+        condim = 1  # frictionless (ForcesConfig.min_friction says why)
     write_contact(naconmax, 0, dist, pos, make_frame(normal), margin, gap, condim, friction, solref,
                   solreffriction, solimp, adhesion, geoms, wp.vec2i(-1, -1), w, contact_dist, contact_pos,
                   contact_frame, contact_includemargin, contact_friction, contact_solref, contact_solreffriction,

@@ -176,6 +176,7 @@ class TerrainForces:
         self.foot_soil.fill_(-1)
         self.foot_touch = z((n, nf), int)
         self.foot_cand = z((n, nf), float)
+        self.foot_inrut = z((n, nf), int)
         self.foot_load = z((n, nf), float)
         self.foot_force = z((n, nf), wp.vec3)
         self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
@@ -261,15 +262,16 @@ class TerrainForces:
         use_soil = int(bool(cfg.soil) and self.nfoot > 0)
         area = self.sole_length * self.sole_width
         cap, sink_step = float(cfg.soil_friction_cap), float(cfg.sinkage_rate) * self.dt
+        mu_min = float(cfg.min_friction)
         ref, use_fr = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
         wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
-                          use_soil, self.foot_soil, self.foot_touch, self.foot_cand])
+                          use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut])
         c = d.contact
         wp.launch(
             K.contact_filter_kernel, dim=d.naconmax, device=dev,
             inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
-                    self.friction, ref, use_fr, use_soil, area, self.sole_width, cap, sink_step,
+                    self.friction, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
                     float(cfg.max_rut_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage,
                     self.foot_soil, c.pos, c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch,
                     self.foot_cand],
@@ -281,9 +283,9 @@ class TerrainForces:
                         m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
                         m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
-                        self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, sink_step,
+                        self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
                         self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
-                        d.naconmax, self.foot_touch, self.foot_cand, c.dist, c.pos, c.frame, c.includemargin,
+                        d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon],
             )
@@ -331,7 +333,7 @@ class TerrainForces:
             inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
                     self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights,
                     d.time, self.water, self.xi, self.soil_params, self.foot_fn,
-                    self.foot_vel, self.foot_sinkage, self.foot_soil, float(self.cfg.liftoff_time), self.foot_slip,
+                    self.foot_vel, self.foot_sinkage, self.foot_soil, float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip,
                     self.foot_air, self.foot_load, self.obs],
         )
 

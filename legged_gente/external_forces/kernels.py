@@ -368,11 +368,13 @@ def foot_cell_kernel(
     foot_soil: wp.array2d[int],
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
+    foot_inrut: wp.array2d[int],
 ):
     """Each foot's soil: the cell under its sole centre (one writer per foot: deterministic at soil borders)."""
     w, f = wp.tid()
     foot_touch[w, f] = 0
     foot_cand[w, f] = 0.0
+    foot_inrut[w, f] = 0
     s = int(-1)
     if use_soil != 0:
         p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
@@ -427,6 +429,7 @@ def contact_filter_kernel(
     sole_area: float,
     sole_width: float,
     friction_cap: float,
+    min_friction: float,
     sink_step: float,
     max_rut: float,
     soil_params: wp.array3d[float],
@@ -456,8 +459,7 @@ def contact_filter_kernel(
     unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance: soil sinkage is plastic
     (Wong: unloading recovers little). Without these two rules the loop F_N -> z -> contact chatters or
     ratchets: a rut deeper than the foot releases the contact, the foot falls into it and the impact load
-    digs it deeper still. A contact whose friction is 0 becomes frictionless (condim 1): MuJoCo's elliptic
-    cone divides by the friction.
+    digs it deeper still. A contact whose friction is below min_friction becomes frictionless (condim 1).
     """
     i = wp.tid()
     if i >= nacon[0]:
@@ -479,7 +481,7 @@ def contact_filter_kernel(
     fr = ground_friction(contact_friction[i], cell, f, w, soil, friction, friction_reference, use_friction,
                          use_soil, sole_area, friction_cap, soil_params, foot_load, foot_slip)
     contact_friction[i] = fr
-    if fr[0] <= 0.0:
+    if fr[0] < min_friction:
         contact_dim[i] = 1
     if f < 0:
         return
@@ -614,6 +616,7 @@ def foot_state_kernel(
     foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
     liftoff_time: float,
+    foot_inrut: wp.array2d[int],
     foot_slip: wp.array2d[float],
     foot_air: wp.array2d[float],
     foot_load: wp.array2d[float],
@@ -624,7 +627,9 @@ def foot_state_kernel(
     foot_load is F_N through a first-order low-pass (load_alpha = dt / tau): the sinkage follows the
     sustained load, not the solver's single-substep impact spikes. A foot has lifted off once its F_N has
     stayed at or below contact_threshold for liftoff_time: only then are its slip and rut forgotten (MuJoCo's
-    sliding contacts dip below 1 N for single substeps while the foot stays on the ground).
+    sliding contacts dip below 1 N for single substeps, and hop off for several while sliding, as the
+    pyramidal cone inflates the normal force), and only once it is also out of its rut (``foot_inrut``: an
+    analytic sole contact still below the unlowered surface), else it would find itself deep in the ground.
     """
     w, f = wp.tid()
     foot_load[w, f] = foot_load[w, f] + load_alpha * (foot_fn[w, f] - foot_load[w, f])
@@ -633,7 +638,7 @@ def foot_state_kernel(
         foot_slip[w, f] = foot_slip[w, f] + dt * wp.length(foot_vel[w, f])
     else:
         foot_air[w, f] = foot_air[w, f] + dt
-        if foot_air[w, f] >= liftoff_time:
+        if foot_air[w, f] >= liftoff_time and foot_inrut[w, f] == 0:
             foot_slip[w, f] = 0.0
             foot_sinkage[w, f] = 0.0
     p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
