@@ -115,7 +115,7 @@ SOIL_PRESETS: dict[str, SoilPreset] = {
                         "Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 15% moisture, LLL)"),
     # Snow (U.S., Harrison), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, c=1.03 kPa, phi=19.7 deg.
     # K = 4 cm for undisturbed fresh snow (Wong, snow shear tests); gamma ~ 3 kN/m^3 (settled snow).
-    # A 41.5 kg biped on one 0.22 x 0.096 m sole (19.3 kPa) sinks ~20 cm.
+    # A 41.5 kg biped on one 0.22 x 0.096 m sole (19.3 kPa) sinks ~21 cm.
     "snow": _bekker(4.37e3, 196.72e3, 1.6, 1.03e3, 19.7, 3.0e3, 0.040,
                     "Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S., Harrison)"),
     # Mud: lean clay at 32 % moisture (Waterways Experiment Station), Wong Table 2.3: n=0.5, kc=5.16e3,
