@@ -109,7 +109,7 @@ def test_sinkage_grows_with_load_as_bekker():
 def test_soil_presets_and_custom():
     for name in ("dry_sand", "wet_sand", "snow", "mud", "clay_loam"):
         assert name in SOIL_PRESETS and SOIL_PRESETS[name].source
-    assert preset_table(["mud", "snow"]).shape == (2, 9, 2)
+    assert preset_table(["mud", "snow"]).shape == (2, 8, 2)
     with pytest.raises(KeyError, match="register_custom_soil"):
         preset_table(["lava"])
     with pytest.raises(ValueError, match="built-in"):
@@ -122,7 +122,7 @@ def test_soil_presets_and_custom():
 
 
 def test_bulldozing_coefficients_by_hand():
-    from legged_gente.external_forces.soil import bulldozing_coefficients
+    from legged_gente.terrain.soil import bulldozing_coefficients
 
     # dry sand, c = 1.04 kPa, phi = 28 deg, gamma = 15.7 kN/m^3: N_q = e^(pi tan 28) tan^2(59 deg) = 14.72,
     # N_c = (N_q - 1) / tan 28 = 25.80, N_gamma = (N_q - 1) tan(39.2 deg) = 11.19 (Meyerhof),

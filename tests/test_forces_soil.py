@@ -10,7 +10,7 @@ import pytest
 import warp as wp
 
 from legged_gente.external_forces.field import ForcesConfig, TerrainForces
-from legged_gente.external_forces.soil import SOIL_PRESETS, register_custom_soil
+from legged_gente.terrain.soil import SOIL_PRESETS, register_custom_soil
 from legged_gente.terrain.materials import MaterialMap
 
 wp.config.quiet = True

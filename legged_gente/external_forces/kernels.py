@@ -18,8 +18,8 @@ from mujoco_warp._src.support import contact_force_fn
 from mujoco_warp._src.types import vec5
 
 # Soil parameter columns (same order as soil.PARAM_NAMES).
-KC, KPHI, N, COH, MU, K, BULL_C, BULL_G, ZETA = 0, 1, 2, 3, 4, 5, 6, 7, 8
-NSOILPARAM = 9
+KC, KPHI, N, COH, MU, K, BULL_C, BULL_G = 0, 1, 2, 3, 4, 5, 6, 7
+NSOILPARAM = 8
 OBS_PER_FOOT = 12
 """Privileged observation values per foot, see :meth:`field.TerrainForces.privileged_obs`."""
 

@@ -86,7 +86,7 @@ def bulldozing_force(bulldoze_c, bulldoze_g, width, sinkage):
     """Bekker's bulldozing resistance of a foot of ``width`` sunk by ``sinkage`` pushing soil ahead (N).
 
     R_b = b (0.67 c K_pc z + 0.5 gamma K_pgamma z^2) (Bekker 1960/1969; Wong, *Theory of Ground Vehicles*,
-    ch. 2), with ``bulldoze_c = 0.67 c K_pc`` and ``bulldoze_g = 0.5 gamma K_pgamma`` (``soil.py``). The GenTe
+    ch. 2), with ``bulldoze_c = 0.67 c K_pc`` and ``bulldoze_g = 0.5 gamma K_pgamma`` (``terrain/soil.py``). The GenTe
     paper's a z^n is this law with one of its two terms (n = 1: cohesive, n = 2: frictional soil).
     """
     z = np.maximum(np.asarray(sinkage, dtype=float), 0.0)

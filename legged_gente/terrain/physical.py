@@ -67,7 +67,7 @@ def soil(shape, resolution, rng, heights, preset):
     if preset not in SOIL_PRESETS:
         raise ValueError(
             f"soil: preset {preset!r} is not registered; call legged_gente.terrain.soil."
-            f"register_custom_soil({preset!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
+            f"register_custom_soil({preset!r}, kc=..., kphi=..., n=..., c=..., mu=..., K=..., bulldoze_c=..., bulldoze_g=...) "
             f"first or use one of {sorted(SOIL_PRESETS)}."
         )
     return MaterialPatch(shape=shape, soil=preset)

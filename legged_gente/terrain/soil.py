@@ -23,9 +23,6 @@ R_b/b = 0.67 c z K_pc + 0.5 z^2 gamma K_pgamma, K_pc = (N_c - tan phi) cos^2 phi
 K_pgamma = (2 N_gamma / tan phi + 1) cos^2 phi; :func:`bulldozing_coefficients` computes both from (c, phi,
 gamma). Which term dominates depends on the soil and the sinkage: for the cohesive soils (mud, clay loam)
 the cohesion term, for dry sand at a few centimetres the gamma term.
-
-``model`` selects the granular model of a preset: ``"bekker"`` (sinkage, bulldozing, Mohr-Coulomb traction)
-or ``"rft"`` (Resistive Force Theory, ``rft.py``, for small feet in dry granular media; it uses ``rft_zeta``).
 """
 
 from __future__ import annotations
@@ -35,9 +32,8 @@ import math
 
 import numpy as np
 
-PARAM_NAMES = ("kc", "kphi", "n", "c", "mu", "K", "bulldoze_c", "bulldoze_g", "rft_zeta")
+PARAM_NAMES = ("kc", "kphi", "n", "c", "mu", "K", "bulldoze_c", "bulldoze_g")
 """Order of the parameters in :func:`preset_table` (the force kernels index columns by this order)."""
-SOIL_MODELS = ("bekker", "rft")
 
 
 def bulldozing_coefficients(c: float, phi_deg: float, gamma: float) -> tuple[float, float]:
@@ -68,13 +64,9 @@ class SoilPreset:
     K: tuple[float, float]
     bulldoze_c: tuple[float, float]
     bulldoze_g: tuple[float, float]
-    rft_zeta: tuple[float, float] = (0.0, 0.0)
-    model: str = "bekker"
     source: str = ""
 
     def __post_init__(self):
-        if self.model not in SOIL_MODELS:
-            raise ValueError(f"SoilPreset.model={self.model!r} must be one of {SOIL_MODELS}.")
         for name in PARAM_NAMES:
             value = getattr(self, name)
             if not (isinstance(value, tuple) and len(value) == 2):
@@ -85,23 +77,21 @@ class SoilPreset:
             if name in ("kphi", "n", "K") and mean <= 0:
                 # kc may be ~0 (Grenville loam) or slightly negative in Wong's fits; c, bulldozing terms may be 0
                 raise ValueError(f"SoilPreset.{name} mean must be > 0, got {mean}.")
-            if name in ("c", "mu", "bulldoze_c", "bulldoze_g", "rft_zeta") and mean < 0:
+            if name in ("c", "mu", "bulldoze_c", "bulldoze_g") and mean < 0:
                 raise ValueError(f"SoilPreset.{name} mean must be >= 0, got {mean}.")
-        if self.model == "rft" and self.rft_zeta[0] <= 0:
-            raise ValueError("SoilPreset.model='rft' needs rft_zeta > 0 (N/m^3, the medium's RFT scale).")
 
 
 def _pct(mean: float, frac: float) -> tuple[float, float]:
     return (mean, abs(mean) * frac)
 
 
-def _bekker(kc, kphi, n, c, phi_deg, gamma, K, source, **extra) -> SoilPreset:
+def _bekker(kc, kphi, n, c, phi_deg, gamma, K, source) -> SoilPreset:
     """A Bekker soil from Wong's table values (kc, kphi in N/m^(n+1), N/m^(n+2); c in Pa; phi in degrees),
     its unit weight gamma (N/m^3) for bulldozing and its shear deformation modulus K (m)."""
     bc, bg = bulldozing_coefficients(c, phi_deg, gamma)
     return SoilPreset(kc=_pct(kc, 0.2), kphi=_pct(kphi, 0.15), n=_pct(n, 0.05), c=_pct(c, 0.15),
                       mu=_pct(math.tan(math.radians(phi_deg)), 0.1), K=_pct(K, 0.2), bulldoze_c=_pct(bc, 0.2),
-                      bulldoze_g=_pct(bg, 0.2), source=source, **extra)
+                      bulldoze_g=_pct(bg, 0.2), source=source)
 
 
 SOIL_PRESETS: dict[str, SoilPreset] = {
@@ -134,27 +124,26 @@ SOIL_PRESETS: dict[str, SoilPreset] = {
 def register_custom_soil(name: str, **params) -> SoilPreset:
     """Add a soil to :data:`SOIL_PRESETS` under ``name``.
 
-    Each of ``PARAM_NAMES`` but ``rft_zeta`` is a ``(mean, std)`` pair (a bare number means std 0; see
-    :func:`bulldozing_coefficients` for the bulldozing pair); ``rft_zeta`` (for ``model="rft"``), ``model``
-    ("bekker" default, or "rft") and ``source`` (str) are optional. Re-registering a built-in name raises; re-registering a custom
+    Each of ``PARAM_NAMES`` is a ``(mean, std)`` pair (a bare number means std 0; see
+    :func:`bulldozing_coefficients` for the bulldozing pair); ``source`` (str) is optional. Re-registering a built-in name raises; re-registering a custom
     name replaces it.
     """
     if not isinstance(name, str) or not name.isidentifier():
         raise ValueError(f"Soil name must be a python identifier like 'peat', got {name!r}.")
     if name in _BUILTIN:
         raise ValueError(f"{name!r} is a built-in soil preset; register yours under another name.")
-    missing = [p for p in PARAM_NAMES if p not in params and p != "rft_zeta"]
-    unknown = sorted(set(params) - set(PARAM_NAMES) - {"source", "model"})
+    missing = [p for p in PARAM_NAMES if p not in params]
+    unknown = sorted(set(params) - set(PARAM_NAMES) - {"source"})
     if missing or unknown:
         raise ValueError(
             f"register_custom_soil({name!r}): missing {missing}, unknown {unknown}; give exactly "
-            f"{list(PARAM_NAMES)} as (mean, std) pairs (rft_zeta only for model='rft'; optionally source=...)."
+            f"{list(PARAM_NAMES)} as (mean, std) pairs (and optionally source=...)."
         )
     fields = {
         p: tuple(float(x) for x in params[p]) if np.ndim(params[p]) else (float(params[p]), 0.0)
-        for p in PARAM_NAMES if p in params
+        for p in PARAM_NAMES
     }
-    preset = SoilPreset(**fields, model=str(params.get("model", "bekker")), source=str(params.get("source", "custom")))
+    preset = SoilPreset(**fields, source=str(params.get("source", "custom")))
     SOIL_PRESETS[name] = preset
     return preset
 
