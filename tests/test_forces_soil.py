@@ -21,15 +21,23 @@ SHAPE, RES, ORIGIN = (41, 41), 0.1, (-2.0, -2.0)
 SOLE_XY = [(0.09, 0.025), (0.09, -0.025), (-0.09, 0.025), (-0.09, -0.025)]
 SOLE_AREA = 0.22 * 0.09
 
-# Wong, Theory of Ground Vehicles, Table 2.3: dry sand (LLL) and snow (U.S.); no bulldozing, no scatter, so
-# the tests see the traction limit and the sinkage alone
-register_custom_soil("t_sand", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=math.tan(math.radians(28.0)),
-                     K=0.025, bulldoze_c=0.0, bulldoze_g=0.0)
-register_custom_soil("t_snow", kc=4.37e3, kphi=196.72e3, n=1.6, c=1.03e3, mu=math.tan(math.radians(19.7)),
-                     K=0.04, bulldoze_c=0.0, bulldoze_g=0.0)
-# Wong Table 2.3, lean clay at 32 % moisture (WES): the "mud" preset's means, here without scatter
-register_custom_soil("t_mud", kc=5.16e3, kphi=119.61e3, n=0.5, c=13.79e3, mu=math.tan(math.radians(11.0)),
-                     K=0.05, bulldoze_c=0.0, bulldoze_g=0.0)
+@pytest.fixture(scope="module", autouse=True)
+def test_soils():
+    """Wong, Theory of Ground Vehicles, Table 2.3: dry sand (LLL), snow (U.S.) and lean clay at 32 % moisture
+    (WES, the "mud" preset's means), with no bulldozing and no scatter so the tests see the traction limit and
+    the sinkage alone; and dry sand with bulldozing. Removed again after this module's tests."""
+    tan = lambda deg: math.tan(math.radians(deg))  # noqa: E731
+    register_custom_soil("t_sand", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    register_custom_soil("t_snow", kc=4.37e3, kphi=196.72e3, n=1.6, c=1.03e3, mu=tan(19.7), K=0.04,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    register_custom_soil("t_mud", kc=5.16e3, kphi=119.61e3, n=0.5, c=13.79e3, mu=tan(11.0), K=0.05,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    register_custom_soil("t_sand_bull", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
+                         bulldoze_c=1.4e4, bulldoze_g=2.6e5)
+    yield
+    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull"):
+        SOIL_PRESETS.pop(name)
 
 
 def foot_world(mass, joints="xz", sole_xy=SOLE_XY, z0=0.025, option=""):
@@ -125,9 +133,7 @@ def test_soil_shear_never_pushes_back():
 
 def test_soil_power_never_positive_under_random_motions():
     wp.set_device(DEV)
-    register_custom_soil("t_sand_b", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=0.53, K=0.025,
-                         bulldoze_c=1.4e4, bulldoze_g=2.6e5)
-    m, d, f = make(foot_world(20.0, joints="xyz"), soil_map("t_sand_b"), nworld=8)
+    m, d, f = make(foot_world(20.0, joints="xyz"), soil_map("t_sand_bull"), nworld=8)
     run(m, d, f, 60)
     rng = np.random.default_rng(0)
     worked = 0
@@ -245,8 +251,6 @@ def test_foot_soil_is_the_cell_under_the_sole_centre():
 
 def test_soil_forces_act_at_the_contact_plane():
     wp.set_device(DEV)
-    register_custom_soil("t_sand_bull", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=0.53, K=0.025,
-                         bulldoze_c=1.4e4, bulldoze_g=2.6e5)
     m, d, f = make(foot_world(20.0), soil_map("t_sand_bull"))
     run(m, d, f, 60)
     q = d.qvel.numpy()
