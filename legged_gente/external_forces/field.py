@@ -157,6 +157,7 @@ class TerrainForces:
         self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
         self.sole_length, self.sole_width = self._sole(mjm, groups)
         self._setup_sole_contacts(mjm, groups)
+        self._filter_key, self._filter_launches = None, []
 
         n, nf, ns = self.nworld, max(self.nfoot, 1), max(self.nseg, 1)
         z = lambda shape, dtype: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
@@ -257,27 +258,38 @@ class TerrainForces:
             self.m.callback.passive = self.passive
 
     def contact_filter(self, m, d):
+        """Ground friction and soil ruts on MuJoCo's contacts, then the analytic sole contacts. The launches are
+        recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU packing the
+        sole kernel's ~60 arguments every substep would cost more than the heightfield collision it replaces."""
+        key = (id(m), id(d))
+        if self._filter_key != key:
+            self._filter_launches, self._filter_key = self._record_contact_filter(m, d), key
+        for launch in self._filter_launches:
+            launch.launch()
+
+    def _record_contact_filter(self, m, d) -> list:
         cfg, dev = self.cfg, self.device
+        launches = []
         nf = max(self.nfoot, 1)
         use_soil = int(bool(cfg.soil) and self.nfoot > 0)
         area = self.sole_length * self.sole_width
         cap, sink_step = float(cfg.soil_friction_cap), float(cfg.sinkage_rate) * self.dt
         mu_min = float(cfg.min_friction)
         ref, use_fr = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
-        wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
+        launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
-                          use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut])
+                          use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut], record_cmd=True))
         c = d.contact
-        wp.launch(
+        launches.append(wp.launch(
             K.contact_filter_kernel, dim=d.naconmax, device=dev,
             inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
                     self.friction, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
                     float(cfg.max_rut_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage,
                     self.foot_soil, c.pos, c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch,
-                    self.foot_cand],
-        )
+                    self.foot_cand], record_cmd=True,
+        ))
         if self.npt:
-            wp.launch(
+            launches.append(wp.launch(
                 C.sole_contact_kernel, dim=(self.nworld, self.npt), device=dev,
                 inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.terrain_geom, m.geom_condim, m.geom_priority,
                         m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
@@ -287,10 +299,11 @@ class TerrainForces:
                         self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
                         d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
-                        c.type, c.geomcollisionid, c.adhesion, d.nacon],
-            )
-        wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
-                  inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil])
+                        c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
+            ))
+        launches.append(wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
+                  inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil], record_cmd=True))
+        return launches
 
     def passive(self, m, d):
         cfg, dev = self.cfg, self.device
