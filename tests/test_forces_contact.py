@@ -113,3 +113,46 @@ def test_pillar_side_pushes_sideways_and_up():
     assert dist == pytest.approx(-0.001, abs=1e-6)
     np.testing.assert_allclose(normal, n, atol=1e-6)
     assert normal[0] > 0.9 and normal[2] > 0
+
+
+def test_matches_mujoco_heightfield_collision_where_it_is_right():
+    """A sphere 5 mm into a bumpy heightfield, over a triangle's centroid (where MuJoCo's prism collision is
+    right): the analytic contact has MuJoCo's depth and normal, so both use the same surface and split."""
+    import mujoco
+    import mujoco_warp as mjw
+
+    rng = np.random.default_rng(3)
+    n = 8
+    h = (0.3 * np.linspace(0, 1, n)[:, None] + 0.2 * np.linspace(0, 1, n)[None, :]
+         + rng.uniform(0, 0.03, (n, n))).astype(np.float32)  # heights[i, j] at x = i * RES, y = j * RES
+    lo, span = float(h.min()), float(h.max() - h.min())
+    half = (n - 1) * RES / 2
+    spec = mujoco.MjSpec()  # as sim.assembly builds the terrain: MuJoCo's rows run along y, data in [0, 1]
+    hfield = spec.add_hfield(name="hf", nrow=n, ncol=n, size=[half, half, span, 0.1])
+    hfield.userdata = ((h.T - lo) / span).ravel().tolist()
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="hf", pos=[half, half, lo])
+    body = spec.worldbody.add_body(name="b")
+    body.add_freejoint()
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.02, 0, 0])
+    mjm = spec.compile()
+    poses = []
+    for i, j, upper in ((1, 2, True), (3, 1, False), (4, 4, True), (5, 2, False), (2, 5, False)):
+        a, b, c = C.triangle_vertices(h, (0.0, 0.0), RES, i, j, upper)
+        normal = np.cross(b - a, c - a)
+        normal = normal / np.linalg.norm(normal) * np.sign(normal[2])
+        poses.append(((a + b + c) / 3 + normal * (0.02 - 0.005), normal))
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=len(poses), nconmax=16, njmax=64)
+    qpos = np.zeros((len(poses), 7), np.float32)
+    qpos[:, :3] = [p for p, _ in poses]
+    qpos[:, 3] = 1.0
+    d.qpos.assign(qpos)
+    mjw.forward(m, d)
+    k = int(d.nacon.numpy()[0])
+    world, dist, frame = d.contact.worldid.numpy()[:k], d.contact.dist.numpy()[:k], d.contact.frame.numpy()[:k]
+    for w, (centre, normal) in enumerate(poses):
+        deepest = np.argmin(np.where(world == w, dist, np.inf))
+        ours, our_normal, _ = C.sphere_contact(h, (0.0, 0.0), RES, centre, 0.02)
+        assert ours == pytest.approx(-0.005, abs=1e-5) and dist[deepest] == pytest.approx(ours, abs=5e-4)
+        np.testing.assert_allclose(our_normal, normal, atol=1e-6)
+        np.testing.assert_allclose(frame[deepest, 0], normal, atol=2e-3)
