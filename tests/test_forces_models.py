@@ -13,7 +13,8 @@ wp.config.quiet = True
 
 @wp.kernel
 def _eval(
-    x: wp.array2d[float],  # columns: rho cd r L v | g | cm | kind t amp omega phase | p kc kphi n width | a bn z | mu fn j K
+    x: wp.array2d[float],  # columns: rho cd r L v | g | cm | kind t amp omega phase | p kc kphi n width | bc bg z |
+    #                        c mu fn j K (A = x[:, 16] ** 2 * 2, cap 2)
     paper: int,
     out: wp.array2d[float],
 ):
@@ -23,8 +24,11 @@ def _eval(
     out[i, 2] = K.added_mass_fn(x[i, 0], x[i, 6], x[i, 2], x[i, 3])
     out[i, 3] = K.flow_force_fn(int(x[i, 7]), x[i, 8], x[i, 9], x[i, 10], x[i, 11])
     out[i, 4] = K.bekker_sinkage_fn(x[i, 12], x[i, 13], x[i, 14], x[i, 15], x[i, 16])
-    out[i, 5] = K.bulldozing_force_fn(x[i, 17], x[i, 18], x[i, 19])
-    out[i, 6] = K.presliding_friction_fn(x[i, 20], x[i, 21], x[i, 22], x[i, 23])
+    out[i, 5] = K.bulldozing_force_fn(x[i, 17], x[i, 18], x[i, 16], x[i, 19])
+    area = x[i, 16] * x[i, 16] * 2.0
+    out[i, 6] = K.shear_strength_fn(x[i, 24], x[i, 20], area, x[i, 21])
+    out[i, 7] = K.soil_traction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23])
+    out[i, 8] = K.soil_friction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23], 2.0)
 
 
 @pytest.mark.parametrize("paper", [0, 1])
@@ -35,9 +39,9 @@ def test_kernels_match_references(paper):
     cols = [u(900, 1100), u(0.8, 1.3), u(0.01, 0.1), u(0, 0.5), u(-2, 2), u(9, 10), u(0.5, 1.5),
             rng.integers(0, 3, n).astype(float), u(0, 20), u(-1, 1), u(0, 3), u(-3, 3),
             u(-1e3, 5e4), u(0.5e3, 5e4), u(1e5, 3e6), u(0.4, 1.7), u(0.03, 0.2),
-            u(1e3, 5e5), u(0.8, 2.2), u(0, 0.1), u(0.1, 0.8), u(0, 500), u(0, 0.2), u(0.005, 0.05)]
+            u(0, 8e4), u(0, 3e5), u(0, 0.1), u(0.1, 0.8), u(0, 500), u(0, 0.2), u(0.005, 0.05), u(0, 1.5e4)]
     x = np.stack(cols, 1).astype(np.float32)
-    out = wp.zeros((n, 7), dtype=float, device="cpu")
+    out = wp.zeros((n, 9), dtype=float, device="cpu")
     wp.launch(_eval, dim=n, inputs=[wp.array(x, dtype=float, device="cpu"), paper, out], device="cpu")
     got = out.numpy()
     x = x.astype(np.float64)
@@ -48,8 +52,10 @@ def test_kernels_match_references(paper):
         models.added_mass(x[:, 0], x[:, 6], x[:, 2], x[:, 3]),
         np.array([models.flow_force(k, t, a, o, p) for k, t, a, o, p in zip(kinds, *x[:, 8:12].T)]),
         models.bekker_sinkage(x[:, 12], x[:, 13], x[:, 14], x[:, 15], x[:, 16]),
-        models.bulldozing_force(x[:, 17], x[:, 18], x[:, 19]),
-        models.presliding_friction(x[:, 20], x[:, 21], x[:, 22], x[:, 23]),
+        models.bulldozing_force(x[:, 17], x[:, 18], x[:, 16], x[:, 19]),
+        models.shear_strength(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21]),
+        models.soil_traction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23]),
+        models.soil_friction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23], 2.0),
     ], 1)
     scale = np.maximum(np.abs(ref), 1e-6 * np.abs(ref).max(0))
     # a tide near its zero crossing: float32 rounding of omega*t is relative to the amplitude, not the value
@@ -72,7 +78,18 @@ def test_references_textbook_values():
     # Bekker: linear soil (n=1), p = (kc/b + kphi) z -> 10 kPa on kc/b + kphi = 1 MN/m^3 gives 1 cm.
     assert models.bekker_sinkage(1e4, 1e5, 0.5e6, 1.0, 0.2) == pytest.approx(0.01)
     assert models.bekker_sinkage(-5.0, 1e5, 0.5e6, 1.0, 0.2) == 0.0
-    assert models.presliding_friction(0.5, 100.0, 1e9, 0.01) == pytest.approx(50.0)
+    # Mohr-Coulomb on dry sand (c = 1.04 kPa, phi = 28 deg, Wong) under a 0.22 x 0.09 m sole loaded by 196.2 N
+    t_max = 1.04e3 * 0.0198 + 196.2 * np.tan(np.radians(28.0))
+    assert models.shear_strength(1.04e3, np.tan(np.radians(28.0)), 0.0198, 196.2) == pytest.approx(t_max)
+    # Janosi-Hanamoto: after a slip of K the traction is (1 - 1/e) of the strength; fully mobilised far beyond
+    assert models.soil_traction(1.04e3, 0.53, 0.0198, 196.2, 0.025, 0.025) == pytest.approx(
+        (1.04e3 * 0.0198 + 196.2 * 0.53) * (1 - np.exp(-1)))
+    assert models.soil_traction(0.0, 0.5, 0.02, 100.0, 1e9, 0.01) == pytest.approx(50.0)
+    assert models.soil_friction(1.04e3, 0.53, 0.0198, 196.2, 1e9, 0.025, 2.0) == pytest.approx(
+        0.53 + 1.04e3 * 0.0198 / 196.2)
+    assert models.soil_friction(1.04e3, 0.53, 0.0198, 1.0, 1e9, 0.025, 2.0) == 2.0  # capped as F_N -> 0
+    # Bekker bulldozing: b (0.67 c K_pc z + 0.5 gamma K_pgamma z^2) with the two coefficients given
+    assert models.bulldozing_force(1e4, 2e5, 0.1, 0.02) == pytest.approx(0.1 * (1e4 * 0.02 + 2e5 * 4e-4))
     with pytest.raises(ValueError, match="area"):
         models.cylinder_drag(1, 1, 1, 1, 1, area="lateral")
     with pytest.raises(ValueError, match="kind"):
@@ -92,13 +109,24 @@ def test_sinkage_grows_with_load_as_bekker():
 def test_soil_presets_and_custom():
     for name in ("dry_sand", "wet_sand", "snow", "mud", "clay_loam"):
         assert name in SOIL_PRESETS and SOIL_PRESETS[name].source
-    assert preset_table(["mud", "snow"]).shape == (2, 7, 2)
+    assert preset_table(["mud", "snow"]).shape == (2, 8, 2)
     with pytest.raises(KeyError, match="register_custom_soil"):
         preset_table(["lava"])
     with pytest.raises(ValueError, match="built-in"):
-        register_custom_soil("mud", kc=1, kphi=1, n=1, bulldoze_a=1, bulldoze_n=1, mu=1, K=1)
+        register_custom_soil("mud", kc=1, kphi=1, n=1, c=0, mu=1, K=1, bulldoze_c=1, bulldoze_g=1)
     with pytest.raises(ValueError, match="missing"):
         register_custom_soil("peat_t", kc=(1e3, 1e2))
-    p = register_custom_soil("peat_t", kc=(1e3, 1e2), kphi=2e5, n=(1.0, 0.1), bulldoze_a=(1e4, 1e3),
-                             bulldoze_n=(1.0, 0.0), mu=(0.3, 0.03), K=(0.05, 0.01))
+    p = register_custom_soil("peat_t", kc=(1e3, 1e2), kphi=2e5, n=(1.0, 0.1), c=(2e3, 2e2), mu=(0.3, 0.03),
+                             K=(0.05, 0.01), bulldoze_c=(1e4, 1e3), bulldoze_g=(0.0, 0.0))
     assert p.kphi == (2e5, 0.0) and SOIL_PRESETS.pop("peat_t") is p
+
+
+def test_bulldozing_coefficients_by_hand():
+    from legged_gente.terrain.soil import bulldozing_coefficients
+
+    # dry sand, c = 1.04 kPa, phi = 28 deg, gamma = 15.7 kN/m^3: N_q = e^(pi tan 28) tan^2(59 deg) = 14.72,
+    # N_c = (N_q - 1) / tan 28 = 25.80, N_gamma = (N_q - 1) tan(39.2 deg) = 11.19 (Meyerhof),
+    # K_pc = (25.80 - 0.532) cos^2 28 = 19.70, K_pgamma = (2 * 11.19 / 0.532 + 1) cos^2 28 = 33.6
+    bc, bg = bulldozing_coefficients(1.04e3, 28.0, 15.7e3)
+    assert bc == pytest.approx(0.67 * 1.04e3 * 19.70, rel=0.01)
+    assert bg == pytest.approx(0.5 * 15.7e3 * 33.6, rel=0.01)

@@ -7,7 +7,8 @@ class ForcesConfig:
     """Attributes TerrainForces reads (subclass or copy these onto your env config's ``forces`` class).
 
     wading: bool          drag, buoyancy, added mass (and paper flow force) on leg segments and feet in water
-    soil: bool            Bekker sinkage, bulldozing and pre-sliding friction on feet on soil cells
+    soil: bool            Bekker sinkage, bulldozing and Mohr-Coulomb / Janosi-Hanamoto traction limit for feet on
+                          soil cells
     friction_from_map: bool  ground contacts' tangential friction scaled by the cell's MaterialMap.friction
     friction_reference: float  friction of the MJCF ground geom (1): a cell of this friction changes nothing
     water_density: float  rho, kg/m^3
@@ -31,12 +32,24 @@ class ForcesConfig:
                            None: the foot_geom_names
     sole_length, sole_width: float | None  sole size (m); None: the footprint of the first foot's geoms in its
                            body's x-y plane (box: its extent; sphere/capsule/cylinder: a disc of its radius)
-    contact_threshold: float  foot normal force (N) above which a foot counts as in contact (slip resets below)
+    contact_threshold: float  foot normal force (N) above which a foot counts as in contact
+    liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
+                          off: its slip and rut are forgotten (shorter dips are solver chatter, not lift-off)
+    min_friction: float   a ground contact whose friction is below this is made frictionless (condim 1): as mu -> 0
+                          MuJoCo's pyramidal cone holds a tangential load by inflating the normal force (the foot
+                          is launched) and its elliptic cone divides by mu
+    soil_friction_cap: float  most friction coefficient a soil contact gets: its traction (c A + F_N tan phi)
+                          over F_N grows without bound as F_N -> 0 through the cohesion term
+    sole_contact: bool    sphere and capsule foot geoms touch the terrain through analytic contacts
+                          (``contact.py``: the triangulated heightfield, the rut shown in full) instead of
+                          MuJoCo's heightfield collision; the model must not collide them with the terrain
+                          (``contact.exclude_sole_collisions``)
     bulldozing_speed_reg: float  speed (m/s) below which the bulldozing direction fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
-    max_rut_depth: float  deepest the foot is shown lowered into its rut (m); the forces use the full sinkage.
-                           Heightfield contacts go wrong once a geom is ~3 cm inside a cell (docs/forces.md)
+    max_rut_depth: float  deepest a MuJoCo-collided foot (box soles, or sole_contact off) is shown lowered into its
+                           rut (m); the forces use the full sinkage. MuJoCo's heightfield contacts go wrong once a
+                           geom is ~3 cm inside a cell (docs/forces.md); analytic sole contacts show the full rut
     """
 
     wading = True
@@ -59,6 +72,10 @@ class ForcesConfig:
     sole_length = None
     sole_width = None
     contact_threshold = 1.0
+    liftoff_time = 0.02
+    soil_friction_cap = 2.0
+    min_friction = 0.01
+    sole_contact = True
     bulldozing_speed_reg = 0.05
     sinkage_rate = 0.5
     max_rut_depth = 0.01

@@ -25,6 +25,7 @@ import mujoco
 import numpy as np
 import warp as wp
 
+from legged_gente.external_forces import contact as C
 from legged_gente.external_forces import kernels as K
 from legged_gente.external_forces import water as W
 from legged_gente.external_forces.config import ForcesConfig
@@ -98,6 +99,12 @@ class TerrainForces:
             return wp.array(np.ascontiguousarray(x), dtype=dtype, device=dev)
 
         self.heights = arr(heights, float)
+        # the contacts' heightfield: a plane's (1, 1) grid as one wide constant cell
+        if min(heights.shape) < 2:
+            self.hf_heights = arr(np.full((2, 2), heights.flat[0], np.float32), float)
+            self.hf_origin, self.hf_res = wp.vec2(-1.0e4, -1.0e4), 2.0e4
+        else:
+            self.hf_heights, self.hf_origin, self.hf_res = self.heights, self.origin, self.resolution
         self.water = K.WaterMap()
         self.water.origin, self.water.resolution = self.origin, self.resolution
         self.water.surface = arr(material.water_surface.astype(np.float32), float)
@@ -108,6 +115,9 @@ class TerrainForces:
         self.water.flow_phase = arr(material.flow_phase.astype(np.float32), float)
         self.soil = arr(material.soil.astype(np.int32), int)
         self.friction = arr(material.friction.astype(np.float32), float)
+        self.soilmap = C.SoilMap()
+        self.soilmap.origin, self.soilmap.resolution = self.origin, self.resolution
+        self.soilmap.soil, self.soilmap.friction = self.soil, self.friction
         if material.has_soil().any() and int(material.soil.max()) >= len(material.soil_presets):
             raise ValueError(f"material.soil indexes preset {int(material.soil.max())} but soil_presets has "
                              f"{len(material.soil_presets)} names; list every soil used in soil_presets.")
@@ -135,6 +145,11 @@ class TerrainForces:
         # sole centre in the foot body's frame: the mean of its geoms' centres
         offsets = [mjm.geom_pos[g].mean(0) for g in groups] or np.zeros((1, 3))
         self.foot_offset = arr(np.asarray(offsets, np.float32), wp.vec3)
+        # the sole's contact plane below that centre (body frame, foot level): where the soil forces act
+        box = int(mujoco.mjtGeom.mjGEOM_BOX)
+        drops = [offsets[f][2] - min(mjm.geom_pos[g, 2] - mjm.geom_size[g, 2 if mjm.geom_type[g] == box else 0]
+                                     for g in group) for f, group in enumerate(groups)] or [0.0]
+        self.foot_drop = arr(np.asarray(drops, np.float32), float)
         geom_foot = np.full(mjm.ngeom, -1, np.int32)
         for f, g in enumerate(groups):
             geom_foot[g] = f
@@ -142,6 +157,8 @@ class TerrainForces:
         self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
         self.foot_water_geom = arr(self._foot_water_geoms(mjm, groups), int)
         self.sole_length, self.sole_width = self._sole(mjm, groups)
+        self._setup_sole_contacts(mjm, groups)
+        self._filter_key, self._filter_launches = None, []
 
         n, nf, ns = self.nworld, max(self.nfoot, 1), max(self.nseg, 1)
         z = lambda shape, dtype: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
@@ -153,12 +170,14 @@ class TerrainForces:
         self.foot_water_force = z((n, max(len(self.foot_water_geom), 1)), wp.vec3)
         self.foot_fn = z((n, nf), float)
         self.foot_vel = z((n, nf), wp.vec3)
-        self.foot_slip = z((n, nf), wp.vec3)
+        self.foot_slip = z((n, nf), float)
+        self.foot_air = z((n, nf), float)
         self.foot_sinkage = z((n, nf), float)
         self.foot_soil = z((n, nf), int)
         self.foot_soil.fill_(-1)
         self.foot_touch = z((n, nf), int)
         self.foot_cand = z((n, nf), float)
+        self.foot_inrut = z((n, nf), int)
         self.foot_load = z((n, nf), float)
         self.foot_force = z((n, nf), wp.vec3)
         self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
@@ -204,6 +223,34 @@ class TerrainForces:
                              f"box soles in forces.foot_water_geom_names (or [] for no water force on the feet).")
         return geoms
 
+    def _setup_sole_contacts(self, mjm, groups):
+        """Sphere / capsule sole geoms get analytic terrain contacts (``contact.py``) when ``sole_contact`` is on;
+        MuJoCo must then not collide them with the terrain geom (the one geom on the world body that collides)."""
+        self.npt = 0
+        if not (self.cfg.sole_contact and groups):
+            return
+        geoms, ends, feet = C.sole_points(mjm, groups)
+        ground = [g for g in range(mjm.ngeom) if mjm.geom_bodyid[g] == 0 and (mjm.geom_contype[g] or
+                                                                            mjm.geom_conaffinity[g])]
+        if len(geoms) == 0 or len(ground) != 1:
+            if len(geoms) and len(ground) != 1:
+                raise ValueError(f"forces.sole_contact needs exactly one colliding terrain geom on the world body, "
+                                 f"found {len(ground)}; set forces.sole_contact=False for such scenes.")
+            return
+        self.terrain_geom = ground[0]
+        clash = sorted({mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, int(g)) for g in geoms
+                        if (mjm.geom_contype[g] & mjm.geom_conaffinity[ground[0]]) or
+                        (mjm.geom_conaffinity[g] & mjm.geom_contype[ground[0]])})
+        if clash:
+            raise ValueError(f"forces.sole_contact: sole geoms {clash} still collide with the terrain in MuJoCo; "
+                             f"build the model with external_forces.contact.exclude_sole_collisions(spec, names) "
+                             f"(contype = conaffinity = 0) or set forces.sole_contact=False.")
+        self.npt = len(geoms)
+        dev = self.device
+        self.pt_geom = wp.array(geoms, dtype=int, device=dev)
+        self.pt_end = wp.array(ends, dtype=float, device=dev)
+        self.pt_foot = wp.array(feet, dtype=int, device=dev)
+
     def _sole(self, mjm, groups):
         """Sole length and width (m): from the config, else the footprint of the first foot's geoms in its
         body's x-y plane (box: its x-y extent; sphere, capsule, cylinder: a disc of its radius)."""
@@ -227,28 +274,58 @@ class TerrainForces:
     def install(self):
         """Set the mujoco_warp callbacks (contact filter for soil/friction, passive for the forces)."""
         cfg = self.cfg
-        if cfg.soil or cfg.friction_from_map:
+        if cfg.soil or cfg.friction_from_map or self.npt:
             self.m.callback.contactfilter = self.contact_filter
         if cfg.wading or cfg.soil:
             self.m.callback.passive = self.passive
 
     def contact_filter(self, m, d):
-        dev = self.device
+        """Ground friction and soil ruts on MuJoCo's contacts, then the analytic sole contacts. The launches are
+        recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU packing the
+        sole kernel's ~60 arguments every substep would cost more than the heightfield collision it replaces."""
+        key = (id(m), id(d))
+        if self._filter_key != key:
+            self._filter_launches, self._filter_key = self._record_contact_filter(m, d), key
+        for launch in self._filter_launches:
+            launch.launch()
+
+    def _record_contact_filter(self, m, d) -> list:
+        cfg, dev = self.cfg, self.device
+        launches = []
         nf = max(self.nfoot, 1)
-        wp.launch(K.foot_untouch_kernel, dim=(self.nworld, nf), device=dev, inputs=[self.foot_touch, self.foot_cand])
+        use_soil = int(bool(cfg.soil) and self.nfoot > 0)
+        area = self.sole_length * self.sole_width
+        cap, sink_step = float(cfg.soil_friction_cap), float(cfg.sinkage_rate) * self.dt
+        mu_min = float(cfg.min_friction)
+        ref, use_fr = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
+        launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
+                  inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
+                          use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut], record_cmd=True))
         c = d.contact
-        wp.launch(
+        launches.append(wp.launch(
             K.contact_filter_kernel, dim=d.naconmax, device=dev,
             inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
-                    self.friction, float(self.cfg.friction_reference), int(bool(self.cfg.friction_from_map)),
-                    int(bool(self.cfg.soil) and self.nfoot > 0), self.sole_length * self.sole_width,
-                    self.sole_width, float(self.cfg.sinkage_rate) * self.dt, float(self.cfg.max_rut_depth),
-                    self.soil_params, self.foot_load,
-                    self.foot_sinkage, c.pos, c.geom, c.worldid, c.dist, c.friction, self.foot_soil,
-                    self.foot_touch, self.foot_cand],
-        )
-        wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
-                  inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil])
+                    self.friction, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
+                    float(cfg.max_rut_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage,
+                    self.foot_soil, c.pos, c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch,
+                    self.foot_cand], record_cmd=True,
+        ))
+        if self.npt:
+            launches.append(wp.launch(
+                C.sole_contact_kernel, dim=(self.nworld, self.npt), device=dev,
+                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.terrain_geom, m.geom_condim, m.geom_priority,
+                        m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
+                        m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
+                        m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
+                        self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
+                        self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
+                        d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
+                        c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
+                        c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
+            ))
+        launches.append(wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
+                  inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil], record_cmd=True))
+        return launches
 
     def passive(self, m, d):
         cfg, dev = self.cfg, self.device
@@ -278,10 +355,10 @@ class TerrainForces:
         if cfg.soil and self.nfoot:
             wp.launch(
                 K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
-                inputs=[self.foot_body, self.foot_offset, m.body_rootid, d.xpos, d.xmat, d.xipos, d.cvel,
-                        d.subtree_com, self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params,
-                        self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_slip,
-                        self.foot_vel, self.foot_force, d.xfrc_applied],
+                inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
+                        d.cvel, d.subtree_com, self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params,
+                        self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_vel, self.foot_force,
+                        d.xfrc_applied],
             )
 
     # ------------------------------------------------------------------ env calls
@@ -302,7 +379,8 @@ class TerrainForces:
             inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
                     self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights,
                     d.time, self.water, self.xi, self.soil_params, self.foot_fn,
-                    self.foot_vel, self.foot_sinkage, self.foot_soil, self.foot_slip, self.foot_load, self.obs],
+                    self.foot_vel, self.foot_sinkage, self.foot_soil, float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip,
+                    self.foot_air, self.foot_load, self.obs],
         )
 
     def reset(self, mask):
@@ -310,7 +388,8 @@ class TerrainForces:
         forget their foot slip. Device-only: safe inside a captured graph."""
         wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
                   inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
-                          self.soil_params, self.foot_slip])
+                          self.soil_params, self.foot_slip, self.foot_air, self.foot_sinkage,
+                          self.foot_load])
         wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])
 
     def new_policy_step(self):
@@ -321,5 +400,5 @@ class TerrainForces:
 
     def privileged_obs(self):
         """Torch view (nworld, n_feet * 12), per foot: water depth (m), flow vx, vy (m/s), on-soil flag,
-        sinkage (m), normal force / 100 N, kc/1e4, kphi/1e6, n, bulldozing a/1e5, mu, K (cm)."""
+        sinkage (m), normal force / 100 N, kc/1e4, kphi/1e6, n, cohesion c/1e4 (Pa), mu = tan(phi), K (cm)."""
         return wp.to_torch(self.obs)

@@ -18,8 +18,8 @@ from mujoco_warp._src.support import contact_force_fn
 from mujoco_warp._src.types import vec5
 
 # Soil parameter columns (same order as soil.PARAM_NAMES).
-KC, KPHI, N, BULL_A, BULL_N, MU, K = 0, 1, 2, 3, 4, 5, 6
-NSOILPARAM = 7
+KC, KPHI, N, COH, MU, K, BULL_C, BULL_G = 0, 1, 2, 3, 4, 5, 6, 7
+NSOILPARAM = 8
 OBS_PER_FOOT = 12
 """Privileged observation values per foot, see :meth:`field.TerrainForces.privileged_obs`."""
 
@@ -78,15 +78,30 @@ def bekker_sinkage_fn(pressure: float, kc: float, kphi: float, n: float, width: 
 
 
 @wp.func
-def bulldozing_force_fn(a: float, n: float, sinkage: float) -> float:
-    """GenTe / Bekker bulldozing resistance a z^n."""
-    return a * wp.pow(wp.max(sinkage, 0.0), n)
+def bulldozing_force_fn(bulldoze_c: float, bulldoze_g: float, width: float, sinkage: float) -> float:
+    """Bekker's bulldozing resistance b (0.67 c K_pc z + 0.5 gamma K_pgamma z^2)."""
+    z = wp.max(sinkage, 0.0)
+    return width * (bulldoze_c * z + bulldoze_g * z * z)
 
 
 @wp.func
-def presliding_friction_fn(mu: float, normal_force: float, slip: float, k: float) -> float:
-    """Janosi-Hanamoto: mu F_N (1 - exp(-j/K))."""
-    return mu * normal_force * (1.0 - wp.exp(-slip / k))
+def shear_strength_fn(c: float, mu: float, area: float, normal_force: float) -> float:
+    """Mohr-Coulomb: c A + F_N tan(phi)."""
+    return c * area + wp.max(normal_force, 0.0) * mu
+
+
+@wp.func
+def soil_traction_fn(c: float, mu: float, area: float, normal_force: float, slip: float, k: float) -> float:
+    """Janosi-Hanamoto: (c A + F_N tan phi)(1 - exp(-j/K))."""
+    return shear_strength_fn(c, mu, area, normal_force) * (1.0 - wp.exp(-wp.max(slip, 0.0) / k))
+
+
+@wp.func
+def soil_friction_fn(c: float, mu: float, area: float, normal_force: float, slip: float, k: float,
+                     cap: float) -> float:
+    """The contact friction coefficient of a soil: mobilised traction / F_N, at most cap."""
+    fn = wp.max(normal_force, 1.0e-6)
+    return wp.min(soil_traction_fn(c, mu, area, fn, slip, k) / fn, cap)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -180,9 +195,13 @@ def reset_kernel(
     soil_table: wp.array3d[float],  # (npreset, NSOILPARAM, 2) mean, std
     eps: wp.array[float],
     soil_params: wp.array3d[float],  # (nworld, npreset, NSOILPARAM)
-    foot_slip: wp.array2d[wp.vec3],
+    foot_slip: wp.array2d[float],
+    foot_air: wp.array2d[float],
+    foot_sinkage: wp.array2d[float],
+    foot_load: wp.array2d[float],
 ):
-    """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset.
+    """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset; the
+    feet's soil state (slip, rut, load) starts afresh.
 
     Soil draws are truncated below at 10 % of the mean so kphi, n, K stay positive (documented in docs).
     """
@@ -200,7 +219,10 @@ def reset_kernel(
                 value = floor
             soil_params[w, s, q] = value
     for f in range(foot_slip.shape[1]):
-        foot_slip[w, f] = wp.vec3(0.0)
+        foot_slip[w, f] = 0.0
+        foot_air[w, f] = 1.0e6
+        foot_sinkage[w, f] = 0.0
+        foot_load[w, f] = 0.0
 
 
 @wp.kernel
@@ -221,10 +243,62 @@ def increment_kernel(counter: wp.array[int]):
 
 
 @wp.kernel
-def foot_untouch_kernel(foot_touch: wp.array2d[int], foot_cand: wp.array2d[float]):
+def foot_cell_kernel(
+    foot_body: wp.array[int],
+    foot_offset: wp.array[wp.vec3],
+    xpos: wp.array2d[wp.vec3],
+    xmat: wp.array2d[wp.mat33],
+    origin: wp.vec2,
+    resolution: float,
+    soil: wp.array2d[int],
+    use_soil: int,
+    foot_soil: wp.array2d[int],
+    foot_touch: wp.array2d[int],
+    foot_cand: wp.array2d[float],
+    foot_inrut: wp.array2d[int],
+):
+    """Each foot's soil: the cell under its sole centre (one writer per foot: deterministic at soil borders)."""
     w, f = wp.tid()
     foot_touch[w, f] = 0
     foot_cand[w, f] = 0.0
+    foot_inrut[w, f] = 0
+    s = int(-1)
+    if use_soil != 0:
+        p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
+        cell = cell_of(p, origin, resolution, soil.shape[0], soil.shape[1])
+        s = soil[cell[0], cell[1]]
+    foot_soil[w, f] = s
+
+
+@wp.func
+def ground_friction(
+    fr: vec5,
+    cell: wp.vec2i,
+    f: int,
+    w: int,
+    soil: wp.array2d[int],
+    friction: wp.array2d[float],
+    friction_reference: float,
+    use_friction: int,
+    use_soil: int,
+    sole_area: float,
+    friction_cap: float,
+    soil_params: wp.array3d[float],
+    foot_load: wp.array2d[float],
+    foot_slip: wp.array2d[float],
+) -> vec5:
+    """Tangential friction of a ground contact in ``cell``: the rigid friction scaled by the cell's map friction;
+    on soil under a foot ``f`` (>= 0), at most the soil's mobilised traction / F_N (Mohr-Coulomb, Janosi-Hanamoto)."""
+    mu = fr[0]
+    if use_friction != 0:
+        mu = mu * friction[cell[0], cell[1]] / friction_reference
+    s = soil[cell[0], cell[1]]
+    if use_soil != 0 and f >= 0 and s >= 0:
+        mu = wp.min(mu, soil_friction_fn(soil_params[w, s, COH], soil_params[w, s, MU], sole_area, foot_load[w, f],
+                                         foot_slip[w, f], soil_params[w, s, K], friction_cap))
+    fr[0] = mu
+    fr[1] = mu
+    return fr
 
 
 @wp.kernel
@@ -241,32 +315,38 @@ def contact_filter_kernel(
     use_soil: int,
     sole_area: float,
     sole_width: float,
+    friction_cap: float,
+    min_friction: float,
     sink_step: float,
     max_rut: float,
     soil_params: wp.array3d[float],
-    foot_fn: wp.array2d[float],
+    foot_load: wp.array2d[float],
+    foot_slip: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
     # contacts (modified)
     contact_pos: wp.array[wp.vec3],
     contact_geom: wp.array[wp.vec2i],
     contact_worldid: wp.array[int],
     contact_dist: wp.array[float],
     contact_friction: wp.array[vec5],
+    contact_dim: wp.array[int],
     # out
-    foot_soil: wp.array2d[int],
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
 ):
-    """Ground contacts take the cell's friction; a foot on soil sits in a rut of depth z.
+    """MuJoCo's ground contacts take the cell's friction (soil: its traction limit); a MuJoCo-collided foot on
+    soil sits in a rut of depth z (the analytic sole contacts of ``contact.py`` show theirs themselves).
 
     The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration
     (contact dist += z, at most max_rut): the solver holds the foot that much deeper with the contact's
     usual stiffness, so the sinkage shows as a lowered foot. max_rut keeps geoms within the depth where
     heightfield contacts stay correct; the forces and observations use the full z. The rut deepens towards
     Bekker's z(F_N / sole area) but never further than the foot's current penetration (counting the rut's
-    unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance: soil sinkage is plastic (Wong: unloading recovers little). Without these two
-    rules the loop F_N -> z -> contact chatters or ratchets: a rut deeper than the foot releases the
-    contact, the foot falls into it and the impact load digs it deeper still.
+    unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance: soil sinkage is plastic
+    (Wong: unloading recovers little). Without these two rules the loop F_N -> z -> contact chatters or
+    ratchets: a rut deeper than the foot releases the contact, the foot falls into it and the impact load
+    digs it deeper still. A contact whose friction is below min_friction becomes frictionless (condim 1).
     """
     i = wp.tid()
     if i >= nacon[0]:
@@ -282,27 +362,27 @@ def contact_filter_kernel(
         other = g[0]
     if ground < 0 or other < 0:
         return
-    cell = cell_of(contact_pos[i], origin, resolution, soil.shape[0], soil.shape[1])
-    if use_friction != 0:
-        scale = friction[cell[0], cell[1]] / friction_reference
-        fr = contact_friction[i]
-        fr[0] = fr[0] * scale
-        fr[1] = fr[1] * scale
-        contact_friction[i] = fr
-    f = geom_foot[other]
-    s = soil[cell[0], cell[1]]
-    if use_soil == 0 or f < 0 or s < 0:
-        return
     w = contact_worldid[i]
+    cell = cell_of(contact_pos[i], origin, resolution, soil.shape[0], soil.shape[1])
+    f = geom_foot[other]
+    fr = ground_friction(contact_friction[i], cell, f, w, soil, friction, friction_reference, use_friction,
+                         use_soil, sole_area, friction_cap, soil_params, foot_load, foot_slip)
+    contact_friction[i] = fr
+    if fr[0] < min_friction:
+        contact_dim[i] = 1
+    if f < 0:
+        return
+    s = foot_soil[w, f]
+    if s < 0:
+        return
     z = bekker_sinkage_fn(
-        foot_fn[w, f] / sole_area, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], sole_width
+        foot_load[w, f] / sole_area, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], sole_width
     )
     rut = foot_sinkage[w, f]
     shown = wp.min(rut, max_rut)
     # the foot's depth counting the rut's unshown part: the rut deepens at most sink_step below it
     wp.atomic_max(foot_cand, w, f, wp.min(z, -contact_dist[i] + rut - shown + sink_step))
     contact_dist[i] = contact_dist[i] + shown
-    foot_soil[w, f] = s
     foot_touch[w, f] = 1
 
 
@@ -311,12 +391,11 @@ def foot_rut_kernel(
     foot_touch: wp.array2d[int], foot_cand: wp.array2d[float], foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
 ):
-    """Deepen each foot's rut for the next substep; a foot without soil contact has left its rut."""
+    """Deepen each touching foot's rut for the next substep; no rut off soil (lift-off: ``foot_state_kernel``)."""
     w, f = wp.tid()
-    if foot_touch[w, f] == 0:
+    if foot_soil[w, f] < 0:
         foot_sinkage[w, f] = 0.0
-        foot_soil[w, f] = -1
-    else:
+    elif foot_touch[w, f] != 0:
         foot_sinkage[w, f] = wp.max(foot_sinkage[w, f], foot_cand[w, f])
 
 
@@ -328,6 +407,7 @@ def foot_rut_kernel(
 def soil_force_kernel(
     foot_body: wp.array[int],
     foot_offset: wp.array[wp.vec3],
+    foot_drop: wp.array[float],
     body_rootid: wp.array[int],
     xpos: wp.array2d[wp.vec3],
     xmat: wp.array2d[wp.mat33],
@@ -340,34 +420,28 @@ def soil_force_kernel(
     foot_fn: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
-    foot_slip: wp.array2d[wp.vec3],
     # out
     foot_vel: wp.array2d[wp.vec3],
     foot_force: wp.array2d[wp.vec3],
     xfrc: wp.array2d[wp.spatial_vector],
 ):
-    """Bulldozing b*a*z^n against the foot's horizontal velocity and Janosi-Hanamoto shear against its slip.
+    """Bekker bulldozing against the foot's horizontal velocity, at the sole's contact plane (``foot_drop``
+    below the sole centre), where the soil acts. The shear is the contacts' friction (``ground_friction``).
 
     The bulldozing direction is regularised, v / max(|v|, speed_reg), so it fades out linearly below
-    speed_reg instead of chattering around zero speed.
+    speed_reg instead of chattering around zero speed; its power -F |v|^2 / max(|v|, speed_reg) is never positive.
     """
     w, f = wp.tid()
     b = foot_body[f]
-    p = sole_point(xpos, xmat, w, b, foot_offset[f])
+    p = sole_point(xpos, xmat, w, b, foot_offset[f]) - wp.vec3(0.0, 0.0, foot_drop[f])
     v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
     vh = wp.vec3(v[0], v[1], 0.0)
     foot_vel[w, f] = vh
     s = foot_soil[w, f]
     force = wp.vec3(0.0)
     if s >= 0 and foot_fn[w, f] > 0.0:
-        a = sole_width * soil_params[w, s, BULL_A]
-        fb = bulldozing_force_fn(a, soil_params[w, s, BULL_N], foot_sinkage[w, f])
-        force = force - (fb / wp.max(wp.length(vh), speed_reg)) * vh
-        slip = foot_slip[w, f]
-        j = wp.length(slip)
-        if j > 1.0e-9:
-            fs = presliding_friction_fn(soil_params[w, s, MU], foot_fn[w, f], j, soil_params[w, s, K])
-            force = force - (fs / j) * slip
+        fb = bulldozing_force_fn(soil_params[w, s, BULL_C], soil_params[w, s, BULL_G], sole_width, foot_sinkage[w, f])
+        force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh
         apply_force(xfrc, xipos, w, b, force, p)
     foot_force[w, f] = force
 
@@ -428,21 +502,32 @@ def foot_state_kernel(
     foot_vel: wp.array2d[wp.vec3],
     foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
-    foot_slip: wp.array2d[wp.vec3],
+    liftoff_time: float,
+    foot_inrut: wp.array2d[int],
+    foot_slip: wp.array2d[float],
+    foot_air: wp.array2d[float],
     foot_load: wp.array2d[float],
     obs: wp.array2d[float],
 ):
-    """Accumulate slip since touchdown (reset at lift-off), low-pass the sinkage load, write the obs.
+    """Accumulate the distance slid since touchdown, low-pass the sinkage load, detect lift-off, write the obs.
 
     foot_load is F_N through a first-order low-pass (load_alpha = dt / tau): the sinkage follows the
-    sustained load, not the solver's single-substep impact spikes.
+    sustained load, not the solver's single-substep impact spikes. A foot has lifted off once its F_N has
+    stayed at or below contact_threshold for liftoff_time: only then are its slip and rut forgotten (MuJoCo's
+    sliding contacts dip below 1 N for single substeps, and hop off for several while sliding, as the
+    pyramidal cone inflates the normal force), and only once it is also out of its rut (``foot_inrut``: an
+    analytic sole contact still below the unlowered surface), else it would find itself deep in the ground.
     """
     w, f = wp.tid()
     foot_load[w, f] = foot_load[w, f] + load_alpha * (foot_fn[w, f] - foot_load[w, f])
     if foot_fn[w, f] > contact_threshold:
-        foot_slip[w, f] = foot_slip[w, f] + dt * foot_vel[w, f]
+        foot_air[w, f] = 0.0
+        foot_slip[w, f] = foot_slip[w, f] + dt * wp.length(foot_vel[w, f])
     else:
-        foot_slip[w, f] = wp.vec3(0.0)
+        foot_air[w, f] = foot_air[w, f] + dt
+        if foot_air[w, f] >= liftoff_time and foot_inrut[w, f] == 0:
+            foot_slip[w, f] = 0.0
+            foot_sinkage[w, f] = 0.0
     p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
     cell = water_cell(water, p)  # heights and the water layer share the grid
     depth = wp.max(water.surface[cell[0], cell[1]] - heights[cell[0], cell[1]], 0.0)
@@ -458,13 +543,13 @@ def foot_state_kernel(
     obs[w, o + 3] = on_soil
     obs[w, o + 4] = foot_sinkage[w, f]
     obs[w, o + 5] = foot_fn[w, f] / 100.0
-    for q in range(NSOILPARAM - 1):
+    for q in range(6):
         obs[w, o + 6 + q] = 0.0
     if s >= 0:
-        # scaled to O(1): kc/1e4, kphi/1e6, n, a/1e5, bulldozing n, mu, K in cm
+        # scaled to O(1): kc/1e4, kphi/1e6, n, cohesion c/1e4, mu = tan(phi), K in cm
         obs[w, o + 6] = soil_params[w, s, KC] / 1.0e4
         obs[w, o + 7] = soil_params[w, s, KPHI] / 1.0e6
         obs[w, o + 8] = soil_params[w, s, N]
-        obs[w, o + 9] = soil_params[w, s, BULL_A] / 1.0e5
+        obs[w, o + 9] = soil_params[w, s, COH] / 1.0e4
         obs[w, o + 10] = soil_params[w, s, MU]
         obs[w, o + 11] = soil_params[w, s, K] * 100.0

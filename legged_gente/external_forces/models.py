@@ -82,16 +82,43 @@ def bekker_sinkage(pressure, kc, kphi, n, width):
     return np.where(p > 0.0, np.maximum(p, 0.0) / k, 0.0) ** (1.0 / np.asarray(n))
 
 
-def bulldozing_force(a, n, sinkage):
-    """Bulldozing resistance of a sunk foot pushing soil ahead of it (N): a * z^n (GenTe paper's form;
-    Bekker's bulldozing resistance, see ``soil.py`` for how a and n follow from c, phi and gamma)."""
-    return np.asarray(a) * np.maximum(np.asarray(sinkage, dtype=float), 0.0) ** np.asarray(n)
+def bulldozing_force(bulldoze_c, bulldoze_g, width, sinkage):
+    """Bekker's bulldozing resistance of a foot of ``width`` sunk by ``sinkage`` pushing soil ahead (N).
 
-
-def presliding_friction(mu, normal_force, slip, K):
-    """Shear (pre-sliding) resistance after a horizontal slip ``slip`` since touchdown (N).
-
-    Janosi-Hanamoto shear stress-displacement relation (Janosi & Hanamoto 1961; Wong eq. 2.56) with
-    Coulomb strength mu * F_N: F = mu F_N (1 - exp(-j / K)), K the shear deformation modulus (m).
+    R_b = b (0.67 c K_pc z + 0.5 gamma K_pgamma z^2) (Bekker 1960/1969; Wong, *Theory of Ground Vehicles*,
+    ch. 2), with ``bulldoze_c = 0.67 c K_pc`` and ``bulldoze_g = 0.5 gamma K_pgamma`` (``terrain/soil.py``). The GenTe
+    paper's a z^n is this law with one of its two terms (n = 1: cohesive, n = 2: frictional soil).
     """
-    return np.asarray(mu) * normal_force * (1.0 - np.exp(-np.asarray(slip) / np.asarray(K)))
+    z = np.maximum(np.asarray(sinkage, dtype=float), 0.0)
+    return np.asarray(width) * (np.asarray(bulldoze_c) * z + np.asarray(bulldoze_g) * z * z)
+
+
+def shear_strength(c, mu, area, normal_force):
+    """Mohr-Coulomb shear strength of the soil under a sole (N): c A + F_N tan(phi), ``mu`` = tan(phi).
+
+    The most traction the soil can give a foot (Wong, *Theory of Ground Vehicles*, eq. 2.57 integrated over a
+    uniformly loaded sole; Coulomb 1776 / Mohr 1900).
+    """
+    return np.asarray(c) * area + np.maximum(np.asarray(normal_force, dtype=float), 0.0) * np.asarray(mu)
+
+
+def soil_traction(c, mu, area, normal_force, slip, K):
+    """Traction the soil has mobilised after a shear displacement ``slip`` since touchdown (N).
+
+    Janosi-Hanamoto (Janosi & Hanamoto 1961; Wong eq. 2.56): (c A + F_N tan phi)(1 - exp(-j/K)), K the shear
+    deformation modulus (m). ``slip`` j is the distance the sole has slid over the soil (its path length: the
+    soil is sheared whichever way the foot moves), so the traction never stores energy.
+    """
+    j = np.maximum(np.asarray(slip, dtype=float), 0.0)
+    return shear_strength(c, mu, area, normal_force) * (1.0 - np.exp(-j / np.asarray(K)))
+
+
+def soil_friction(c, mu, area, normal_force, slip, K, cap):
+    """Friction coefficient that makes a contact's Coulomb limit the soil's mobilised traction: the traction
+    over F_N, at most ``cap`` (the cohesion term c A / F_N grows without bound as F_N -> 0).
+
+    Soil cells give their contacts this coefficient instead of the rigid ground's, so the soil limits the
+    traction (Mohr-Coulomb) instead of adding to it; the contact solver keeps it dissipative.
+    """
+    fn = np.maximum(np.asarray(normal_force, dtype=float), 1e-6)
+    return np.minimum(soil_traction(c, mu, area, fn, slip, K) / fn, cap)

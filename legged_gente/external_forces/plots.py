@@ -1,8 +1,9 @@
 """Figures of docs/forces.md, drawn from the numpy references along kinematic trajectories.
 
 ``python -m legged_gente.external_forces.plots docs/img`` writes ``forces_gait.png`` (strip-theory forces on one
-swinging shin over two gait cycles in still water, a current and a tide) and ``forces_soil.png`` (sinkage and resistance
-of one foot over a stance on dry sand and on mud). The trajectories are scripted, not simulated.
+swinging shin over two gait cycles in still water, a current and a tide) and ``forces_soil.png`` (sinkage,
+bulldozing and traction limit of one biped foot on dry sand, snow and mud). The trajectories are scripted, not
+simulated.
 """
 
 from __future__ import annotations
@@ -78,28 +79,37 @@ def gait_figure(path: Path):
 
 
 def soil_figure(path: Path):
-    """One foot (sole 0.2 m x 0.1 m) of a 40 kg biped over a 0.5 s stance: half-sine load peaking at
-    1.2 m g, slipping backwards at 3 cm/s and ploughing forward at 0.1 m/s."""
+    """One biped foot (sole 0.22 m x 0.096 m, 41.5 kg) over a 0.5 s stance: half-sine load peaking at 1.2 m g,
+    ploughing forward at 0.1 m/s; and the traction each soil gives that foot under its weight against the
+    distance it has slid (Janosi-Hanamoto), with its Mohr-Coulomb limit."""
+    mass, length, width = 41.5, 0.22, 0.096
+    area = length * width
     t = np.linspace(0.0, 0.5, 401)
-    load = 1.2 * 40 * G * np.sin(np.pi * t / 0.5)
-    width, area = 0.1, 0.02
-    fig, axes = plt.subplots(3, 1, figsize=(7, 6.5), sharex=True)
-    for name in ("dry_sand", "mud"):
+    load = 1.2 * mass * G * np.sin(np.pi * t / 0.5)
+    j = np.linspace(0.0, 0.15, 301)
+    fig, axes = plt.subplots(3, 1, figsize=(7, 7.5))
+    for name, color in (("dry_sand", "C1"), ("snow", "C0"), ("mud", "C5")):
         s = SOIL_PRESETS[name]
         z = np.maximum.accumulate(models.bekker_sinkage(load / area, s.kc[0], s.kphi[0], s.n[0], width))
-        bull = models.bulldozing_force(width * s.bulldoze_a[0], s.bulldoze_n[0], z)
-        shear = models.presliding_friction(s.mu[0], load, 0.03 * t, s.K[0])
-        axes[0].plot(t, 100 * z, label=name)
-        axes[1].plot(t, bull, label=name)
-        axes[2].plot(t, shear, label=name)
+        bull = models.bulldozing_force(s.bulldoze_c[0], s.bulldoze_g[0], width, z)
+        traction = models.soil_traction(s.c[0], s.mu[0], area, mass * G, j, s.K[0])
+        axes[0].plot(t, 100 * z, color=color, label=f"{name} (the foot is shown this deep)")
+        axes[1].plot(t, bull, color=color, label=name)
+        axes[2].plot(100 * j, traction, color=color, label=f"{name}: T(j)")
+        axes[2].axhline(models.shear_strength(s.c[0], s.mu[0], area, mass * G), color=color, ls=":", lw=1)
+    axes[2].axhline(mass * G, color="k", ls="--", lw=1, label="rigid ground, mu = 1")
     axes[0].set_ylabel("sinkage (cm)")
-    axes[1].set_ylabel("bulldozing (N)")
-    axes[2].set_ylabel("pre-sliding (N)")
-    axes[2].set_xlabel("time in stance (s)")
+    axes[0].set_yscale("log")
+    axes[0].set_ylim(0.05, 50.0)
+    axes[1].set_ylabel("bulldozing at 0.1 m/s (N)")
+    axes[0].set_xlabel("time in stance (s)")
+    axes[1].set_xlabel("time in stance (s)")
+    axes[2].set_ylabel("traction limit (N)")
+    axes[2].set_xlabel("slid since touchdown j (cm); dotted: Mohr-Coulomb c A + W tan(phi)")
     for ax in axes:
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.suptitle("Foot 0.2x0.1 m, 40 kg biped, stance 0.5 s (plastic rut: deepest sinkage kept)", fontsize=9)
+    fig.suptitle("Biped foot 0.22 x 0.096 m, 41.5 kg: stance (plastic rut) and traction vs slip", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)

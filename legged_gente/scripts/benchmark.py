@@ -66,7 +66,8 @@ RESTORE_EVERY = 10  # substeps between returns to the start state (0.05 s at the
 
 def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
     """Substeps/s (all worlds) of mjw.step on the env's model and data; no env logic. ``with_forces`` keeps the
-    terrain force callbacks and their after-substep kernel in the loop.
+    terrain force callbacks and their after-substep kernel in the loop; without, the contact filter stays where
+    it makes the soles' terrain contacts (``forces.sole_contact``).
 
     Every RESTORE_EVERY substeps the worlds go back to the state the measurement began in (two device
     copies; ``settle`` makes that a standing state), and the env gets that state back at the end: without it
@@ -79,7 +80,9 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
     start_qpos, start_qvel = wp.clone(sim.d.qpos), wp.clone(sim.d.qvel)
     callbacks = (sim.m.callback.passive, sim.m.callback.contactfilter)
     if not with_forces:
-        sim.m.callback.passive = sim.m.callback.contactfilter = None
+        sim.m.callback.passive = None
+        if env.forces is None or not env.forces.npt:  # analytic sole contacts are the feet's collision: kept
+            sim.m.callback.contactfilter = None
     hooks = sim.after_substep if with_forces else []
 
     def restore():

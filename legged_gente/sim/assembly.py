@@ -101,12 +101,27 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
         collides = geom.contype or geom.conaffinity or (geom.parent.name in collide and
                                                         geom.parent.name not in has_collider)
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
+    if owns_sole_contacts(cfg, terrain):
+        # the terrain force fields collide sphere / capsule soles with the heightfield analytically
+        # (external_forces/contact.py); MuJoCo must not collide them too
+        for name in cfg.forces.foot_geom_names:
+            geom = spec.geom(name)
+            if geom is not None and geom.type in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CAPSULE):
+                geom.contype, geom.conaffinity = 0, 0
     _configure_actuators(spec, robot, cfg.control)
     mjm = spec.compile()
     layout = _layout(mjm, cfg)
     if mjm.geom_type[layout.terrain_geom] == mujoco.mjtGeom.mjGEOM_HFIELD:
         _warn_flat_feet_on_heightfield(mjm, layout.foot_bodies)
     return mjm, layout
+
+
+def owns_sole_contacts(cfg, terrain) -> bool:
+    """Whether the terrain force fields own the soles' terrain contacts (a heightfield terrain, forces on,
+    ``forces.sole_contact``): then the env must install them even on a terrain without water or soil."""
+    forces = getattr(cfg, "forces", None)
+    return (terrain is not None and forces is not None and bool(getattr(forces, "enabled", True))
+            and bool(forces.sole_contact) and bool(forces.foot_geom_names))
 
 
 def _warn_flat_feet_on_heightfield(mjm: mujoco.MjModel, foot_bodies: np.ndarray) -> None:

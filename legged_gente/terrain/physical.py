@@ -55,7 +55,7 @@ def _soil_rules(p) -> None:
     if p["preset"] not in SOIL_PRESETS:
         raise ValueError(
             f"soil: preset {p['preset']!r} is not registered; call legged_gente.terrain.soil."
-            f"register_custom_soil({p['preset']!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
+            f"register_custom_soil({p['preset']!r}, kc=..., kphi=..., n=..., c=..., mu=..., K=..., bulldoze_c=..., bulldoze_g=...) "
             f"first or use one of {sorted(SOIL_PRESETS)}."
         )
 

@@ -1,4 +1,5 @@
-"""Deformable-soil presets: Bekker pressure-sinkage, bulldozing, friction and shear-deformation parameters.
+"""Deformable-soil presets: Bekker pressure-sinkage, Mohr-Coulomb shear strength, Janosi-Hanamoto shear
+deformation and Bekker bulldozing parameters.
 
 Every parameter is a ``(mean, std)`` pair: the force field draws one value per env per episode from this
 Gaussian (the GenTe paper's per-episode domain randomisation). Means come from the terramechanics literature
@@ -9,17 +10,19 @@ Units (SI):
     kc:   cohesive modulus of deformation, N/m^(n+1)          (Bekker 1969; Wong, *Theory of Ground Vehicles*)
     kphi: frictional modulus of deformation, N/m^(n+2)        (same)
     n:    exponent of deformation, 1                           (same)
-    bulldoze_a: bulldozing coefficient per metre of foot width, N/m^(bulldoze_n+1); the force on a foot of
-          width b sunk by z is ``b * bulldoze_a * z**bulldoze_n`` (the GenTe paper's a*z^n with a = b*bulldoze_a)
-    bulldoze_n: bulldozing exponent, 1
-    mu:   soil-foot friction coefficient, 1 (Mohr-Coulomb tan(phi) of the soil's internal friction angle)
+    c:    cohesion, Pa                                         (same table)
+    mu:   tan(phi), phi the soil's angle of internal shearing resistance, 1 (same table)
     K:    Janosi-Hanamoto shear deformation modulus, m
+    bulldoze_c: Bekker bulldozing coefficient of z, N/m^2 per metre of foot width (0.67 c K_pc)
+    bulldoze_g: Bekker bulldozing coefficient of z^2, N/m^3 per metre of foot width (0.5 gamma K_pgamma)
 
-Bulldozing coefficients follow Bekker's bulldozing resistance per unit width (Bekker 1960/1969, as given in
-Wong ch. 2): R_b/b = 0.67 c z K_pc + 0.5 z^2 gamma K_pgamma. For frictional soils (sand, snow) the second
-term dominates: a = 0.5 gamma K_pgamma, n = 2. For cohesive soils (mud, clay) the first dominates:
-a = 0.67 c K_pc, n = 1. K_pc = (N_c - tan phi) cos^2 phi and K_pgamma = (2 N_gamma / tan phi + 1) cos^2 phi
-use Terzaghi's bearing-capacity factors N_c, N_gamma at the soil's phi.
+The traction a foot can get from a soil is its shear strength (Mohr-Coulomb: c A + F_N tan phi, A the sole
+area), mobilised with the foot's slip j as Janosi and Hanamoto measured: (c A + F_N tan phi)(1 - exp(-j/K)).
+Bulldozing is Bekker's resistance per unit width (Bekker 1960/1969, Wong ch. 2) with both its terms:
+R_b/b = 0.67 c z K_pc + 0.5 z^2 gamma K_pgamma, K_pc = (N_c - tan phi) cos^2 phi and
+K_pgamma = (2 N_gamma / tan phi + 1) cos^2 phi; :func:`bulldozing_coefficients` computes both from (c, phi,
+gamma). Which term dominates depends on the soil and the sinkage: for the cohesive soils (mud, clay loam)
+the cohesion term, for dry sand at a few centimetres the gamma term.
 """
 
 from __future__ import annotations
@@ -29,21 +32,38 @@ import math
 
 import numpy as np
 
-PARAM_NAMES = ("kc", "kphi", "n", "bulldoze_a", "bulldoze_n", "mu", "K")
+PARAM_NAMES = ("kc", "kphi", "n", "c", "mu", "K", "bulldoze_c", "bulldoze_g")
 """Order of the parameters in :func:`preset_table` (the force kernels index columns by this order)."""
+
+
+def bulldozing_coefficients(c: float, phi_deg: float, gamma: float) -> tuple[float, float]:
+    """Bekker's bulldozing coefficients (0.67 c K_pc, 0.5 gamma K_pgamma) of a soil (Wong, ch. 2).
+
+    Bearing-capacity factors in closed form: N_q = exp(pi tan phi) tan^2(45 deg + phi/2) (Prandtl-Reissner),
+    N_c = (N_q - 1) cot phi, N_gamma = (N_q - 1) tan(1.4 phi) (Meyerhof 1963). Wong tabulates Terzaghi's
+    factors, which differ by ~10 % at these angles.
+    """
+    phi = math.radians(phi_deg)
+    nq = math.exp(math.pi * math.tan(phi)) * math.tan(math.pi / 4 + phi / 2) ** 2
+    nc = (nq - 1.0) / math.tan(phi)
+    ngamma = (nq - 1.0) * math.tan(1.4 * phi)
+    kpc = (nc - math.tan(phi)) * math.cos(phi) ** 2
+    kpgamma = (2.0 * ngamma / math.tan(phi) + 1.0) * math.cos(phi) ** 2
+    return 0.67 * c * kpc, 0.5 * gamma * kpgamma
 
 
 @dataclasses.dataclass(frozen=True)
 class SoilPreset:
-    """One deformable soil: each field a ``(mean, std)`` pair in the SI units of the module docstring."""
+    """One deformable soil: each parameter a ``(mean, std)`` pair in the SI units of the module docstring."""
 
     kc: tuple[float, float]
     kphi: tuple[float, float]
     n: tuple[float, float]
-    bulldoze_a: tuple[float, float]
-    bulldoze_n: tuple[float, float]
+    c: tuple[float, float]
     mu: tuple[float, float]
     K: tuple[float, float]
+    bulldoze_c: tuple[float, float]
+    bulldoze_g: tuple[float, float]
     source: str = ""
 
     def __post_init__(self):
@@ -54,65 +74,58 @@ class SoilPreset:
             mean, std = value
             if not (math.isfinite(mean) and math.isfinite(std)) or std < 0:
                 raise ValueError(f"SoilPreset.{name}=({mean}, {std}): mean must be finite and std >= 0.")
-            if name != "kc" and mean <= 0:
-                # kc may be ~0 (Grenville loam) or slightly negative in Wong's fits; the others must be positive.
+            if name in ("kphi", "n", "K") and mean <= 0:
+                # kc may be ~0 (Grenville loam) or slightly negative in Wong's fits; c, bulldozing terms may be 0
                 raise ValueError(f"SoilPreset.{name} mean must be > 0, got {mean}.")
+            if name in ("c", "mu", "bulldoze_c", "bulldoze_g") and mean < 0:
+                raise ValueError(f"SoilPreset.{name} mean must be >= 0, got {mean}.")
 
 
 def _pct(mean: float, frac: float) -> tuple[float, float]:
     return (mean, abs(mean) * frac)
 
 
+def _bekker(kc, kphi, n, c, phi_deg, gamma, K, source) -> SoilPreset:
+    """A Bekker soil from Wong's table values (kc, kphi in N/m^(n+1), N/m^(n+2); c in Pa; phi in degrees),
+    its unit weight gamma (N/m^3) for bulldozing and its shear deformation modulus K (m)."""
+    bc, bg = bulldozing_coefficients(c, phi_deg, gamma)
+    return SoilPreset(kc=_pct(kc, 0.2), kphi=_pct(kphi, 0.15), n=_pct(n, 0.05), c=_pct(c, 0.15),
+                      mu=_pct(math.tan(math.radians(phi_deg)), 0.1), K=_pct(K, 0.2), bulldoze_c=_pct(bc, 0.2),
+                      bulldoze_g=_pct(bg, 0.2), source=source)
+
+
 SOIL_PRESETS: dict[str, SoilPreset] = {
     # Dry sand, Land Locomotion Lab. (LLL), Wong Table 2.3: n=1.1, kc=0.99 kN/m^(n+1), kphi=1528.43 kN/m^(n+2),
-    # phi=28 deg (mu = tan 28 = 0.53). K = 2.5 cm for loose sand (Wong, Janosi-Hanamoto K values).
-    # Bulldozing: gamma ~ 15.7 kN/m^3, N_gamma(28 deg) ~ 13 -> K_pgamma ~ 39 -> a = 0.5*gamma*K_pgamma ~ 3.1e5.
-    "dry_sand": SoilPreset(
-        kc=_pct(0.99e3, 0.2), kphi=_pct(1528.43e3, 0.15), n=_pct(1.1, 0.05),
-        bulldoze_a=_pct(3.1e5, 0.2), bulldoze_n=_pct(2.0, 0.05), mu=_pct(0.53, 0.1), K=_pct(0.025, 0.2),
-        source="Wong, Theory of Ground Vehicles, Table 2.3 (dry sand, LLL); Bekker 1969",
-    ),
-    # Wet sand: sandy loam at 15 % moisture, LLL, Wong Table 2.3: n=0.7, kc=5.27e3, kphi=1515.04e3, phi=29 deg
-    # (mu = 0.55). K = 1 cm for firm sandy terrain (Wong). Bulldozing with gamma ~ 18 kN/m^3 (wet),
-    # N_gamma(29 deg) ~ 14 -> K_pgamma ~ 40 -> a ~ 3.6e5, n = 2.
-    "wet_sand": SoilPreset(
-        kc=_pct(5.27e3, 0.2), kphi=_pct(1515.04e3, 0.15), n=_pct(0.7, 0.05),
-        bulldoze_a=_pct(3.6e5, 0.2), bulldoze_n=_pct(2.0, 0.05), mu=_pct(0.55, 0.1), K=_pct(0.010, 0.2),
-        source="Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 15% moisture, LLL)",
-    ),
-    # Snow (U.S., Harrison), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, phi=19.7 deg (mu = 0.36).
-    # K = 4 cm for undisturbed fresh snow (Wong, snow shear tests). Bulldozing with gamma ~ 3 kN/m^3
-    # (settled snow), N_gamma(20 deg) ~ 4 -> K_pgamma ~ 20 -> a ~ 3e4, n = 2.
-    "snow": SoilPreset(
-        kc=_pct(4.37e3, 0.2), kphi=_pct(196.72e3, 0.2), n=_pct(1.6, 0.05),
-        bulldoze_a=_pct(3.0e4, 0.25), bulldoze_n=_pct(2.0, 0.05), mu=_pct(0.36, 0.1), K=_pct(0.040, 0.2),
-        source="Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S., Harrison)",
-    ),
-    # Mud: clayey soil at 38 % moisture (Thailand), Wong Table 2.3: n=0.5, kc=13.19e3, kphi=692.15e3,
-    # c=4.14 kPa, phi=13 deg (mu = 0.23). K ~ 5 cm for saturated, remoulded fine-grained soil (Wong reports
-    # several cm for muskeg/soft wet soils). Bulldozing, cohesive term: N_c(13 deg) ~ 10 -> K_pc ~ 9.3 ->
-    # a = 0.67*c*K_pc ~ 2.6e4 N/m^2 per unit width, n = 1.
-    "mud": SoilPreset(
-        kc=_pct(13.19e3, 0.2), kphi=_pct(692.15e3, 0.2), n=_pct(0.5, 0.05),
-        bulldoze_a=_pct(2.6e4, 0.25), bulldoze_n=_pct(1.0, 0.05), mu=_pct(0.23, 0.15), K=_pct(0.050, 0.25),
-        source="Wong, Theory of Ground Vehicles, Table 2.3 (clayey soil 38% moisture, Thailand)",
-    ),
+    # c=1.04 kPa, phi=28 deg. K = 2.5 cm for loose sand (Wong, Janosi-Hanamoto K values); gamma ~ 15.7 kN/m^3.
+    "dry_sand": _bekker(0.99e3, 1528.43e3, 1.1, 1.04e3, 28.0, 15.7e3, 0.025,
+                        "Wong, Theory of Ground Vehicles, Table 2.3 (dry sand, LLL); Bekker 1969"),
+    # Wet sand: sandy loam at 15 % moisture, LLL, Wong Table 2.3: n=0.7, kc=5.27e3, kphi=1515.04e3,
+    # c=1.72 kPa, phi=29 deg. K = 1 cm for firm sandy terrain (Wong); gamma ~ 18 kN/m^3.
+    "wet_sand": _bekker(5.27e3, 1515.04e3, 0.7, 1.72e3, 29.0, 18.0e3, 0.010,
+                        "Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 15% moisture, LLL)"),
+    # Snow (U.S., Harrison), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, c=1.03 kPa, phi=19.7 deg.
+    # K = 4 cm for undisturbed fresh snow (Wong, snow shear tests); gamma ~ 3 kN/m^3 (settled snow).
+    # A 41.5 kg biped on one 0.22 x 0.096 m sole (19.3 kPa) sinks ~21 cm.
+    "snow": _bekker(4.37e3, 196.72e3, 1.6, 1.03e3, 19.7, 3.0e3, 0.040,
+                    "Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S., Harrison)"),
+    # Mud: lean clay at 32 % moisture (Waterways Experiment Station), Wong Table 2.3: n=0.5, kc=5.16e3,
+    # kphi=119.61e3, c=13.79 kPa, phi=11 deg: a soft, wet, sticky soil. Sinks ~1.2 cm under a 41.5 kg biped's
+    # single support (19.3 kPa; the former preset, Wong's firm clayey soil of Thailand, 0.1-0.5 mm). K ~ 5 cm
+    # for saturated, remoulded fine-grained soil (Wong reports several cm for soft wet soils); gamma ~ 17 kN/m^3.
+    "mud": _bekker(5.16e3, 119.61e3, 0.5, 13.79e3, 11.0, 17.0e3, 0.050,
+                   "Wong, Theory of Ground Vehicles, Table 2.3 (lean clay 32% moisture, WES)"),
     # Clay loam: North Gower clayey loam at 46 % moisture, Wong Table 2.3: n=0.73, kc=41.6e3, kphi=2471e3,
-    # c=6.1 kPa, phi=26.6 deg (mu = 0.50). K = 0.6 cm for clay at maximum compaction; ~1 cm here (Wong).
-    # Bulldozing, cohesive term: N_c(26.6 deg) ~ 27 -> K_pc ~ 21 -> a = 0.67*c*K_pc ~ 8.6e4, n = 1.
-    "clay_loam": SoilPreset(
-        kc=_pct(41.6e3, 0.2), kphi=_pct(2471e3, 0.15), n=_pct(0.73, 0.05),
-        bulldoze_a=_pct(8.6e4, 0.2), bulldoze_n=_pct(1.0, 0.05), mu=_pct(0.50, 0.1), K=_pct(0.010, 0.2),
-        source="Wong, Theory of Ground Vehicles, Table 2.3 (North Gower clayey loam)",
-    ),
+    # c=6.1 kPa, phi=26.6 deg. K = 0.6 cm for clay at maximum compaction; ~1 cm here (Wong); gamma ~ 18 kN/m^3.
+    "clay_loam": _bekker(41.6e3, 2471e3, 0.73, 6.1e3, 26.6, 18.0e3, 0.010,
+                         "Wong, Theory of Ground Vehicles, Table 2.3 (North Gower clayey loam)"),
 }
 
 
 def register_custom_soil(name: str, **params) -> SoilPreset:
     """Add a soil to :data:`SOIL_PRESETS` under ``name``.
 
-    Each of ``kc, kphi, n, bulldoze_a, bulldoze_n, mu, K`` is a ``(mean, std)`` pair (a bare number means
-    std 0); ``source`` (str) is optional. Re-registering a built-in name raises; re-registering a custom
+    Each of ``PARAM_NAMES`` is a ``(mean, std)`` pair (a bare number means std 0; see
+    :func:`bulldozing_coefficients` for the bulldozing pair); ``source`` (str) is optional. Re-registering a built-in name raises; re-registering a custom
     name replaces it.
     """
     if not isinstance(name, str) or not name.isidentifier():

@@ -19,7 +19,7 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
-from legged_gente.sim.assembly import build_model
+from legged_gente.sim.assembly import build_model, owns_sole_contacts
 from legged_gente.sim.backend import Simulation
 from legged_gente.utils.cuda_graph import StepGraph
 from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
@@ -103,8 +103,8 @@ class LeggedRobot(VecEnv):
         if self.terrain is None or not self.cfg.forces.enabled:
             return None
         material = self.terrain.material
-        if not (material.has_water().any() or material.has_soil().any() or
-                (material.friction != self.cfg.terrain.static_friction).any()):
+        if not (material.has_water().any() or material.has_soil().any() or owns_sole_contacts(self.cfg, self.terrain)
+                or (material.friction != self.cfg.terrain.static_friction).any()):
             from legged_gente.external_forces.field import privileged_obs_size
 
             self._force_obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces),

@@ -1,0 +1,384 @@
+"""Analytic foot-terrain contacts: sphere and capsule soles against the triangulated heightfield.
+
+MuJoCo collides a geom with a heightfield prism by prism through its general convex solver; once a geom is
+a few centimetres inside a cell it returns sideways and downward normals, which launch the foot, so a soil
+rut deeper than ~1 cm could not be shown. Here the sole geoms do not collide with the terrain in MuJoCo;
+``sole_contact_kernel`` (run in mujoco_warp's contact filter, after its collision and before the constraints
+are built) appends one contact per sole sphere (two per capsule: its end spheres, as MuJoCo's capsule-plane
+collision) against the same surface MuJoCo draws and collides: the heightfield's triangles, split along the
+diagonal from vertex (i, j) to (i + 1, j + 1) as MuJoCo does. The contact is the nearest point of the
+triangles around the sphere centre, so flat ground gives exactly vertical normals at any depth, and stair
+risers, pillar sides and gap walls (steep triangles of the same surface) give the normals of those walls.
+
+A foot's soil rut lowers the surface under it: the sphere is tested ``rut`` higher than it is (the surface
+vertically lowered by the rut), so the foot sits in its full Bekker rut with the contact's usual stiffness.
+
+``numpy`` references of every function sit beside their Warp twins (``*_fn``) and are tested against them.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import warp as wp
+from mujoco_warp._src.collision_core import contact_material_params, write_contact
+from mujoco_warp._src.math import make_frame
+from mujoco_warp._src.types import vec5
+
+from legged_gente.external_forces.kernels import bekker_sinkage_fn, cell_of, ground_friction, KC, KPHI, N
+
+SOLE_TYPES = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))
+
+
+# --------------------------------------------------------------------------------------------------------
+# numpy references
+
+
+def triangle_vertices(heights, origin, res, i, j, upper):
+    """World vertices of one triangle of cell (i, j): ``upper`` the one with fy >= fx (vertices (i, j+1), (i, j),
+    (i+1, j+1)), else the one with fx >= fy ((i, j), (i+1, j+1), (i+1, j)); MuJoCo's split of the cell."""
+    idx = ((i, j + 1), (i, j), (i + 1, j + 1)) if upper else ((i, j), (i + 1, j + 1), (i + 1, j))
+    return [np.array([origin[0] + a * res, origin[1] + b * res, heights[a, b]], float) for a, b in idx]
+
+
+def surface_height(heights, origin, res, x, y):
+    """Height (m) and upward unit normal of the triangulated heightfield at world (x, y) (clamped to the grid)."""
+    nx, ny = heights.shape
+    u = np.clip((x - origin[0]) / res, 0.0, nx - 1.0)
+    v = np.clip((y - origin[1]) / res, 0.0, ny - 1.0)
+    i, j = min(int(np.floor(u)), nx - 2), min(int(np.floor(v)), ny - 2)
+    fx, fy = u - i, v - j
+    a, b, c = triangle_vertices(heights, origin, res, i, j, fy > fx)
+    n = np.cross(b - a, c - a)
+    n = n / np.linalg.norm(n) * np.sign(n[2])
+    h = a[2] - (n[0] * (x - a[0]) + n[1] * (y - a[1])) / n[2]
+    return h, n
+
+
+def closest_point_triangle(p, a, b, c):
+    """Point of triangle abc nearest to p (Ericson, *Real-Time Collision Detection*, 2005, sec. 5.1.5)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = ab @ ap, ac @ ap
+    if d1 <= 0 and d2 <= 0:
+        return a
+    bp = p - b
+    d3, d4 = ab @ bp, ac @ bp
+    if d3 >= 0 and d4 <= d3:
+        return b
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0 and d1 >= 0 and d3 <= 0:
+        return a + d1 / (d1 - d3) * ab
+    cp = p - c
+    d5, d6 = ab @ cp, ac @ cp
+    if d6 >= 0 and d5 <= d6:
+        return c
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0 and d2 >= 0 and d6 <= 0:
+        return a + d2 / (d2 - d6) * ac
+    va = d3 * d6 - d5 * d4
+    if va <= 0 and d4 - d3 >= 0 and d5 - d6 >= 0:
+        return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b)
+    denom = 1.0 / (va + vb + vc)
+    return a + ab * (vb * denom) + ac * (vc * denom)
+
+
+def sphere_contact(heights, origin, res, centre, radius, rut=0.0, reach=None):
+    """Contact of a sphere with the triangulated heightfield, its surface lowered by ``rut`` under the sphere.
+
+    Returns (dist, normal, pos): signed distance (m, negative: penetration), unit normal from the terrain to
+    the sphere, contact point (midway between the surfaces, as MuJoCo's). With the centre above the surface
+    the nearest point of the triangles within ``reach`` (default: the radius) of the cells around the centre;
+    with the centre below it (deeper than the radius) the triangle under the centre, along its normal.
+    Returns dist = inf when nothing lies within reach.
+    """
+    centre = np.asarray(centre, float)
+    q = centre + np.array([0.0, 0.0, rut])
+    reach = radius if reach is None else reach
+    h, n_face = surface_height(heights, origin, res, q[0], q[1])
+    if q[2] < h:  # centre inside the terrain: push out along the face under it
+        dist = n_face[2] * (q[2] - h) - radius
+        normal = n_face
+    else:
+        nx, ny = heights.shape
+        lo = np.floor((q[:2] - np.asarray(origin) - reach) / res).astype(int)
+        hi = np.floor((q[:2] - np.asarray(origin) + reach) / res).astype(int)
+        best, normal = np.inf, n_face
+        for i in range(max(lo[0], 0), min(hi[0], nx - 2) + 1):
+            for j in range(max(lo[1], 0), min(hi[1], ny - 2) + 1):
+                for upper in (True, False):
+                    a, b, c = triangle_vertices(heights, origin, res, i, j, upper)
+                    p = closest_point_triangle(q, a, b, c)
+                    d = np.linalg.norm(q - p)
+                    if d < best:
+                        best = d
+                        normal = (q - p) / d if d > 1e-9 else n_face
+        if best > reach:
+            return np.inf, normal, centre
+        dist = best - radius
+    return dist, normal, centre - normal * (radius + 0.5 * dist)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Warp twins
+
+
+@wp.func
+def vertex_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, i: int, j: int) -> wp.vec3:
+    return wp.vec3(origin[0] + float(i) * res, origin[1] + float(j) * res, heights[i, j])
+
+
+@wp.func
+def closest_point_triangle_fn(p: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> wp.vec3:
+    """Ericson's closest point of triangle abc to p (see the numpy reference)."""
+    ab = b - a
+    ac = c - a
+    ap = p - a
+    d1 = wp.dot(ab, ap)
+    d2 = wp.dot(ac, ap)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return a
+    bp = p - b
+    d3 = wp.dot(ab, bp)
+    d4 = wp.dot(ac, bp)
+    if d3 >= 0.0 and d4 <= d3:
+        return b
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        return a + (d1 / (d1 - d3)) * ab
+    cp = p - c
+    d5 = wp.dot(ab, cp)
+    d6 = wp.dot(ac, cp)
+    if d6 >= 0.0 and d5 <= d6:
+        return c
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        return a + (d2 / (d2 - d6)) * ac
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
+        return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)
+    denom = 1.0 / (va + vb + vc)
+    return a + (vb * denom) * ab + (vc * denom) * ac
+
+
+@wp.func
+def triangle_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, i: int, j: int, upper: int) -> wp.mat33:
+    """Rows: the three vertices of triangle ``upper`` of cell (i, j) (see ``triangle_vertices``)."""
+    if upper != 0:
+        return wp.matrix_from_rows(vertex_fn(heights, origin, res, i, j + 1), vertex_fn(heights, origin, res, i, j),
+                        vertex_fn(heights, origin, res, i + 1, j + 1))
+    return wp.matrix_from_rows(vertex_fn(heights, origin, res, i, j), vertex_fn(heights, origin, res, i + 1, j + 1),
+                    vertex_fn(heights, origin, res, i + 1, j))
+
+
+@wp.func
+def surface_height_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, x: float, y: float) -> wp.vec4:
+    """(normal x, y, z, height) of the triangulated heightfield at (x, y), clamped to the grid."""
+    nx = heights.shape[0]
+    ny = heights.shape[1]
+    u = wp.clamp((x - origin[0]) / res, 0.0, float(nx - 1))
+    v = wp.clamp((y - origin[1]) / res, 0.0, float(ny - 1))
+    i = wp.min(int(wp.floor(u)), nx - 2)
+    j = wp.min(int(wp.floor(v)), ny - 2)
+    upper = int(0)
+    if v - float(j) > u - float(i):
+        upper = 1
+    t = triangle_fn(heights, origin, res, i, j, upper)
+    n = wp.cross(t[1] - t[0], t[2] - t[0])
+    n = wp.normalize(n)
+    if n[2] < 0.0:
+        n = -n
+    h = t[0, 2] - (n[0] * (x - t[0, 0]) + n[1] * (y - t[0, 1])) / n[2]
+    return wp.vec4(n[0], n[1], n[2], h)
+
+
+@wp.func
+def sphere_contact_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, centre: wp.vec3, radius: float,
+                      rut: float, reach: float) -> wp.vec4:
+    """(normal x, y, z, dist) of a sphere against the triangulated heightfield lowered by ``rut`` (see the
+    numpy reference ``sphere_contact``); dist = 1e10 when nothing lies within reach."""
+    q = centre + wp.vec3(0.0, 0.0, rut)
+    s = surface_height_fn(heights, origin, res, q[0], q[1])
+    n_face = wp.vec3(s[0], s[1], s[2])
+    if q[2] < s[3]:
+        return wp.vec4(n_face[0], n_face[1], n_face[2], n_face[2] * (q[2] - s[3]) - radius)
+    nx = heights.shape[0]
+    ny = heights.shape[1]
+    i0 = wp.max(int(wp.floor((q[0] - origin[0] - reach) / res)), 0)
+    i1 = wp.min(int(wp.floor((q[0] - origin[0] + reach) / res)), nx - 2)
+    j0 = wp.max(int(wp.floor((q[1] - origin[1] - reach) / res)), 0)
+    j1 = wp.min(int(wp.floor((q[1] - origin[1] + reach) / res)), ny - 2)
+    best = float(1.0e10)
+    normal = n_face
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            for upper in range(2):
+                t = triangle_fn(heights, origin, res, i, j, upper)
+                p = closest_point_triangle_fn(q, t[0], t[1], t[2])
+                d = wp.length(q - p)
+                if d < best:
+                    best = d
+                    if d > 1.0e-9:
+                        normal = (q - p) / d
+                    else:
+                        normal = n_face
+    if best > reach:
+        return wp.vec4(normal[0], normal[1], normal[2], 1.0e10)
+    return wp.vec4(normal[0], normal[1], normal[2], best - radius)
+
+
+@wp.struct
+class SoilMap:
+    """The soil and friction layers of the MaterialMap on the device, with the grid's placement."""
+
+    origin: wp.vec2
+    resolution: float
+    soil: wp.array2d[int]
+    friction: wp.array2d[float]
+
+
+@wp.kernel
+def sole_contact_kernel(
+    # sole points (host constants): geom, capsule end (-1, 0 sphere, +1), foot
+    pt_geom: wp.array[int],
+    pt_end: wp.array[float],
+    pt_foot: wp.array[int],
+    terrain_geom: int,
+    # model
+    geom_condim: wp.array[int],
+    geom_priority: wp.array[int],
+    geom_solmix: wp.array2d[float],
+    geom_solref: wp.array2d[wp.vec2],
+    geom_solimp: wp.array2d[vec5],
+    geom_friction: wp.array2d[wp.vec3],
+    geom_adhesion: wp.array2d[float],
+    geom_margin: wp.array2d[float],
+    geom_gap: wp.array2d[float],
+    geom_size: wp.array2d[wp.vec3],
+    pair_dim: wp.array[int],
+    pair_solref: wp.array2d[wp.vec2],
+    pair_solreffriction: wp.array2d[wp.vec2],
+    pair_solimp: wp.array2d[vec5],
+    pair_adhesion: wp.array2d[float],
+    pair_friction: wp.array2d[vec5],
+    # state
+    geom_xpos: wp.array2d[wp.vec3],
+    geom_xmat: wp.array2d[wp.mat33],
+    heights: wp.array2d[float],
+    hf_origin: wp.vec2,
+    hf_res: float,
+    soilmap: SoilMap,
+    friction_reference: float,
+    use_friction: int,
+    use_soil: int,
+    sole_area: float,
+    sole_width: float,
+    friction_cap: float,
+    min_friction: float,
+    sink_step: float,
+    soil_params: wp.array3d[float],
+    foot_load: wp.array2d[float],
+    foot_slip: wp.array2d[float],
+    foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
+    naconmax: int,
+    # out
+    foot_touch: wp.array2d[int],
+    foot_cand: wp.array2d[float],
+    foot_inrut: wp.array2d[int],
+    contact_dist: wp.array[float],
+    contact_pos: wp.array[wp.vec3],
+    contact_frame: wp.array[wp.mat33],
+    contact_includemargin: wp.array[float],
+    contact_friction: wp.array[vec5],
+    contact_solref: wp.array[wp.vec2],
+    contact_solreffriction: wp.array[wp.vec2],
+    contact_solimp: wp.array[vec5],
+    contact_dim: wp.array[int],
+    contact_geom: wp.array[wp.vec2i],
+    contact_efc_address: wp.array2d[int],
+    contact_worldid: wp.array[int],
+    contact_type: wp.array[int],
+    contact_geomcollisionid: wp.array[int],
+    contact_adhesion: wp.array[float],
+    nacon: wp.array[int],
+):
+    """One contact per sole point and world against the heightfield lowered by its foot's rut; the contact's
+    material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``).
+
+    The rut deepens towards Bekker's z(F_N / sole area) but at most sink_step below the sphere's current
+    depth (the rules of ``kernels.contact_filter_kernel``).
+    """
+    w, k = wp.tid()
+    g = pt_geom[k]
+    f = pt_foot[k]
+    size = geom_size[w % geom_size.shape[0], g]
+    radius = size[0]
+    xm = geom_xmat[w, g]
+    centre = geom_xpos[w, g] + (pt_end[k] * size[1]) * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    s_foot = foot_soil[w, f]
+    rut = float(0.0)
+    if s_foot >= 0:
+        rut = foot_sinkage[w, f]
+    geoms = wp.vec2i(terrain_geom, g)
+    mid = w % geom_margin.shape[0]
+    gid = w % geom_gap.shape[0]
+    margin = geom_margin[mid, terrain_geom] + geom_margin[mid, g]
+    gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
+    # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
+    res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, radius + wp.max(margin + gap, 0.0) + rut)
+    dist = res[3]
+    if dist - rut < margin and rut > 0.0:
+        foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
+    if dist >= margin + gap:
+        return
+    normal = wp.vec3(res[0], res[1], res[2])
+    if s_foot >= 0:
+        z = bekker_sinkage_fn(foot_load[w, f] / sole_area, soil_params[w, s_foot, KC], soil_params[w, s_foot, KPHI],
+                              soil_params[w, s_foot, N], sole_width)
+        # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
+        wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + sink_step))
+        foot_touch[w, f] = 1
+    pos = centre - (radius + 0.5 * dist) * normal
+    condim, friction, solref, solreffriction, solimp, adhesion = contact_material_params(
+        geom_condim, geom_priority, geom_solmix, geom_solref, geom_solimp, geom_friction, geom_adhesion,
+        pair_dim, pair_solref, pair_solreffriction, pair_solimp, pair_adhesion, pair_friction, geoms, -1, w)
+    cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
+    friction = ground_friction(friction, cell, f, w, soilmap.soil, soilmap.friction, friction_reference, use_friction,
+                               use_soil, sole_area, friction_cap, soil_params, foot_load, foot_slip)
+    if friction[0] < min_friction:
+        condim = 1  # frictionless (ForcesConfig.min_friction says why)
+    write_contact(naconmax, 0, dist, pos, make_frame(normal), margin, gap, condim, friction, solref,
+                  solreffriction, solimp, adhesion, geoms, wp.vec2i(-1, -1), w, contact_dist, contact_pos,
+                  contact_frame, contact_includemargin, contact_friction, contact_solref, contact_solreffriction,
+                  contact_solimp, contact_dim, contact_geom, contact_efc_address, contact_worldid, contact_type,
+                  contact_geomcollisionid, contact_adhesion, nacon)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Model set-up
+
+
+def sole_points(mjm: mujoco.MjModel, foot_groups) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The sole points of the feet whose geoms are spheres or capsules: (geom, end, foot) per point; a sphere is
+    one point (end 0), a capsule its two end spheres (end -1, +1: centre -+ half-length along its axis)."""
+    geoms, ends, feet = [], [], []
+    for f, group in enumerate(foot_groups):
+        for g in group:
+            if int(mjm.geom_type[g]) == SOLE_TYPES[0]:
+                geoms.append(g), ends.append(0.0), feet.append(f)
+            elif int(mjm.geom_type[g]) == SOLE_TYPES[1]:
+                geoms += [g, g]
+                ends += [-1.0, 1.0]
+                feet += [f, f]
+    return np.asarray(geoms, np.int32), np.asarray(ends, np.float32), np.asarray(feet, np.int32)
+
+
+def exclude_sole_collisions(spec: mujoco.MjSpec, names) -> None:
+    """Stop MuJoCo colliding the named sphere / capsule geoms at all (contype = conaffinity = 0): their terrain
+    contacts come from ``sole_contact_kernel``. Only the robot's soles: they touch nothing but the terrain."""
+    for name in names:
+        geom = spec.geom(name)
+        if geom is None:
+            raise ValueError(f"forces.foot_geom_names: no geom named {name!r} in the model.")
+        if int(geom.type) in SOLE_TYPES:
+            geom.contype, geom.conaffinity = 0, 0

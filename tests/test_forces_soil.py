@@ -1,0 +1,266 @@
+"""Soil under a foot in tiny MuJoCo-Warp worlds on the CPU (analytic sole contacts on a heightfield): the
+Mohr-Coulomb traction limit, dissipation, lift-off, the shown rut (snow, mud) and the edge cases."""
+
+import math
+
+import mujoco
+import mujoco_warp as mjw
+import numpy as np
+import pytest
+import warp as wp
+
+from legged_gente.external_forces.field import ForcesConfig, TerrainForces
+from legged_gente.terrain.soil import SOIL_PRESETS, register_custom_soil
+from legged_gente.terrain.materials import MaterialMap
+
+wp.config.quiet = True
+DEV = "cpu"
+G = 9.81
+SHAPE, RES, ORIGIN = (41, 41), 0.1, (-2.0, -2.0)
+# four 2 cm sole spheres at the corners of a 0.22 m x 0.09 m sole (their discs' footprint)
+SOLE_XY = [(0.09, 0.025), (0.09, -0.025), (-0.09, 0.025), (-0.09, -0.025)]
+SOLE_AREA = 0.22 * 0.09
+
+@pytest.fixture(scope="module", autouse=True)
+def test_soils():
+    """Wong, Theory of Ground Vehicles, Table 2.3: dry sand (LLL), snow (U.S.) and lean clay at 32 % moisture
+    (WES, the "mud" preset's means), with no bulldozing and no scatter so the tests see the traction limit and
+    the sinkage alone; and dry sand with bulldozing. Removed again after this module's tests."""
+    tan = lambda deg: math.tan(math.radians(deg))  # noqa: E731
+    register_custom_soil("t_sand", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    register_custom_soil("t_snow", kc=4.37e3, kphi=196.72e3, n=1.6, c=1.03e3, mu=tan(19.7), K=0.04,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    register_custom_soil("t_mud", kc=5.16e3, kphi=119.61e3, n=0.5, c=13.79e3, mu=tan(11.0), K=0.05,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    register_custom_soil("t_sand_bull", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
+                         bulldoze_c=1.4e4, bulldoze_g=2.6e5)
+    yield
+    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull"):
+        SOIL_PRESETS.pop(name)
+
+
+def foot_world(mass, joints="xz", sole_xy=SOLE_XY, z0=0.025, option=""):
+    axes = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}
+    js = "".join(f'<joint name="{a}" type="slide" axis="{axes[a]}"/>' for a in joints)
+    soles = "".join(f'<geom name="sole{k}" type="sphere" size="0.02" pos="{x} {y} 0" contype="0" conaffinity="0"/>'
+                    for k, (x, y) in enumerate(sole_xy))
+    xml = f"""<mujoco><option timestep="0.005" {option}/>
+      <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+        <body name="foot" pos="0 0 {z0}">{js}
+          <geom type="box" size="0.1 0.04 0.01" pos="0 0 0.03" mass="{mass}" contype="0" conaffinity="0"/>{soles}
+        </body></worldbody></mujoco>"""
+    return mujoco.MjModel.from_xml_string(xml)
+
+
+class Cfg(ForcesConfig):
+    noise_std = 0.0
+    wading = False
+    foot_geom_names = [f"sole{k}" for k in range(4)]
+
+
+def soil_map(name=None, friction=1.0):
+    mat = MaterialMap.rigid(SHAPE, friction=friction)
+    if name is not None:
+        mat.soil[:] = 0
+        mat.soil_presets = [name]
+    return mat
+
+
+def make(mjm, mat, nworld=1, **cfg):
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=nworld, nconmax=16, njmax=64)
+    f = TerrainForces(mjm, m, d, np.zeros(SHAPE, np.float32), ORIGIN, RES, mat, type("C", (Cfg,), cfg)(), seed=1)
+    f.install()
+    return m, d, f
+
+
+def run(m, d, f, steps, push=0.0):
+    """``steps`` substeps with a force ``push`` (N, per world) on the x joint."""
+    qfrc = np.zeros((d.nworld, m.nv), np.float32)
+    qfrc[:, 0] = push
+    d.qfrc_applied.assign(qfrc)
+    for _ in range(steps):
+        mjw.step(m, d)
+        f.after_substep()
+
+
+def ramp_and_hold(m, d, f, target, ramp=200, hold=150):
+    """Push along x rising linearly to ``target`` (per world) over ``ramp`` substeps, then held: quasi-static
+    loading, as Janosi and Hanamoto's shear tests."""
+    for k in range(ramp + hold):
+        run(m, d, f, 1, push=min(k / ramp, 1.0) * np.asarray(target))
+
+
+def test_dry_sand_limits_traction():
+    wp.set_device(DEV)
+    mass = 20.0
+    # Mohr-Coulomb: T_max = c A + W tan(phi); dry sand c = 1.04 kPa, phi = 28 deg (Wong), A = 0.22 m x 0.09 m
+    t_max = 1.04e3 * 0.22 * 0.09 + mass * G * math.tan(math.radians(28.0))  # 20.6 + 104.3 = 124.9 N
+    m, d, f = make(foot_world(mass), soil_map("t_sand"), nworld=2)
+    run(m, d, f, 60)  # settle into the rut
+    x0 = d.qpos.numpy()[:, 0].copy()
+    ramp_and_hold(m, d, f, [0.9 * t_max, 1.1 * t_max])
+    travel, v = d.qpos.numpy()[:, 0] - x0, d.qvel.numpy()[:, 0]
+    # below the limit: it slips while the traction mobilises (Janosi-Hanamoto: j = -K ln(1 - 0.9) = 5.8 cm
+    # quasi-statically; MuJoCo's sliding contacts hop, which adds some), then holds
+    assert abs(v[0]) < 0.01 and 0.02 < travel[0] < 0.2, (travel, v)
+    # above it: it slides away, accelerated by the excess push
+    assert v[1] > 0.3 and travel[1] > 0.3, (travel, v)
+
+    # rigid ground (mu = 1, limit W = 196 N): the same pushes hold
+    m, d, f = make(foot_world(mass), soil_map(None), nworld=2)
+    run(m, d, f, 60)
+    x0 = d.qpos.numpy()[:, 0].copy()
+    ramp_and_hold(m, d, f, [0.9 * t_max, 1.1 * t_max])
+    assert np.all(np.abs(d.qpos.numpy()[:, 0] - x0) < 0.005) and np.all(np.abs(d.qvel.numpy()[:, 0]) < 0.01)
+
+
+def test_soil_shear_never_pushes_back():
+    """The former shear opposed the accumulated slip like a spring: a foot dragged forward and released was
+    pulled back. Soil traction is friction now: released, the foot stays where it was left."""
+    wp.set_device(DEV)
+    m, d, f = make(foot_world(20.0), soil_map("t_sand"))
+    run(m, d, f, 60)
+    run(m, d, f, 60, push=np.array([200.0]))  # far above the 125 N limit: dragged ~10 cm
+    d.qvel.zero_()
+    x_release = d.qpos.numpy()[0, 0]
+    assert f.foot_slip.numpy()[0, 0] > 0.02  # the soil has been sheared
+    run(m, d, f, 100)
+    assert d.qpos.numpy()[0, 0] >= x_release - 1e-3 and abs(d.qvel.numpy()[0, 0]) < 0.01
+
+
+def test_soil_power_never_positive_under_random_motions():
+    wp.set_device(DEV)
+    m, d, f = make(foot_world(20.0, joints="xyz"), soil_map("t_sand_bull"), nworld=8)
+    run(m, d, f, 60)
+    rng = np.random.default_rng(0)
+    worked = 0
+    for _ in range(60):  # random horizontal velocities, reversing at random
+        qvel = d.qvel.numpy()
+        qvel[:, :2] = rng.normal(0.0, 0.3, (8, 2))
+        d.qvel.assign(qvel)
+        mjw.step(m, d)
+        f.after_substep()
+        power = np.sum(f.foot_force.numpy()[:, 0] * f.foot_vel.numpy()[:, 0], axis=1)
+        assert np.all(power <= 1e-9), power
+        worked += np.count_nonzero(power < 0)
+    assert worked > 100  # the feet were in the soil and bulldozing
+
+
+def test_slip_survives_load_dips_and_resets_at_liftoff():
+    wp.set_device(DEV)
+    m, d, f = make(foot_world(20.0), soil_map("t_sand"))
+    run(m, d, f, 60)
+    f.foot_slip.assign(np.array([[0.05]], np.float32))
+    rut = f.foot_sinkage.numpy()[0, 0]
+    assert rut > 0.005
+    rest = d.qpos.numpy().copy()
+
+    def lifted(substeps):
+        for _ in range(substeps):
+            up = rest.copy()
+            up[0, 1] += 0.05
+            d.qpos.assign(up)
+            d.qvel.zero_()
+            mjw.step(m, d)
+            f.after_substep()
+        d.qpos.assign(rest)
+        d.qvel.zero_()
+        run(m, d, f, 1)
+
+    lifted(1)  # one substep without load (5 ms < liftoff_time 20 ms): same stance
+    assert f.foot_slip.numpy()[0, 0] >= 0.05 and f.foot_sinkage.numpy()[0, 0] >= rut
+    lifted(3)  # 15 ms
+    assert f.foot_slip.numpy()[0, 0] >= 0.05
+    lifted(5)  # 25 ms in the air: lift-off, a new stance starts from a fresh rut and no slip
+    assert f.foot_slip.numpy()[0, 0] < 1e-3 and f.foot_sinkage.numpy()[0, 0] < rut
+
+
+def sole_normals(d, mjm):
+    n = int(d.nacon.numpy()[0])
+    soles = {mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, f"sole{k}") for k in range(4)}
+    mask = np.isin(d.contact.geom.numpy()[:n, 1], list(soles))
+    return d.contact.frame.numpy()[:n][mask, 0]
+
+
+def test_snow_foot_shown_at_full_bekker_sinkage_with_vertical_normals():
+    wp.set_device(DEV)
+    mass = 20.0
+    # Bekker: z = (p / (kc/b + kphi))^(1/n); snow (U.S.) kc = 4.37 kN/m^(n+1), kphi = 196.72 kN/m^(n+2),
+    # n = 1.6 (Wong Table 2.3); p = 20 kg * 9.81 / (0.22 * 0.09 m^2) = 9909 Pa, b = 0.09 m
+    z_bekker = (mass * G / (0.22 * 0.09) / (4.37e3 / 0.09 + 196.72e3)) ** (1 / 1.6)  # 0.1346 m
+    mjm = foot_world(mass, z0=0.02)
+    m, d, f = make(mjm, soil_map("t_snow"), sinkage_rate=0.25, sinkage_load_tau=0.2)  # a slow landing
+    normals = []
+    for _ in range(50):
+        run(m, d, f, 5)
+        normals.append(sole_normals(d, mjm))
+    shown = -d.qpos.numpy()[0, 1]  # the sole spheres rest on the rigid surface at qpos z = 0
+    rut = f.foot_sinkage.numpy()[0, 0]
+    assert 0.99 * z_bekker <= rut <= 1.08 * z_bekker, (rut, z_bekker)  # the landing may dig a little deeper
+    assert shown == pytest.approx(rut, abs=0.002), (shown, rut)
+    normals = np.concatenate(normals)
+    assert len(normals) > 50
+    np.testing.assert_allclose(normals, np.tile([0.0, 0.0, 1.0], (len(normals), 1)), atol=1e-6)
+
+
+def test_mud_sinks_centimetres_under_a_biped_foot():
+    wp.set_device(DEV)
+    # the mud preset is Wong's lean clay at 32 % moisture: n = 0.5, kc = 5.16 kN/m^1.5, kphi = 119.61 kN/m^2.5
+    mud = SOIL_PRESETS["mud"]
+    assert (mud.kc[0], mud.kphi[0], mud.n[0], mud.c[0]) == (5.16e3, 119.61e3, 0.5, 13.79e3)
+    # the 41.5 kg biped on one foot: its soles span 0.22 m x 0.096 m (spheres r 2 cm at x 0.14 / -0.04,
+    # y +-0.028): p = 41.5 * 9.81 / 0.02112 = 19.3 kPa -> z = (19.3e3 / (5.16e3 / 0.096 + 119.61e3))^2
+    z_bekker = (41.5 * G / (0.22 * 0.096) / (5.16e3 / 0.096 + 119.61e3)) ** (1 / 0.5)  # 0.0124 m
+    sole = [(0.14, 0.028), (0.14, -0.028), (-0.04, 0.028), (-0.04, -0.028)]
+    m, d, f = make(foot_world(41.5, sole_xy=sole, z0=0.02), soil_map("t_mud"), sinkage_rate=0.1, sinkage_load_tau=0.2)
+    run(m, d, f, 120)
+    shown = -d.qpos.numpy()[0, 1]
+    assert shown > 0.01 and shown == pytest.approx(z_bekker, rel=0.15), (shown, z_bekker)
+
+
+def test_zero_friction_on_soil_neither_launches_nor_sinks_through():
+    wp.set_device(DEV)
+    # map friction 0 on sand (pyramidal cone) and on rigid ground with the elliptic cone
+    for mat, option in ((soil_map("t_sand", friction=0.0), ""), (soil_map(None, friction=0.0), 'cone="elliptic"')):
+        mjm = foot_world(20.0, option=option)
+        m, d, f = make(mjm, mat)
+        run(m, d, f, 60)
+        z0 = d.qpos.numpy()[0, 1]
+        run(m, d, f, 60, push=np.array([30.0]))  # frictionless: it glides
+        z, v = d.qpos.numpy()[0, 1], d.qvel.numpy()[0]
+        assert -0.03 < z0 <= 0.001 and abs(z - z0) < 0.003 and abs(v[1]) < 0.02, (option, z0, z, v)
+        assert v[0] == pytest.approx(30.0 / 20.0 * 0.3, rel=0.05)  # a = F/m for 0.3 s
+
+
+def test_foot_soil_is_the_cell_under_the_sole_centre():
+    wp.set_device(DEV)
+    mat = soil_map(None)
+    mat.soil[21:, :] = 0  # cells centred at x >= 0.1: sand; the border at x = 0.05
+    mat.soil_presets = ["t_sand"]
+    m, d, f = make(foot_world(20.0), mat, nworld=2)
+    q = d.qpos.numpy()
+    q[:, 0] = [0.08, 0.02]  # centre on sand (heels on rigid ground) / on rigid ground (toes on sand)
+    d.qpos.assign(q)
+    for _ in range(3):
+        run(m, d, f, 10)
+        np.testing.assert_array_equal(f.foot_soil.numpy()[:, 0], [0, -1])
+
+
+def test_soil_forces_act_at_the_contact_plane():
+    wp.set_device(DEV)
+    m, d, f = make(foot_world(20.0), soil_map("t_sand_bull"))
+    run(m, d, f, 60)
+    q = d.qvel.numpy()
+    q[0, 0] = 0.3
+    d.qvel.assign(q)
+    mjw.step(m, d)
+    fx = f.foot_force.numpy()[0, 0, 0]
+    assert fx < -1.0  # bulldozing against +x
+    # the force acts at the spheres' lowest points: 2 cm (their radius) below their centres (body origin)
+    contact_z = d.xpos.numpy()[0, 1, 2] - 0.02
+    com = d.xipos.numpy()[0, 1]
+    torque_y = d.xfrc_applied.numpy()[0, 1, 4]
+    assert torque_y == pytest.approx((contact_z - com[2]) * fx, rel=1e-4)
