@@ -64,13 +64,13 @@ class GentePPO(PPO):
             if not cuda:
                 self._minibatch_stages = (self._minibatch_step,)
             elif not self.is_multi_gpu:
-                self._minibatch_stages = (StepGraph(self, self._minibatch_step, (), self.device, warp=False),)
+                self._minibatch_stages = (StepGraph(self, self._minibatch_step, self.device, warp=False),)
             else:  # NCCL's all-reduce runs between the two graphs
-                self._minibatch_stages = (StepGraph(self, self._minibatch_gradients, (), self.device, warp=False),
+                self._minibatch_stages = (StepGraph(self, self._minibatch_gradients, self.device, warp=False),
                                           self._all_reduce_gradients,
-                                          StepGraph(self, self._apply_gradients, (), self.device, warp=False))
+                                          StepGraph(self, self._apply_gradients, self.device, warp=False))
             if cuda:
-                self._act_graph = StepGraph(self, self._act_step, ("_act_transition",), self.device, warp=False)
+                self._act_graph = StepGraph(self, self._act_step, self.device, warp=False)
                 self._act_observations: TensorDict | None = None  # what the act graph reads
 
     def act(self, obs: TensorDict) -> torch.Tensor:
