@@ -281,7 +281,7 @@ class LeggedRobot(VecEnv):
             self.terrain_origin_xy = torch.tensor(self.terrain.origin_xy, dtype=torch.float32, device=dev)
         # episode statistics, reduced on device and reported once per rollout (no per-step host sync)
         self._stat_count = torch.zeros((), device=dev)
-        self._diverged_count = torch.zeros((), device=dev)  # diverged resets since the last report
+        self.diverged_resets = torch.zeros((), device=dev)  # diverged resets since the last report (reset by it)
         self._update_state()
 
     def _init_height_points(self) -> torch.Tensor | None:
@@ -515,7 +515,7 @@ class LeggedRobot(VecEnv):
         if self.terrain_curriculum:
             self._update_terrain_curriculum(finished)
         self._stat_count += mask.sum()
-        self._diverged_count += diverged.sum()
+        self.diverged_resets += diverged.sum()
 
     def curriculum_state(self) -> dict[str, torch.Tensor]:
         """The robots' terrain levels, kept in checkpoints so that a resumed run climbs on from where it stopped."""
@@ -560,10 +560,10 @@ class LeggedRobot(VecEnv):
         stats = {f"rew_{name}": rewards[i] for i, (name, _) in enumerate(self.reward_functions)}
         # legged_gym's statistic: the mean level of all robots now (not only of those whose episode ended)
         stats["terrain_level"] = self.terrain_levels.float().mean()
-        stats["diverged_resets"] = self._diverged_count.clone()
+        stats["diverged_resets"] = self.diverged_resets.clone()
         self._stat_reward_sums.zero_()
         self._stat_count.zero_()
-        self._diverged_count.zero_()
+        self.diverged_resets.zero_()
         return stats
 
     def _reset_envs(self, mask: torch.Tensor) -> None:
