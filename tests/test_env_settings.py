@@ -243,3 +243,32 @@ def test_the_subclass_compiles_to_the_same_numbers():
     for (p, c, r, d), (pc, cc, rc, dc) in zip(eager, compiled):
         assert torch.allclose(p, pc, atol=1e-4) and torch.allclose(c, cc, atol=1e-4)
         assert torch.allclose(r, rc, atol=1e-6) and torch.equal(d, dc)
+
+
+def test_step_graph_keeps_rebound_state_in_its_tensors():
+    """What StepGraph records at the end of a capture (the copy itself runs on the CPU too): a tensor attribute the
+    step rebinds is copied back into the tensor it held before, so a replay reads this step's value next step."""
+    from types import SimpleNamespace
+
+    from legged_gente.utils.cuda_graph import StepGraph, rebound_attributes
+
+    owner = SimpleNamespace(carried=torch.zeros(3), untouched=torch.ones(2), name="x")
+    carried, before = owner.carried, dict(vars(owner))
+    owner.carried = owner.carried + 1.0  # rebound, as plain torch code does
+    graph = StepGraph.__new__(StepGraph)
+    graph.owner = owner
+    kept = graph._copy_back(rebound_attributes(owner, before), before)
+    assert kept == {"carried": carried} and torch.equal(carried, torch.ones(3))
+    owner.carried = torch.zeros(4)  # a shape change cannot be replayed
+    with pytest.raises(RuntimeError, match=r"carried changes from \(3,\)"):
+        graph._copy_back(rebound_attributes(owner, before), before)
+
+
+def test_observation_terms_are_per_config_instance():
+    from legged_gente.utils.args import apply_overrides
+    from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedFlatCfgPPO
+
+    cfg = cfg_of()
+    apply_overrides(["observations.policy.dof_vel.scale=0.1"], cfg, GenteBipedFlatCfgPPO())
+    assert cfg.observations.policy.dof_vel.scale == 0.1
+    assert GenteBipedFlatCfg().observations.policy.dof_vel.scale == 0.05  # the class's table is unchanged
