@@ -2,8 +2,8 @@
 
 import pytest
 
-from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import apply_args, build_parser, parse_args
+from legged_gente.envs.task_registry import apply_args, task_registry
+from legged_gente.utils.args import build_parser, parse_args
 
 
 def parsed(*flags):

@@ -5,9 +5,9 @@ from pathlib import Path
 import pytest
 
 from legged_gente.evaluation.benchmark import load_benchmark, tile_geometry
-from legged_gente.evaluation.checker import check_item
+from legged_gente.generation.checker import check_item
 
-ROOT = Path(__file__).resolve().parents[1] / "benchmarks" / "gente100"
+ROOT = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks" / "gente100"
 ITEMS = load_benchmark(ROOT)
 
 

@@ -1,6 +1,7 @@
 """gente-benchmark end to end on the CPU with tiny sizes: a well-formed table and CSV."""
 
 import csv
+import functools
 
 import pytest
 import torch
@@ -21,6 +22,18 @@ def test_benchmark_prints_and_writes_a_table(tmp_path, capsys):
             assert float(r[key]) > 0.0
         assert float(r["env_over_raw"]) == float(r["env_steps_per_s"]) / (float(r["raw_substeps_per_s"]) / 4)
         assert 0.0 < float(r["ppo_update_share"]) < 1.0
+
+
+def test_terrain_build_prints_its_time(monkeypatch, capsys):
+    """--terrain_build prints the grid build's time (the env benchmark itself is skipped here)."""
+    from legged_gente.terrain import benchmark as terrain_benchmark
+
+    small = functools.partial(terrain_benchmark.benchmark_grid, num_rows=2, num_cols=20, tile_size=2.0, repeats=1)
+    monkeypatch.setattr(terrain_benchmark, "benchmark_grid", small)
+    monkeypatch.setattr(benchmark, "run", lambda *args: [{}])
+    monkeypatch.setattr(benchmark, "print_table", lambda rows, device: None)
+    benchmark.main(["--num_envs", "2", "--device", "cpu", "--terrain_build"])
+    assert "terrain build: 2 x 20 tiles of 2.0 m at 0.1 m" in capsys.readouterr().out
 
 
 def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):

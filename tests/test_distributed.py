@@ -31,7 +31,7 @@ def test_train_py_under_torchrun_is_distributed_and_saves(tmp_path):
     log = out.stdout + out.stderr
     assert out.returncode == 0, log[-4000:]
     # our runner joined a gloo group as rank 0 of 1, and rsl-rl's learn() took its distributed branch
-    assert "[distributed] rank 0/1 (local 0) on cpu, backend gloo, seed 7" in log, log[-4000:]
+    assert "[distributed] rank 0/1 (node 0, local 0) on cpu, backend gloo, seed 7\n" in log, log[-4000:]
     assert "Synchronizing parameters for rank 0" in log, log[-4000:]
     checkpoints = list((tmp_path / "gente_biped_flat").glob("*/model_0.pt"))
     assert len(checkpoints) == 1, log[-4000:]
@@ -45,8 +45,13 @@ def test_torchrun_launch_from_environment():
         torchrun_launch({"RANK": "0", "LOCAL_RANK": "0"})
     with pytest.raises(ValueError, match="must be integers"):
         torchrun_launch({"RANK": "a", "LOCAL_RANK": "0", "WORLD_SIZE": "1"})
-    with pytest.raises(ValueError, match="RANK=2 LOCAL_RANK=0 WORLD_SIZE=2"):
+    with pytest.raises(ValueError, match="need 0 <= RANK < WORLD_SIZE"):
         torchrun_launch({"RANK": "2", "LOCAL_RANK": "0", "WORLD_SIZE": "2"})
+    # two hosts of two GPUs: the second host's first process is global rank 2, device index (local rank) 0
+    second_host = {"RANK": "2", "LOCAL_RANK": "0", "WORLD_SIZE": "4", "LOCAL_WORLD_SIZE": "2", "GROUP_RANK": "1"}
+    assert torchrun_launch(second_host) == Launch(rank=2, local_rank=0, world_size=4, node=1)
+    with pytest.raises(ValueError, match="LOCAL_RANK < LOCAL_WORLD_SIZE"):
+        torchrun_launch({**second_host, "LOCAL_RANK": "2"})
 
 
 def test_rank_device_and_backend(monkeypatch):

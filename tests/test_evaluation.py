@@ -12,7 +12,7 @@ import torch
 from legged_gente.evaluation.evaluator import grid_shape
 from legged_gente.evaluation.tasks import WaypointTask, zigzag_waypoints
 
-BENCHMARK = Path(__file__).resolve().parents[1] / "benchmarks" / "gente100"
+BENCHMARK = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks" / "gente100"
 ITEMS = ["text_02_wide_river_strong_current", "image_05_sketch_blocks"]
 
 
@@ -69,7 +69,8 @@ def test_evaluate_writes_reports(tmp_path, mode):
           "--device", "cpu", "--out", str(out), "--no_progress"])
     report = json.loads((out / "report.json").read_text())
     assert [t["id"] for t in report["terrains"]] == ITEMS
-    assert report["overall"]["robots"] == 4 and report["overall"]["terrains"] == 2
+    standing = report["groups"].get("stand_still", {"robots": 0})["robots"]
+    assert report["overall"]["robots"] + standing == 4 and report["overall"]["terrains"] == 2
     assert report["meta"]["task_mode"] == mode
     assert set(report["groups"]) >= {"text", "image", "water", "obstacles"}
     assert report["terrains"][1]["categories"] == ["obstacles"]  # the sketch's raised blocks
@@ -126,3 +127,49 @@ def test_one_evaluation_runs_several_times():
     for d in (0.1, 20.0):
         result = evaluation.run(still, evaluation.make_task(reach_distance=d), progress=False)
         assert result.traces["pos"].shape[1] == round(0.2 / 0.02)
+
+
+def test_success_needs_progress_and_tight_tracking():
+    """The velocity task's rule, case by case: moving commands need tracking < 0.25 m/s and >= 70 % of the
+    commanded distance; stand-still commands need only to stand (tracking < 0.25 m/s) without falling."""
+    from legged_gente.evaluation.report import success
+
+    #            follows  too slow  stands   error 0.3  fell    stands(cmd 0)  drifts(cmd 0)
+    metrics = {
+        "fell": np.array([False, False, False, False, True, False, False]),
+        "tracking_error": np.array([0.05, 0.20, 0.50, 0.30, 0.05, 0.02, 0.40]),
+        "progress": np.array([0.98, 0.60, 0.00, 0.90, 0.98, np.nan, np.nan]),
+        "standing": np.array([False, False, False, False, False, True, True]),
+    }
+    assert success(metrics, "velocity").tolist() == [True, False, False, False, False, True, False]
+
+
+def test_velocity_commands_are_fast_enough_or_standing():
+    from types import SimpleNamespace
+
+    from legged_gente.evaluation.tasks import VelocityTask
+
+    ranges = SimpleNamespace(lin_vel_x=[-1.0, 1.0], lin_vel_y=[-0.5, 0.5], ang_vel_yaw=[-1.0, 1.0],
+                             heading=[-math.pi, math.pi])
+    task = VelocityTask(2000, ranges, heading_command=False, device="cpu", seed=3, min_speed=0.3, stand_fraction=0.1)
+    cmd = task.commands(torch.zeros(2000, 2), torch.zeros(2000, 4))
+    speed = torch.linalg.norm(cmd[:, :2], dim=1)
+    assert bool((speed[~task.standing] >= 0.3).all()) and bool((cmd[task.standing, :3] == 0).all())
+    assert abs(task.standing.float().mean().item() - 0.1) < 0.03  # binomial(2000, 0.1): sd 0.0067
+    assert cmd[~task.standing, 0].abs().max() <= 1.0 and cmd[~task.standing, 1].abs().max() <= 0.5
+    narrow = SimpleNamespace(lin_vel_x=[0.0, 0.2], lin_vel_y=[-0.1, 0.1], ang_vel_yaw=[0, 0], heading=[0, 0])
+    with pytest.raises(ValueError, match="min_speed 0.3"):
+        VelocityTask(4, narrow, heading_command=False, device="cpu", min_speed=0.3)
+
+
+def test_a_standing_policy_scores_zero(tmp_path):
+    """A policy that holds the default pose (zero actions) must not pass a moving command: it covers none of the
+    commanded distance, and its tracking error is the command's speed (>= 0.3 m/s > 0.25 m/s)."""
+    from legged_gente.scripts.evaluate import main
+
+    main(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(BENCHMARK), "--items", ITEMS[1],
+          "--robots_per_terrain", "4", "--episode_s", "1.0", "--settle_s", "0.2", "--stand_fraction", "0",
+          "--device", "cpu", "--out", str(tmp_path), "--no_progress"])
+    overall = json.loads((tmp_path / "report.json").read_text())["overall"]
+    assert overall["robots"] == 4 and overall["success_rate"] == 0.0
+    assert overall["tracking_error"] > 0.25

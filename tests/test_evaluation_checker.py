@@ -4,7 +4,7 @@ import dataclasses
 
 import pytest
 
-from legged_gente.evaluation.checker import check_spec, declared_bounds, required_tools
+from legged_gente.generation.checker import check_spec, declared_bounds, required_tools
 from legged_gente.evaluation.report import BASE_GROUND, CATEGORY_OF_TOOL, categories_of
 from legged_gente.generation.pipeline import generate_spec
 from legged_gente.generation.validation import ToolCall

@@ -6,7 +6,7 @@ import warp as wp
 
 from legged_gente.external_forces import kernels as K
 from legged_gente.external_forces import models
-from legged_gente.external_forces.soil import SOIL_PRESETS, preset_table, register_custom_soil
+from legged_gente.terrain.soil import SOIL_PRESETS, preset_table, register_custom_soil
 
 wp.config.quiet = True
 

@@ -1,4 +1,4 @@
-"""Checks of the shipped robot models (resources/robots): names, masses, geometry, limits, keyframe, and a
+"""Checks of the shipped robot models (legged_gente/resources/robots): names, masses, geometry, limits, keyframe, and a
 PD-held stand on flat ground. Plain CPU MuJoCo, no Warp."""
 
 from dataclasses import dataclass
@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-ROBOTS_DIR = Path(__file__).resolve().parents[1] / "resources" / "robots"
+ROBOTS_DIR = Path(__file__).resolve().parents[1] / "legged_gente" / "resources" / "robots"
 GRAVITY = 9.81
 
 

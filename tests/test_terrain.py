@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from legged_gente.external_forces.soil import SOIL_PRESETS
+from legged_gente.terrain.soil import SOIL_PRESETS
 from legged_gente.terrain.composition import (
     MAX_ABS_HEIGHT,
     SEAM_BAND,

@@ -6,7 +6,7 @@ from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
 from legged_gente.generation.emit import emit
 from legged_gente.generation.pipeline import generate_spec
 from legged_gente.terrain.terrain import Terrain
-from legged_gente.utils.terrain_arg import apply_terrain_arg
+from legged_gente.envs.terrain_arg import apply_terrain_arg
 
 
 @pytest.fixture(scope="module")

@@ -21,7 +21,7 @@ def tiny_args(tmp_path, *extra):
 def make_runner(tmp_path, args):
     env, _ = task_registry.make_env(args.task, args)
     _, train_cfg = task_registry.get_cfgs(args.task)
-    from legged_gente.utils.args import apply_args
+    from legged_gente.envs.task_registry import apply_args
 
     apply_args(args, None, train_cfg)
     train_cfg.runner.num_steps_per_env = 4

@@ -14,7 +14,7 @@ NUM_ENVS=${NUM_ENVS:-4096}
 TASK=${TASK:-gente_biped_flat}
 SKIP=${SKIP:-3}
 OUT_DIR=${OUT_DIR:-/tmp/gente_multi_gpu}
-# NVLink multicast off: on the lent hosts it can put the shared GPUs out of service (docs/multi_gpu.md)
+# NVLink multicast off, as the runner keeps it by default (docs/multi_gpu.md)
 export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 PYTHONUNBUFFERED=1
 
 gpus=$(python3 -c "import torch; print(torch.cuda.device_count())")

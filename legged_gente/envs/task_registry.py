@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 from datetime import datetime
 from pathlib import Path
@@ -9,8 +10,29 @@ from pathlib import Path
 import torch
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO, rsl_rl_train_cfg
+from legged_gente.envs.terrain_arg import apply_terrain_arg
+from legged_gente.utils.args import apply_overrides
 
 LOG_ROOT = Path(os.environ.get("GENTE_LOG_ROOT", Path(__file__).resolve().parents[2] / "logs"))
+
+
+def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
+    """Override config instances with the flags that were given (None means 'keep the config's value')."""
+    apply_overrides(getattr(args, "overrides", None) or [], env_cfg, train_cfg)
+    if env_cfg is not None:
+        if getattr(args, "num_envs", None) is not None:
+            env_cfg.env.num_envs = args.num_envs
+        if getattr(args, "terrain", None):
+            apply_terrain_arg(args.terrain, env_cfg)
+    if train_cfg is not None:
+        if getattr(args, "seed", None) is not None:
+            train_cfg.seed = args.seed
+        for flag in ("max_iterations", "experiment_name", "run_name", "load_run", "checkpoint"):
+            value = getattr(args, flag, None)
+            if value is not None:
+                setattr(train_cfg.runner, flag, value)
+        if getattr(args, "resume", False):
+            train_cfg.runner.resume = True
 
 
 class TaskRegistry:
@@ -28,8 +50,6 @@ class TaskRegistry:
 
     def make_env(self, name: str, args=None, env_cfg: LeggedRobotCfg | None = None):
         """The task's env with ``args`` (argparse namespace from utils.args) applied to its config."""
-        from legged_gente.utils.args import apply_args
-
         default_env_cfg, train_cfg = self.get_cfgs(name)
         env_class = self.tasks[name][0]
         env_cfg = env_cfg or default_env_cfg
@@ -44,7 +64,6 @@ class TaskRegistry:
     def make_alg_runner(self, env, name: str, args=None, train_cfg: LeggedRobotCfgPPO | None = None,
                         log_root: Path | str | None = LOG_ROOT):
         """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default)."""
-        from legged_gente.utils.args import apply_args
         from legged_gente.utils.checkpoints import find_checkpoint
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 

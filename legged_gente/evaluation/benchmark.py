@@ -1,6 +1,9 @@
 """A benchmark folder: ``manifest.json`` listing items (text prompt or image) and their ``spec.json`` files.
 
-Manifest format (written by ``benchmarks/gente100/build.py``)::
+``gente100`` ships with the package (``legged_gente/benchmarks/gente100``): ``load_benchmark("gente100")`` or
+``"benchmarks/gente100"`` find it from any working directory; any other folder is read as given.
+
+Manifest format (written by ``legged_gente/benchmarks/gente100/build.py``)::
 
     {"name": "gente100", "tile_size": [20.0, 20.0], "resolution": 0.1,
      "items": [{"id": "text_00_beach", "kind": "text", "prompt": "...", "spec": "specs/text_00_beach.json"},
@@ -14,12 +17,14 @@ Manifest format (written by ``benchmarks/gente100/build.py``)::
 from __future__ import annotations
 
 import dataclasses
+import importlib.resources
 import json
 from pathlib import Path
 
 from legged_gente.generation.spec import TerrainSpec
 
 KINDS = ("text", "image")
+SHIPPED = Path(str(importlib.resources.files("legged_gente"))) / "benchmarks"  # package data
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,13 +40,24 @@ class Item:
         return TerrainSpec.load(self.spec_path)
 
 
+def benchmark_root(root: str | Path) -> Path:
+    """A benchmark folder as given, else a shipped one by name (``gente100``) or by ``benchmarks/<name>``."""
+    given = Path(root).expanduser()
+    if given.is_dir() or given.is_absolute():
+        return given
+    for shipped in (SHIPPED / given, SHIPPED.parent / given):
+        if (shipped / "manifest.json").is_file():
+            return shipped
+    return given
+
+
 def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]:
     """The items of the benchmark at ``root`` (all, or those in ``ids``, in manifest order)."""
-    root = Path(root)
+    root = benchmark_root(root)
     manifest = root / "manifest.json"
     if not manifest.is_file():
-        raise FileNotFoundError(f"{manifest} not found; pass a benchmark folder (e.g. benchmarks/gente100) or "
-                                f"build one with `python benchmarks/gente100/build.py`.")
+        raise FileNotFoundError(f"{manifest} not found; pass a benchmark folder with a manifest.json, or a shipped "
+                                f"benchmark: {sorted(p.parent.name for p in SHIPPED.glob('*/manifest.json'))}.")
     data = json.loads(manifest.read_text())
     items = []
     for entry in data["items"]:

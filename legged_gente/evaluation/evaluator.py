@@ -13,8 +13,14 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
   the time-out.
 * ``tracking_error`` (m/s): mean over the robot's steps after ``settle_s`` of |v_cmd_xy - v_xy|, the
   horizontal base velocity in the base frame against the commanded (vx, vy).
-* ``success``: velocity task: not fell and tracking_error < ``tracking_threshold``; waypoint task: the last
-  waypoint was reached before any termination.
+* ``progress``: velocity task: the distance covered along the command over the commanded distance, both after
+  ``settle_s``: sum over steps of (v_xy . c_xy / |c_xy|) dt divided by the sum of |c_xy| dt (base frame). A
+  robot that stands scores 0, one that follows the command 1; undefined (NaN) for a stand-still command.
+* ``standing``: the robot was commanded to stand still (velocity task).
+* ``success``: velocity task, moving command (|c_xy| >= 0.3 m/s): not fell, tracking_error <
+  ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still command (its own
+  category): not fell and tracking_error < ``tracking_threshold``; waypoint task: the last waypoint was reached
+  before any termination.
 * ``distance`` (m): xy path length of the base, summed over policy steps; ``displacement`` (m): straight
   xy distance from the spawn to the last position.
 * ``collisions``: onsets of contact (|F| > 1 N) on any penalised body (thighs, shanks: the task's
@@ -27,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -80,6 +87,7 @@ class Recorder:
         self.active = torch.ones(n, dtype=torch.bool, device=dev)
         self.fell = z(torch.bool)
         self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
+        self.along_cmd, self.cmd_distance = z(), z()
         self.collisions = z()
         self.in_contact = z(torch.bool)
         self.start_xy = env.base_pos[:, :2].clone()
@@ -97,6 +105,10 @@ class Recorder:
         counted = af * float(self.step > self.settle_steps)
         self.err_sum += err * counted
         self.err_steps += counted
+        cmd_speed = torch.norm(env.commands[:, :2], dim=1)
+        along = torch.sum(env.base_lin_vel[:, :2] * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
+        self.along_cmd += along * self.dt * counted
+        self.cmd_distance += cmd_speed * self.dt * counted
         self.distance += torch.norm(xy - self.last_xy, dim=1) * af
         self.last_xy = torch.where(a[:, None], xy, self.last_xy)
         self.energy += torch.sum(torch.abs(env.torques * env.dof_vel), dim=1) * self.dt * af
@@ -170,11 +182,11 @@ class Evaluation:
         self.env.env_origins = self.env.terrain_origins[self.env.terrain_levels, self.env.terrain_columns]
 
     def make_task(self, reach_distance: float = 1.0, speed: float = 0.6, num_waypoints: int = 4,
-                  spacing: float = 1.8, lateral: float = 1.5):
+                  spacing: float = 1.8, lateral: float = 1.5, min_speed: float = 0.3, stand_fraction: float = 0.1):
         env = self.env
         if self.mode == "velocity":
             return VelocityTask(env.num_envs, self.env_cfg.commands.ranges, self.env_cfg.commands.heading_command,
-                                env.device, seed=self.seed)
+                                env.device, seed=self.seed, min_speed=min_speed, stand_fraction=stand_fraction)
         points = zigzag_waypoints(env.env_origins[:, :2], num_waypoints, spacing, lateral, seed=self.seed)
         return WaypointTask(points, reach_distance, speed)
 
@@ -201,10 +213,14 @@ class Evaluation:
         r = recorder
         steps = r.err_steps.clamp(min=1.0)
         tracking = torch.where(r.err_steps > 0, r.err_sum / steps, torch.full_like(steps, float("nan")))
+        progress = torch.where(r.cmd_distance > 0, r.along_cmd / r.cmd_distance.clamp(min=1e-9),
+                               torch.full_like(steps, float("nan")))
+        standing = getattr(task, "standing", torch.zeros_like(r.fell))
         metrics = {
             "fell": r.fell, "tracking_error": tracking, "distance": r.distance,
             "displacement": torch.norm(r.last_xy - r.start_xy, dim=1), "collisions": r.collisions,
             "energy": r.energy, "time_s": r.alive_steps * env.dt, "finished": task.finished,
+            "progress": progress, "standing": standing,
         }
         out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
         traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}
@@ -215,3 +231,33 @@ class Evaluation:
             traces["waypoints"] = task.waypoints[first].cpu().numpy()
             params |= {"reach_distance": task.reach_distance, "speed": task.speed}
         return RunResult(self.tile.cpu().numpy(), out, traces, self.mode, params)
+
+
+def load_policy(evaluation, checkpoint: str | None = None, exported: str | None = None, baseline: str | None = None):
+    """obs TensorDict -> actions from an rsl-rl checkpoint (file or run folder), a TorchScript file, or a baseline."""
+    env = evaluation.env
+    given = [x for x in (checkpoint, exported, baseline) if x]
+    if len(given) != 1:
+        raise ValueError("give exactly one of --checkpoint (rsl-rl model_N.pt or its run folder), --exported "
+                         "(TorchScript policy.pt from gente-play) or --baseline (zero | random).")
+    if baseline:
+        if baseline == "zero":
+            return lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)
+        if baseline == "random":
+            return lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)
+        raise ValueError(f"--baseline {baseline!r}: use 'zero' or 'random'.")
+    if exported:
+        model = torch.jit.load(exported, map_location=env.device)
+        model.eval()
+        return lambda obs: model(obs["policy"])
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.utils.checkpoints import find_checkpoint
+
+    path = Path(checkpoint)
+    if path.is_dir():
+        path = find_checkpoint(path.parent, path.name)
+    if not path.is_file():
+        raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
+    runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
+    runner.load(str(path), map_location=env.device)
+    return runner.get_inference_policy(device=env.device)

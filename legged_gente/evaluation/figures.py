@@ -128,12 +128,11 @@ def plot_trajectories(heights: np.ndarray, resolution: float, runs: dict[float, 
     return _save(fig, out)
 
 
-def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "benchmarks/gente100",
+def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "gente100",
                     distances=(0.1, 1.0, 5.0, 20.0), device: str = "cpu", episode_s: float = 20.0, **policy) -> Path:
     """Run the waypoint task on one terrain once per reach distance d (one robot) and plot the trajectories."""
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation
-    from legged_gente.scripts.evaluate import load_policy
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
 
     item = load_benchmark(benchmark, [item_id])[0]
     evaluation = Evaluation(task, [item], 1, device, episode_s, "waypoints")
@@ -150,13 +149,12 @@ def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "
 
 # ------------------------------------------------------------------------------ (d) success over training
 def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], out: str | Path,
-                          benchmark: str = "benchmarks/gente100", max_checkpoints: int = 8, robots_per_terrain: int = 16,
-                          device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float = 0.5) -> Path:
+                          benchmark: str = "gente100", max_checkpoints: int = 8, robots_per_terrain: int = 16,
+                          device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float | None = None) -> Path:
     """Evaluate up to ``max_checkpoints`` evenly spaced checkpoints of a run on ``item_ids``; plot success vs iteration."""
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation
-    from legged_gente.evaluation.report import success
-    from legged_gente.scripts.evaluate import load_policy
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.evaluation.report import TRACKING_THRESHOLD, success
     from legged_gente.utils.checkpoints import _iteration
 
     items = load_benchmark(benchmark, item_ids)
@@ -168,8 +166,9 @@ def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], o
     iterations, rates = [], []
     for k in pick:
         result = evaluation.run(load_policy(evaluation, checkpoint=str(checkpoints[k])), progress=False)
-        ok = success(result.metrics, "velocity", tracking_threshold)
-        rates.append([ok[result.tile == t].mean() for t in range(len(items))])
+        ok = success(result.metrics, "velocity", tracking_threshold or TRACKING_THRESHOLD)
+        moving = ~result.metrics["standing"].astype(bool)
+        rates.append([ok[(result.tile == t) & moving].mean() for t in range(len(items))])
         iterations.append(_iteration(checkpoints[k]))
     rates = np.array(rates)
     plt = _plt()
@@ -206,7 +205,7 @@ def main(argv=None) -> None:
     for name, help_ in (("waypoints", "(c) waypoint trajectories for several d"), ("training", "(d) success over training")):
         s = sub.add_parser(name, help=help_)
         s.add_argument("--task", default="gente_biped")
-        s.add_argument("--benchmark", default="benchmarks/gente100")
+        s.add_argument("--benchmark", default="gente100")
         s.add_argument("--device", default="cpu")
     c = sub.choices["waypoints"]
     c.add_argument("--item", required=True, help="benchmark item id (an obstacle field, e.g. image_05_sketch_blocks)")

@@ -29,7 +29,7 @@ except a ``flat`` call at a non-zero height: a raised block (a sketch's black ob
 BASE_GROUND = ("flat", "natural_ground", "random_uniform", "waves")
 CATEGORIES = ("water", "soil", "obstacles", "slopes_and_stairs")
 
-METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "distance", "displacement", "collisions",
+METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "progress", "distance", "displacement", "collisions",
                   "falls", "fall_rate", "energy_per_m")
 
 
@@ -47,12 +47,24 @@ def categories_of(spec) -> list[str]:
     return [c for c in CATEGORIES if c in found]
 
 
-def success(metrics: dict[str, np.ndarray], task: str, tracking_threshold: float) -> np.ndarray:
+TRACKING_THRESHOLD = 0.25
+"""m/s; a velocity-task success needs a mean tracking error below it."""
+MIN_PROGRESS = 0.7
+"""A moving command's success needs at least this share of the commanded distance covered along the command."""
+STAND_GROUP = "stand_still"
+"""The report group of the robots commanded to stand still; every other group counts moving commands only."""
+
+
+def success(metrics: dict[str, np.ndarray], task: str, tracking_threshold: float = TRACKING_THRESHOLD,
+            min_progress: float = MIN_PROGRESS) -> np.ndarray:
     """Per-robot success (see the evaluator's docstring for the definitions)."""
     if task == "waypoints":
         return metrics["finished"].astype(bool)
+    standing = metrics["standing"].astype(bool)
     with np.errstate(invalid="ignore"):
-        return ~metrics["fell"].astype(bool) & (metrics["tracking_error"] < tracking_threshold)
+        tracked = ~metrics["fell"].astype(bool) & (metrics["tracking_error"] < tracking_threshold)
+        progressed = metrics["progress"] >= min_progress
+    return tracked & (standing | progressed)
 
 
 def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str, float]:
@@ -61,10 +73,12 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
     distance = float(metrics["distance"].sum())
     falls = int(metrics["fell"].sum())
     finite = np.isfinite(metrics["tracking_error"])
+    progress = metrics["progress"][np.isfinite(metrics["progress"])] if "progress" in metrics else np.zeros(0)
     return {
         "robots": n,
         "success_rate": float(ok.mean()) if n else math.nan,
         "tracking_error": float(metrics["tracking_error"][finite].mean()) if finite.any() else math.nan,
+        "progress": float(progress.mean()) if progress.size else math.nan,
         "distance": float(metrics["distance"].mean()) if n else math.nan,
         "displacement": float(metrics["displacement"].mean()) if n else math.nan,
         "collisions": float(metrics["collisions"].mean()) if n else math.nan,
@@ -74,11 +88,17 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
     }
 
 
-def build_report(result, items: list[Item], tracking_threshold: float = 0.5, meta: dict | None = None) -> dict:
-    """JSON-ready report: ``terrains`` (one entry per item), ``groups`` (kinds and categories) and ``overall``."""
-    ok = success(result.metrics, result.task, tracking_threshold)
+def build_report(result, items: list[Item], tracking_threshold: float = TRACKING_THRESHOLD,
+                 meta: dict | None = None, min_progress: float = MIN_PROGRESS) -> dict:
+    """JSON-ready report: ``terrains`` (one entry per item), ``groups`` (kinds and categories) and ``overall``.
+
+    Terrains, kinds, categories and overall count the robots with a moving command; the robots told to stand
+    still are the group ``stand_still`` (velocity task)."""
+    ok = success(result.metrics, result.task, tracking_threshold, min_progress)
+    standing = result.metrics.get("standing", np.zeros_like(ok)).astype(bool)
 
     def select(mask):
+        mask = mask & ~standing
         return {k: v[mask] for k, v in result.metrics.items()}, ok[mask]
 
     terrains, group_masks = [], {}
@@ -91,9 +111,13 @@ def build_report(result, items: list[Item], tracking_threshold: float = 0.5, met
     order = ["text", "image", *CATEGORIES]
     groups = {g: {"terrains": sum(1 for t in terrains if g in (t["kind"], *t["categories"])),
                   **summarize_robots(*select(group_masks[g]))} for g in order if g in group_masks}
+    if standing.any():
+        groups[STAND_GROUP] = {"terrains": len(items),
+                               **summarize_robots({k: v[standing] for k, v in result.metrics.items()}, ok[standing])}
     everything = np.ones_like(ok)
     return {
-        "meta": {"task_mode": result.task, "tracking_threshold": tracking_threshold, **result.params, **(meta or {})},
+        "meta": {"task_mode": result.task, "tracking_threshold": tracking_threshold, "min_progress": min_progress,
+                 **result.params, **(meta or {})},
         "overall": {"terrains": len(items), **summarize_robots(*select(everything))},
         "groups": groups,
         "terrains": terrains,

@@ -1,13 +1,18 @@
 """Evaluation tasks: what each robot is commanded to do. Pure tensor logic, no simulator.
 
 * :class:`VelocityTask`: one random command per robot for the whole episode, drawn from the task's command
-  ranges (vx, vy and a heading, or a yaw rate when the task has no heading mode).
+  ranges (vx, vy and a heading, or a yaw rate when the task has no heading mode). A share ``stand_fraction``
+  of the robots is told to stand still (vx = vy = 0), and every other command asks for a horizontal speed of
+  at least ``min_speed``: a policy that only stands cannot pass a moving command (the success rule is in
+  :mod:`legged_gente.evaluation.report`).
 * :class:`WaypointTask`: walk at ``speed`` towards the next waypoint, steering through the heading command;
   a waypoint counts as reached when the base is within ``reach_distance`` (d) of it in the xy plane, and
   the task is finished after the last one (the robot is then commanded to stand).
 """
 
 from __future__ import annotations
+
+import math
 
 import torch
 
@@ -19,13 +24,21 @@ def _uniform(lo: float, hi: float, n: int, generator: torch.Generator) -> torch.
 class VelocityTask:
     name = "velocity"
 
-    def __init__(self, num_robots: int, ranges, heading_command: bool, device: str, seed: int = 0):
+    def __init__(self, num_robots: int, ranges, heading_command: bool, device: str, seed: int = 0,
+                 min_speed: float = 0.3, stand_fraction: float = 0.1):
+        if not 0.0 <= stand_fraction <= 1.0:
+            raise ValueError(f"stand_fraction must be in [0, 1], got {stand_fraction}.")
         g = torch.Generator().manual_seed(seed)
         n = num_robots
         yaw = _uniform(*ranges.ang_vel_yaw, n, g) if not heading_command else torch.zeros(n)
         heading = _uniform(*ranges.heading, n, g) if heading_command else torch.zeros(n)
-        self._commands = torch.stack([_uniform(*ranges.lin_vel_x, n, g), _uniform(*ranges.lin_vel_y, n, g), yaw,
-                                      heading], 1).to(device)
+        vxy = _moving_commands(ranges, n, min_speed, g)
+        self.standing = torch.rand(n, generator=g) < stand_fraction
+        """Per robot: told to stand still for the whole episode (scored as its own category)."""
+        vxy[self.standing] = 0.0
+        yaw[self.standing] = 0.0
+        self._commands = torch.cat([vxy, yaw[:, None], heading[:, None]], 1).to(device)
+        self.standing = self.standing.to(device)
         self.heading_command = heading_command
         self.finished = torch.zeros(n, dtype=torch.bool, device=device)
 
@@ -37,6 +50,31 @@ class VelocityTask:
 
     def update(self, pos_xy: torch.Tensor, active: torch.Tensor) -> None:
         """Nothing to advance: the command is fixed for the episode."""
+
+
+def _moving_commands(ranges, n: int, min_speed: float, generator: torch.Generator, rounds: int = 16) -> torch.Tensor:
+    """(n, 2) (vx, vy) uniform in the command ranges, restricted to speeds >= ``min_speed`` (rejection sampling,
+    a bounded number of rounds of 64 candidates per robot)."""
+    (x0, x1), (y0, y1) = ranges.lin_vel_x, ranges.lin_vel_y
+    fastest = math.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1)))
+    if fastest < min_speed:
+        raise ValueError(f"the command ranges (lin_vel_x {ranges.lin_vel_x}, lin_vel_y {ranges.lin_vel_y}) allow no "
+                         f"speed >= min_speed {min_speed} m/s; lower min_speed or widen the ranges.")
+    out = torch.zeros(n, 2)
+    todo = torch.ones(n, dtype=torch.bool)
+    for _ in range(rounds):
+        k = int(todo.sum())
+        if k == 0:
+            return out
+        cand = torch.stack([_uniform(x0, x1, k * 64, generator), _uniform(y0, y1, k * 64, generator)], 1).view(k, 64, 2)
+        ok = torch.linalg.norm(cand, dim=2) >= min_speed
+        found = ok.any(1)
+        first = ok.float().argmax(1)
+        idx = todo.nonzero().squeeze(1)
+        out[idx[found]] = cand[found, first[found]]
+        todo[idx[found]] = False
+    raise ValueError(f"the command ranges (lin_vel_x {ranges.lin_vel_x}, lin_vel_y {ranges.lin_vel_y}) almost never "
+                     f"reach min_speed {min_speed} m/s; lower min_speed or widen the ranges.")
 
 
 class WaypointTask:

@@ -27,7 +27,7 @@ import warp as wp
 
 from legged_gente.external_forces import kernels as K
 from legged_gente.external_forces.config import ForcesConfig
-from legged_gente.external_forces.soil import preset_table
+from legged_gente.terrain.soil import preset_table
 from legged_gente.terrain.materials import MaterialMap
 
 

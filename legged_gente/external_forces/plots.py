@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from legged_gente.external_forces import models  # noqa: E402
-from legged_gente.external_forces.soil import SOIL_PRESETS  # noqa: E402
+from legged_gente.terrain.soil import SOIL_PRESETS  # noqa: E402
 
 RHO, G, CD, CM = 1000.0, 9.81, 1.1, 1.0
 

@@ -111,14 +111,10 @@ class TerrainSpec:
             raise ValidationError([f"{path}: {m}" for m in exc.messages]) from None
 
     def to_tile_spec(self):
-        """The terrain library's ``TileSpec``: one ``Part`` per call, in call order."""
-        from legged_gente.terrain.composition import Operation, Part, Region, TileSpec
+        """The terrain library's ``TileSpec``: one ``Part`` per call, in call order (read as training reads it)."""
+        from legged_gente.terrain.composition import tile_spec_from_document
 
-        parts = []
-        for c in self.calls:
-            x0, y0, x1, y1 = c.rect(self.size_x, self.size_y)
-            parts.append(Part(Region(x0, y0, x1, y1), [Operation(c.tool, dict(c.params), c.mode or "set")]))
-        return TileSpec(self.size_x, self.size_y, self.resolution, int(self.seed), parts)
+        return tile_spec_from_document(self.to_dict())
 
     def build(self) -> tuple[np.ndarray, MaterialMap]:
         """Heights (float32 ``(nx, ny)``, metres) and the aligned MaterialMap; deterministic."""

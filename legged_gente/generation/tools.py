@@ -15,34 +15,13 @@ from __future__ import annotations
 import copy
 from typing import Any, Mapping
 
+from legged_gente.terrain.composition import named_regions
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain, Param
 
 LAYOUT_ARGS = ("region", "mode")
 """Argument names reserved for layout; no terrain may declare a parameter with one of these names."""
 
 MODES = ("set", "add")
-
-
-def named_regions(size_x: float, size_y: float) -> dict[str, tuple[float, float, float, float]]:
-    """Named regions of a ``size_x`` x ``size_y`` m tile as ``(x0, y0, x1, y1)`` metres.
-
-    The four quadrants come from the terrain library's ``QUADRANTS``; the halves ("front", "back", "left",
-    "right") and "full" are unions of them, so the layout vocabulary has one source.
-    """
-    from legged_gente.terrain.composition import QUADRANTS, quadrant
-
-    quads = {name: quadrant(name, size_x, size_y) for name in QUADRANTS}
-    rects = {name: (float(r.x0), float(r.y0), float(r.x1), float(r.y1)) for name, r in quads.items()}
-
-    def union(*names: str) -> tuple[float, float, float, float]:
-        rs = [rects[n] for n in names]
-        return (min(r[0] for r in rs), min(r[1] for r in rs), max(r[2] for r in rs), max(r[3] for r in rs))
-
-    out = {"full": union(*rects)}
-    for side in ("front", "back", "left", "right"):
-        out[side] = union(*[n for n in rects if side in n.split("_")])
-    out.update(rects)
-    return out
 
 
 def param_schema(param: Param) -> dict[str, Any]:

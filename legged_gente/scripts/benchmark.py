@@ -319,9 +319,9 @@ def main(argv=None) -> None:
     if any(n < 1 for n in args.num_envs):
         parser.error("--num_envs values must be >= 1")
     if args.terrain_build:
-        from legged_gente.terrain.benchmark import benchmark_grid
+        from legged_gente.terrain.benchmark import benchmark_grid, describe
 
-        benchmark_grid()
+        print(describe(benchmark_grid()), flush=True)
     if args.profile_envs is not None and args.profile_envs not in args.num_envs:
         parser.error(f"--profile_envs {args.profile_envs} is not one of --num_envs {args.num_envs}")
     if args.check_sync and not device.startswith("cuda"):

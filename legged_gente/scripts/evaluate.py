@@ -1,7 +1,7 @@
 """gente-evaluate: a policy on the benchmark's terrains -> per-terrain, per-category and overall metrics.
 
     gente-evaluate --task gente_biped --checkpoint logs/gente_biped/RUN/model_1500.pt \\
-        --benchmark benchmarks/gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
+        --benchmark gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
 
 Writes ``report.json``, ``report.csv`` and ``traces.npz`` (the first robot of every terrain: commands,
 velocities, positions, waypoints) to ``--out``. See docs/evaluation.md for the metrics' definitions.
@@ -13,39 +13,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from legged_gente.utils.args import default_device
-
-
-def load_policy(evaluation, checkpoint: str | None = None, exported: str | None = None, baseline: str | None = None):
-    """obs TensorDict -> actions from an rsl-rl checkpoint (file or run folder), a TorchScript file, or a baseline."""
-    env = evaluation.env
-    given = [x for x in (checkpoint, exported, baseline) if x]
-    if len(given) != 1:
-        raise ValueError("give exactly one of --checkpoint (rsl-rl model_N.pt or its run folder), --exported "
-                         "(TorchScript policy.pt from gente-play) or --baseline (zero | random).")
-    if baseline:
-        if baseline == "zero":
-            return lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)
-        if baseline == "random":
-            return lambda obs: 0.5 * torch.randn(env.num_envs, env.num_actions, device=env.device)
-        raise ValueError(f"--baseline {baseline!r}: use 'zero' or 'random'.")
-    if exported:
-        model = torch.jit.load(exported, map_location=env.device)
-        model.eval()
-        return lambda obs: model(obs["policy"])
-    from legged_gente.envs.task_registry import task_registry
-    from legged_gente.utils.checkpoints import find_checkpoint
-
-    path = Path(checkpoint)
-    if path.is_dir():
-        path = find_checkpoint(path.parent, path.name)
-    if not path.is_file():
-        raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
-    runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
-    runner.load(str(path), map_location=env.device)
-    return runner.get_inference_policy(device=env.device)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -55,15 +24,20 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, or a run folder (its latest checkpoint)")
     src.add_argument("--exported", help="TorchScript policy.pt exported by gente-play")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
-    p.add_argument("--benchmark", default="benchmarks/gente100", help="benchmark folder with manifest.json")
+    p.add_argument("--benchmark", default="gente100", help="a shipped benchmark (gente100) or a folder with a manifest.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
     p.add_argument("--robots_per_terrain", type=int, default=16)
     p.add_argument("--mode", choices=("velocity", "waypoints"), default="velocity", help="evaluation task")
     p.add_argument("--episode_s", type=float, default=None,
                    help="episode length in s (default: 10 for velocity, 20 for waypoints)")
-    p.add_argument("--tracking_threshold", type=float, default=0.5,
+    p.add_argument("--tracking_threshold", type=float, default=0.25,
                    help="m/s; velocity-task success needs a mean tracking error below it")
+    p.add_argument("--min_progress", type=float, default=0.7,
+                   help="velocity-task success needs this share of the commanded distance covered along the command")
+    p.add_argument("--min_speed", type=float, default=0.3, help="m/s; the slowest moving command of the velocity task")
+    p.add_argument("--stand_fraction", type=float, default=0.1,
+                   help="share of robots commanded to stand still (scored as the group stand_still)")
     p.add_argument("--settle_s", type=float, default=1.0, help="s at the start not counted in the tracking error")
     p.add_argument("--reach_distance", type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
@@ -76,7 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
     from legged_gente.evaluation.report import build_report, write_reports
 
     items = load_benchmark(args.benchmark, args.items)
@@ -89,11 +63,12 @@ def evaluate(args) -> dict:
     episode_s = args.episode_s or (20.0 if args.mode == "waypoints" else 10.0)
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     policy = load_policy(evaluation, args.checkpoint, args.exported, args.baseline)
-    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed)
+    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
+                                stand_fraction=args.stand_fraction)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress)
     meta = {"task": args.task, "benchmark": str(args.benchmark), "policy": args.checkpoint or args.exported or args.baseline,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed}
-    report = build_report(result, items, args.tracking_threshold, meta)
+    report = build_report(result, items, args.tracking_threshold, meta, args.min_progress)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]

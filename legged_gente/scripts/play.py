@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from legged_gente.envs.task_registry import LOG_ROOT, task_registry
-from legged_gente.utils.args import apply_args, build_parser, parse_args
+from legged_gente.envs.task_registry import LOG_ROOT, apply_args, task_registry
+from legged_gente.utils.args import build_parser, parse_args
 
 
 def export_policy(runner, export_dir: Path) -> tuple[Path, Path]:

@@ -8,24 +8,27 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import importlib.resources
 import warnings
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-PROJECT_ROOT = Path(__file__).resolve().parents[2]
+PACKAGE_ROOT = Path(str(importlib.resources.files("legged_gente")))  # shipped data: resources/robots/...
 TERRAIN_GEOM = "terrain"
 ROBOT_CONTYPE, TERRAIN_CONTYPE, TERRAIN_CONAFFINITY = 2, 1, 2
 
 
 def resolve_path(path: str) -> Path:
-    """An MJCF path as given, or relative to the project root; a clear error when it does not exist."""
+    """An MJCF path as given (absolute, or relative to the working directory), else one shipped with the package
+    (``resources/robots/<name>/<name>.xml``); a clear error when neither exists."""
     candidate = Path(path).expanduser()
     if not candidate.is_absolute() and not candidate.exists():
-        candidate = PROJECT_ROOT / candidate
+        candidate = PACKAGE_ROOT / candidate
     if not candidate.is_file():
-        raise FileNotFoundError(f"robot file {path!r} not found (also looked in {PROJECT_ROOT}); set cfg.asset.file to an MJCF path.")
+        raise FileNotFoundError(f"robot file {path!r} not found (also looked in {PACKAGE_ROOT}); set cfg.asset.file "
+                                f"to an MJCF path.")
     return candidate
 
 

@@ -57,6 +57,12 @@ def benchmark_grid(
     }
 
 
+def describe(result: dict[str, Any]) -> str:
+    """One line for :func:`benchmark_grid`'s result."""
+    return (f"terrain build: {result['grid']} ({result['cells']} cells incl. border): "
+            f"best {result['best_s']:.3f} s, mean {result['mean_s']:.3f} s over {result['repeats']} builds")
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, default=10)
@@ -66,10 +72,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
     result = benchmark_grid(args.rows, args.cols, args.tile_size, args.resolution, args.repeats)
-    print(
-        f"terrain build: {result['grid']} ({result['cells']} cells incl. border): "
-        f"best {result['best_s']:.3f} s, mean {result['mean_s']:.3f} s over {result['repeats']} builds"
-    )
+    print(describe(result))
     return result
 
 

@@ -70,6 +70,26 @@ def quadrant(name: str, size_x: float, size_y: float) -> Region:
     return QUADRANTS[name](size_x, size_y)
 
 
+def named_regions(size_x: float, size_y: float) -> dict[str, tuple[float, float, float, float]]:
+    """Named regions of a ``size_x`` x ``size_y`` m tile as ``(x0, y0, x1, y1)`` metres.
+
+    The four quadrants come from ``QUADRANTS``; the halves ("front", "back", "left",
+    "right") and "full" are unions of them, so the layout vocabulary has one source.
+    """
+    quads = {name: quadrant(name, size_x, size_y) for name in QUADRANTS}
+    rects = {name: (float(r.x0), float(r.y0), float(r.x1), float(r.y1)) for name, r in quads.items()}
+
+    def union(*names: str) -> tuple[float, float, float, float]:
+        rs = [rects[n] for n in names]
+        return (min(r[0] for r in rs), min(r[1] for r in rs), max(r[2] for r in rs), max(r[3] for r in rs))
+
+    out = {"full": union(*rects)}
+    for side in ("front", "back", "left", "right"):
+        out[side] = union(*[n for n in rects if side in n.split("_")])
+    out.update(rects)
+    return out
+
+
 @dataclasses.dataclass
 class Operation:
     """One atomic terrain applied to a part: ``set`` replaces heights, ``add`` adds to them.
@@ -136,6 +156,25 @@ class TileSpec:
 
     def build(self, ground_friction: float = 1.0) -> tuple[np.ndarray, MaterialMap]:
         return build_tile(self, ground_friction)
+
+
+def tile_spec_from_document(data: Any) -> TileSpec:
+    """The tile of a terrain spec document, the ``spec.json`` that gente-generate writes: ``size_x``, ``size_y``,
+    ``resolution``, ``seed`` and ``calls`` of ``{"tool", "region" (a named region or {x0, y0, x1, y1}), "params",
+    "mode"}`` applied in order. The parameters and regions are checked when the tile is built; the generation
+    package validates whole documents (``TerrainSpec.load``) and builds its tiles through this function."""
+    try:
+        size_x, size_y = float(data["size_x"]), float(data["size_y"])
+        regions = named_regions(size_x, size_y)
+        parts = []
+        for call in data["calls"]:
+            region = call["region"]
+            rect = regions[region] if isinstance(region, str) else tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
+            parts.append(Part(Region(*rect), [Operation(call["tool"], dict(call["params"]), call.get("mode") or "set")]))
+        return TileSpec(size_x, size_y, float(data["resolution"]), int(data["seed"]), parts)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"not a terrain spec document ({type(exc).__name__}: {exc}); pass a spec.json written by "
+                         f"gente-generate") from None
 
 
 def _json_params(params: dict[str, Any]) -> dict[str, Any]:

@@ -32,7 +32,7 @@ class MaterialMap:
     flow_omega: angular frequency of a tide (rad/s).
     flow_phase: phase of a tide (rad).
     soil: index into ``soil_presets`` (int8), ``NO_SOIL`` for rigid ground.
-    soil_presets: names of the soil presets (``legged_gente.external_forces.soil.SOIL_PRESETS`` keys, or
+    soil_presets: names of the soil presets (``legged_gente.terrain.soil.SOIL_PRESETS`` keys, or
         custom names registered there) that ``soil`` indexes.
     friction: Coulomb friction coefficient of the ground surface (1).
     """
@@ -124,7 +124,7 @@ class MaterialPatch:
 
     water_surface: (nx, ny) absolute z of the water surface (m), ``NO_WATER`` where the patch leaves a cell dry.
     flow_kind, flow_speed, flow_direction, flow_omega, flow_phase: the flow of that water (see MaterialMap).
-    soil: name of a soil preset of ``legged_gente.external_forces.soil.SOIL_PRESETS``.
+    soil: name of a soil preset of ``legged_gente.terrain.soil.SOIL_PRESETS``.
     friction: Coulomb friction coefficient of the ground (1).
     mask: (nx, ny) bool, the cells soil and friction apply to (all cells of the region if None).
     """

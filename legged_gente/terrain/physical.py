@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from legged_gente.external_forces.soil import SOIL_PRESETS
+from .soil import SOIL_PRESETS
 
 from .materials import FLOW_KINDS, NO_WATER, MaterialPatch
 from .registry import Param, atomic_terrain
@@ -48,7 +48,7 @@ def water(shape, resolution, rng, heights, depth, flow, speed, direction, omega,
 
 
 SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
-"""Built-in presets of ``legged_gente.external_forces.soil`` plus "custom" (register it there first)."""
+"""Built-in presets of ``legged_gente.terrain.soil`` plus "custom" (register it there first)."""
 
 
 @atomic_terrain(
@@ -58,7 +58,7 @@ SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
     {
         "preset": Param(
             "dry_sand",
-            "soil preset; 'custom' needs register_custom_soil('custom', ...) from legged_gente.external_forces.soil",
+            "soil preset; 'custom' needs register_custom_soil('custom', ...) from legged_gente.terrain.soil",
             choices=SOIL_CHOICES,
         )
     },
@@ -66,7 +66,7 @@ SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
 def soil(shape, resolution, rng, heights, preset):
     if preset not in SOIL_PRESETS:
         raise ValueError(
-            f"soil: preset {preset!r} is not registered; call legged_gente.external_forces.soil."
+            f"soil: preset {preset!r} is not registered; call legged_gente.terrain.soil."
             f"register_custom_soil({preset!r}, kc=..., kphi=..., n=..., bulldoze_a=..., bulldoze_n=..., mu=..., K=...) "
             f"first or use one of {sorted(SOIL_PRESETS)}."
         )

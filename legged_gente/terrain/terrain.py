@@ -15,6 +15,7 @@ atomics joined by ``+`` are applied in order to the whole tile, each at the tile
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from pathlib import Path
@@ -22,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .composition import Operation, Part, Region, TileSpec, build_tile
+from .composition import Operation, Part, Region, TileSpec, build_tile, tile_spec_from_document
 from .materials import MaterialMap
 from .registry import ATOMIC_TERRAINS
 
@@ -212,9 +213,14 @@ class Terrain:
 
     def _generated_tile(self, path: Path):
         def build():
-            from legged_gente.generation.spec import TerrainSpec  # generation imports terrain: import it lazily
-
-            return TerrainSpec.load(path).to_tile_spec().build(ground_friction=float(self.cfg.static_friction))
+            try:
+                tile = tile_spec_from_document(json.loads(path.read_text()))
+                return tile.build(ground_friction=float(self.cfg.static_friction))
+            except FileNotFoundError:
+                raise FileNotFoundError(f"terrain spec {path} does not exist; list the spec.json files that "
+                                        f"gente-generate wrote in cfg.generated_specs.") from None
+            except ValueError as exc:  # also json.JSONDecodeError and a parameter out of its range
+                raise ValueError(f"terrain spec {path}: {exc}") from None
 
         return build
 

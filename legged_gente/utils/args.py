@@ -88,15 +88,15 @@ def _override_value(text: str, current, name: str):
 
 
 def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
-    """Apply ``--set SECTION.FIELD=VALUE`` to whichever config owns SECTION (the train config's sections are
-    those of LeggedRobotCfgPPO); a config given as None is skipped, an unknown field is an error."""
-    from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO
-
+    """Apply ``--set SECTION.FIELD=VALUE`` to whichever config has SECTION (the train config first); a section
+    that neither has is skipped when one config is None (it may be the other's) and an error otherwise, as is
+    an unknown field."""
     for text in overrides:
         path, value = _parse_override(text)
-        cfg = train_cfg if hasattr(LeggedRobotCfgPPO, path[0]) else env_cfg
-        if cfg is None:
-            continue
+        owners = [cfg for cfg in (train_cfg, env_cfg) if cfg is not None and hasattr(cfg, path[0])]
+        if not owners and None in (env_cfg, train_cfg):
+            continue  # may be a section of the config not given here
+        cfg = owners[0] if owners else env_cfg
         owner = cfg
         for i, part in enumerate(path[:-1]):
             owner = getattr(owner, part, None)
@@ -108,24 +108,3 @@ def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
             raise ValueError(f"--set {text!r}: {'.'.join(path[:-1])} has no field {path[-1]!r}; its fields: "
                              f"{', '.join(fields)}")
         setattr(owner, path[-1], _override_value(value, getattr(owner, path[-1]), ".".join(path)))
-
-
-def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
-    """Override config instances with the flags that were given (None means 'keep the config's value')."""
-    apply_overrides(getattr(args, "overrides", None) or [], env_cfg, train_cfg)
-    if env_cfg is not None:
-        if getattr(args, "num_envs", None) is not None:
-            env_cfg.env.num_envs = args.num_envs
-        if getattr(args, "terrain", None):
-            from legged_gente.utils.terrain_arg import apply_terrain_arg
-
-            apply_terrain_arg(args.terrain, env_cfg)
-    if train_cfg is not None:
-        if getattr(args, "seed", None) is not None:
-            train_cfg.seed = args.seed
-        for flag in ("max_iterations", "experiment_name", "run_name", "load_run", "checkpoint"):
-            value = getattr(args, flag, None)
-            if value is not None:
-                setattr(train_cfg.runner, flag, value)
-        if getattr(args, "resume", False):
-            train_cfg.runner.resume = True

@@ -1,12 +1,16 @@
-"""Multi-GPU PPO under ``torchrun``: one process (rank) per GPU, each with its own envs.
+"""Multi-GPU and multi-node PPO under ``torchrun``: one process (rank) per GPU, each with its own envs.
 
-    NCCL_NVLS_ENABLE=0 torchrun --standalone --nproc_per_node=2 legged_gente/scripts/train.py --task=gente_biped_flat
+    torchrun --standalone --nproc_per_node=2 legged_gente/scripts/train.py --task=gente_biped_flat
+    torchrun --nnodes=2 --node_rank=K --nproc_per_node=8 --rdzv_backend=c10d --rdzv_endpoint=HOST0:29500 \
+        --rdzv_id=JOB legged_gente/scripts/train.py --task=gente_biped_flat      # on each of two hosts
 
-torchrun starts ``nproc_per_node`` copies of train.py and gives each RANK, LOCAL_RANK and WORLD_SIZE (plus
-MASTER_ADDR/MASTER_PORT for the rendezvous). Each rank builds ``num_envs`` envs on ``cuda:{LOCAL_RANK}``
-(``--device cpu``: on the CPU with the gloo backend, for tests), seeds torch with ``seed + RANK`` so the ranks
-explore differently, collects its own rollouts, and rsl-rl's PPO averages the gradients over the ranks
-(all-reduce) after rank 0's parameters were broadcast at the start. Only rank 0 logs and saves checkpoints.
+torchrun starts ``nproc_per_node`` copies of train.py on each host and gives each RANK (global, 0 ..
+WORLD_SIZE - 1 over all hosts), LOCAL_RANK (on this host, 0 .. LOCAL_WORLD_SIZE - 1), WORLD_SIZE and
+GROUP_RANK (the host's rank), plus MASTER_ADDR/MASTER_PORT for the process group. Each rank builds ``num_envs``
+envs on ``cuda:{LOCAL_RANK}`` (``--device cpu``: on the CPU with the gloo backend, for tests), seeds torch with
+``seed + RANK`` so the ranks explore differently, collects its own rollouts, and rsl-rl's PPO averages the
+gradients over the ranks (all-reduce) after rank 0's parameters were broadcast at the start. Only global
+rank 0 logs and saves checkpoints.
 
 rsl-rl 5.5's own ``OnPolicyRunner._configure_multi_gpu`` only goes distributed when WORLD_SIZE > 1, always
 uses NCCL and needs ``cuda:{LOCAL_RANK}``; ``GenteOnPolicyRunner`` also takes a one-process torchrun launch
@@ -28,9 +32,10 @@ from legged_gente.utils.episode_logger import DeferredLogger
 
 TORCHRUN_VARS = ("RANK", "LOCAL_RANK", "WORLD_SIZE")
 
-# NVLink multicast (NVLS / NVLink SHARP) stays off: on the lent multi-GPU hosts a program that uses it can put
-# the host's shared GPUs out of service for a day or more (/work/.library/device/KINDS.md), and NCCL turns it on
-# by itself on NVSwitch systems. Set before the process group (and so NCCL) is initialised.
+# NVLink multicast (NVLS / NVLink SHARP) is off unless the user turns it on: NCCL enables it by itself on
+# NVSwitch systems, PPO's all-reduce of ~1.5 MB gains nothing from it, and with it off training does not depend
+# on the host's NVSwitch multicast support (which shared hosts may restrict). Setting these variables to other
+# values turns it on, with a warning (docs/multi_gpu.md). Set before NCCL is initialised.
 MULTICAST_OFF = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1"}
 
 
@@ -38,9 +43,10 @@ MULTICAST_OFF = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1
 class Launch:
     """This process's place in a torchrun launch."""
 
-    rank: int  # global rank, 0 .. world_size - 1
+    rank: int  # global rank over all hosts, 0 .. world_size - 1: seeds, logging
     local_rank: int  # rank on this host: the CUDA device index
-    world_size: int
+    world_size: int  # ranks over all hosts
+    node: int = 0  # the host's rank (torchrun's GROUP_RANK)
 
     def rsl_rl_multi_gpu(self) -> dict:
         """The train config's ``multi_gpu`` keys that rsl-rl's PPO reads (all-reduce of the gradients and KL,
@@ -59,14 +65,18 @@ def torchrun_launch(environ=None) -> Launch | None:
         raise ValueError(f"torchrun environment incomplete: {present} set but {missing} missing; launch with "
                          f"`torchrun --nproc_per_node=N ...`, or unset {present} for a single-process run")
     values = {name: environ[name] for name in TORCHRUN_VARS}
+    values.update({name: environ[name] for name in ("LOCAL_WORLD_SIZE", "GROUP_RANK") if name in environ})
     try:
-        rank, local_rank, world_size = (int(value) for value in values.values())
+        numbers = {name: int(value) for name, value in values.items()}
     except ValueError:
         raise ValueError(f"torchrun variables must be integers, got {values}") from None
-    if world_size < 1 or not 0 <= rank < world_size or not 0 <= local_rank < world_size:
-        raise ValueError(f"inconsistent torchrun ranks RANK={rank} LOCAL_RANK={local_rank} WORLD_SIZE={world_size}:"
-                         f" need 0 <= RANK, LOCAL_RANK < WORLD_SIZE")
-    return Launch(rank, local_rank, world_size)
+    rank, local_rank, world_size = (numbers[name] for name in TORCHRUN_VARS)
+    local_world_size = numbers.get("LOCAL_WORLD_SIZE", world_size)
+    if (world_size < 1 or not 0 <= rank < world_size or not 0 <= local_rank < local_world_size <= world_size
+            or numbers.get("GROUP_RANK", 0) < 0):
+        raise ValueError(f"inconsistent torchrun ranks {values}: need 0 <= RANK < WORLD_SIZE, "
+                         f"0 <= LOCAL_RANK < LOCAL_WORLD_SIZE <= WORLD_SIZE and GROUP_RANK >= 0")
+    return Launch(rank, local_rank, world_size, numbers.get("GROUP_RANK", 0))
 
 
 def rank_device(device: str | None, launch: Launch) -> str:
@@ -109,8 +119,8 @@ def init_process_group(launch: Launch, device: str) -> str:
         for name, value in MULTICAST_OFF.items():
             os.environ.setdefault(name, value)
             if os.environ[name] != value:
-                warnings.warn(f"{name}={os.environ[name]} turns NVLink multicast on, which can put the lent GPU "
-                              f"hosts out of service; set {name}={value}", stacklevel=2)
+                warnings.warn(f"{name}={os.environ[name]} turns NVLink multicast on (off by default: "
+                              f"docs/multi_gpu.md); unset it or set {name}={value} to keep it off", stacklevel=2)
         torch.cuda.set_device(device)
         dist.init_process_group("nccl", rank=launch.rank, world_size=launch.world_size,
                                 device_id=torch.device(device))
@@ -156,8 +166,9 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         self.cfg["seed"] = int(self.cfg["seed"]) + self.gpu_global_rank
         torch.manual_seed(self.cfg["seed"])  # CPU and every CUDA device
         if launch is not None:
-            print(f"[distributed] rank {launch.rank}/{launch.world_size} (local {launch.local_rank}) on "
-                  f"{self.device}, backend {backend}, seed {self.cfg['seed']}", flush=True)
+            print(f"[distributed] rank {launch.rank}/{launch.world_size} (node {launch.node}, local "
+                  f"{launch.local_rank}) on {self.device}, backend {backend}, seed {self.cfg['seed']}"
+                  f"{'' if launch.rank == 0 else ', logs on rank 0'}", flush=True)
 
     def save(self, path: str, infos: dict | None = None) -> None:
         """rsl-rl's checkpoint plus the env's curriculum state (``infos["curriculum"]``)."""

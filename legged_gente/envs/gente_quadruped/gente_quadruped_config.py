@@ -1,4 +1,4 @@
-"""gente_quadruped: the 12-DoF, 14 kg quadruped (resources/robots/gente_quadruped), on the biped's terrains.
+"""gente_quadruped: the 12-DoF, 14 kg quadruped (legged_gente/resources/robots/gente_quadruped), on the biped's terrains.
 
 Only config subclasses: the quadruped needs no reward of its own. Reward scales follow legged_gym's
 defaults for small quadrupeds (tracking, lin_vel_z, ang_vel_xy, torques, dof_acc, feet_air_time, collision,

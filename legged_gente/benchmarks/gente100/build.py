@@ -1,7 +1,7 @@
 """Rebuild the gente100 benchmark: 50 text prompts + 50 images -> planner specs, previews, manifest.
 
-    python benchmarks/gente100/build.py            # rewrite images/, specs/, previews_*.png, manifest.json
-    python benchmarks/gente100/build.py --check    # and run the checker on every item (non-zero exit on failure)
+    python legged_gente/benchmarks/gente100/build.py            # rewrite images/, specs/, previews_*.png, manifest.json
+    python legged_gente/benchmarks/gente100/build.py --check    # and run the checker on every item (non-zero exit on failure)
 
 Everything is deterministic: the images are drawn from fixed seeds (half colour-coded sketch maps with the
 planner's LEGEND colours, half procedurally rendered scene pictures), and the offline planner backend maps
@@ -244,7 +244,7 @@ def main(argv=None) -> int:
     if not args.check:
         return 0
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.checker import check_item
+    from legged_gente.generation.checker import check_item
 
     failed = 0
     for item in load_benchmark(ROOT):

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import importlib.util
 import inspect
+import json
 from pathlib import Path
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
+from legged_gente.terrain.composition import tile_spec_from_document
 
 
 def apply_terrain_arg(value: str, env_cfg) -> None:
@@ -17,9 +19,10 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
     if not path.is_file():
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
     if path.suffix == ".json":
-        from legged_gente.generation.spec import TerrainSpec
-
-        spec = TerrainSpec.load(path)  # validates; the terrain takes the spec's own tile size and resolution
+        try:  # the terrain takes the spec's own tile size and resolution; its calls are checked when it is built
+            spec = tile_spec_from_document(json.loads(path.read_text()))
+        except ValueError as exc:  # also json.JSONDecodeError
+            raise ValueError(f"--terrain {value}: {exc}") from None
         terrain = env_cfg.terrain
         terrain.mesh_type, terrain.mode, terrain.curriculum = "heightfield", "generated", False
         terrain.generated_specs = [str(path.resolve())]
