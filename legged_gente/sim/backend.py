@@ -131,7 +131,10 @@ class Simulation:
     @torch.compiler.disable
     def reset_worlds(self, mask: torch.Tensor) -> None:
         """Restore the masked worlds' Data to the model defaults: qpos0, zero velocities, time, controls, solver
-        warm start, applied forces, contacts (``mjw.reset_data``); then the ``after_reset`` hooks."""
+        warm start, applied forces, contacts (``mjw.reset_data``); then the ``after_reset`` hooks. Skipped on
+        the CPU when no world is masked (see ``forward``)."""
+        if not self.wp_device.is_cuda and not bool(mask.any()):
+            return
         with wp.ScopedDevice(self.wp_device):
             mjw.reset_data(self.m, self.d, reset=wp.from_torch(mask.contiguous(), dtype=wp.bool))
         for hook in self.after_reset:
