@@ -124,7 +124,7 @@ class LeggedRobot(VecEnv):
         ]
         for name in COMMAND_RANGES:
             low, high = getattr(cfg.commands.ranges, name)
-            checks.append((low <= high, f"cfg.commands.ranges.{name}=[{low}, {high}]; use [low, high] with low <= high"))
+            checks.append((low <= high, f"cfg.commands.ranges.{name}=[{low}, {high}]; use [low, high], low <= high"))
         checks.append((cfg.terrain.mesh_type == "plane" or not cfg.forces.enabled
                        or cfg.forces.friction_reference == cfg.terrain.static_friction,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference} differs from "
