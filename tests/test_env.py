@@ -82,7 +82,7 @@ def test_every_reward_term_is_finite():
 def test_unknown_reward_term_is_a_clear_error():
     cfg = small_cfg()
     cfg.rewards.scales.dance = 1.0
-    with pytest.raises(AttributeError, match="_reward_dance"):
+    with pytest.raises(ValueError, match="_reward_dance"):
         GenteBiped(cfg, device="cpu")
 
 
@@ -110,22 +110,6 @@ def test_bad_names_give_clear_errors():
     cfg.control.stiffness = {"hip": 100.0}
     with pytest.raises(ValueError, match=r"no stiffness .* given for joint 'left_knee'"):
         GenteBiped(cfg, device="cpu")
-
-
-def test_exploding_world_is_reset_and_counted(env):
-    before = env.diverged_resets.item()
-    env.sim.qvel[2, 6] = 1.0e4  # finite but absurd: a diverged world
-    _, _, done, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
-    assert done[2] and env.diverged_resets.item() == before + 1
-    assert env.sim.qvel.abs().max() < env.cfg.sim.max_qvel
-
-
-def test_nonfinite_world_is_reset_and_counted(env):
-    env.sim.qvel[1, 0] = math.nan
-    obs, _, done, _ = env.step(torch.zeros(NUM_ENVS, env.num_actions))
-    assert done[1]
-    assert env.diverged_resets.item() >= 1
-    assert torch.isfinite(obs["policy"]).all()
 
 
 def test_task_registry_knows_the_biped():
@@ -179,7 +163,8 @@ def test_heading_commands_turn_towards_the_heading(env):
 
     yaw = yaw_of(env.base_quat)
     env.commands[:, 3] = yaw + torch.tensor([0.5, -0.5, 3.0, 0.0])
-    env._compute_observations()
+    env.standing_still[:] = False
+    env._update_heading_commands()
     stiffness, (low, high) = env.cfg.commands.heading_stiffness, env.cfg.commands.ranges.ang_vel_yaw
     expected = torch.tensor([0.5, -0.5, 3.0, 0.0]) * stiffness
     assert torch.allclose(env.commands[:, 2], expected.clamp(low, high), atol=1e-5)

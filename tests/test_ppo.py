@@ -100,3 +100,23 @@ def test_two_rank_update_matches_rsl_rl_over_gloo():
     assert out.returncode == 0, log[-4000:]
     assert log.count("GentePPO agrees with rsl-rl's PPO") == 2, log[-4000:]
     assert "rank 1: update 3:" in log, log[-4000:]
+
+
+def test_a_non_finite_update_stops_training():
+    """learning_rate=1e999 (inf, as --set algorithm.learning_rate=1e999 gives) makes Adam's step inf/NaN: the
+    update must raise instead of returning NaN weights for the runner to save."""
+    with pytest.raises(FloatingPointError, match="non-finite.*learning_rate"):
+        updated(GentePPO, float("1e999"))
+
+
+def test_a_non_finite_update_stops_rsl_rl_fallback_path(monkeypatch):
+    """The fallback to rsl-rl's update (recurrent models, RND, ...) is checked too."""
+    original = GentePPO.__init__
+
+    def init(self, *args, **kwargs):
+        original(self, *args, **kwargs)
+        self.device_side_update = False
+
+    monkeypatch.setattr(GentePPO, "__init__", init)
+    with pytest.raises(FloatingPointError, match="non-finite"):
+        updated(GentePPO, float("1e999"))

@@ -2,6 +2,9 @@
 resumed, in order) into the results format of docs/results: iteration, wall_s, mean_episode_length,
 rew_tracking_lin_vel, mean_reward, env_steps_per_s, terrain_level, diverged_resets_cumulative.
 
+Episode/diverged_resets is the count per logging interval (one iteration); the results column sums it over
+the run. (Runs before the divergence fix logged a running total per chunk; their results files were made so.)
+
 wall_s is the training time rsl-rl measures (collection + learning, summed over iterations): process start-up
 and the pause between resumed chunks are not in it.
 
@@ -25,20 +28,18 @@ def main() -> None:
     parser.add_argument("out")
     parser.add_argument("chunks", nargs="+")
     args = parser.parse_args()
-    out_rows, wall, diverged_offset = [], 0.0, 0.0
+    out_rows, wall, diverged = [], 0.0, 0.0
     for path in args.chunks:
         rows = [r for r in csv.DictReader(open(path)) if r["Train/mean_episode_length"] != ""]
         if not rows:
             raise SystemExit(f"{path}: no training iterations (is it a tb_export CSV of a run?)")
-        last_diverged = 0.0
         for r in rows:
             wall += float(r["Perf/collection_time"]) + float(r["Perf/learning_time"])
-            last_diverged = float(r.get("Episode/diverged_resets") or 0.0)  # cumulative within the chunk
+            diverged += float(r.get("Episode/diverged_resets") or 0.0)  # this iteration's count
             row = {"iteration": int(r["step"]), "wall_s": round(wall, 1)}
             row.update({name: f"{float(r[tag]):.4g}" if r.get(tag) else "" for name, tag in COLUMNS.items()})
-            row["diverged_resets_cumulative"] = int(diverged_offset + last_diverged)
+            row["diverged_resets_cumulative"] = int(diverged)
             out_rows.append(row)
-        diverged_offset += last_diverged
     with open(args.out, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(out_rows[0]))
         writer.writeheader()

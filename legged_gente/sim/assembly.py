@@ -67,7 +67,6 @@ class RobotLayout:
     qpos_adr: np.ndarray  # per actuated joint
     dof_adr: np.ndarray
     foot_bodies: np.ndarray
-    knee_bodies: np.ndarray
     penalized_bodies: np.ndarray
     terminate_bodies: np.ndarray
     hip_joint_ids: np.ndarray  # positions in joint_names
@@ -261,12 +260,12 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
         qpos_adr=np.array([mjm.jnt_qposadr[j] for j in joint_ids], dtype=np.int64),
         dof_adr=np.array([mjm.jnt_dofadr[j] for j in joint_ids], dtype=np.int64),
         foot_bodies=body_ids(asset.foot_bodies),
-        knee_bodies=body_ids(asset.knee_bodies),
         penalized_bodies=body_ids(asset.penalize_contacts_on),
         terminate_bodies=body_ids(asset.terminate_after_contacts_on),
         hip_joint_ids=np.array([joint_names.index(h) for h in hips], dtype=np.int64),
         default_joint_pos=defaults,
-        joint_limits=np.array([mjm.jnt_range[j] for j in joint_ids]),
+        # an unlimited joint (range [0, 0] in MjModel) has no limits
+        joint_limits=np.array([mjm.jnt_range[j] if mjm.jnt_limited[j] else (-np.inf, np.inf) for j in joint_ids]),
         torque_limits=np.array([mjm.actuator_forcerange[a, 1] if mjm.actuator_forcelimited[a] else np.inf
                                 for a in range(mjm.nu)]),
         terrain_geom=mjm.geom(TERRAIN_GEOM).id,

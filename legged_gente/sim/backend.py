@@ -17,7 +17,10 @@ import torch
 import warp as wp
 from mujoco_warp._src.support import contact_force_fn
 
-BATCHED_FIELDS = ("geom_friction", "body_mass", "body_inertia")
+# per-world model fields: what domain randomisation writes (friction, base mass and inertia) and what
+# ``mjw.set_const`` derives from the masses (subtree masses, the inverse weights the solver regularises with)
+BATCHED_FIELDS = ("geom_friction", "body_mass", "body_inertia", "body_subtreemass", "body_invweight0",
+                  "dof_invweight0", "actuator_acc0")
 
 
 @wp.kernel
@@ -65,7 +68,9 @@ class Simulation:
             self.m.opt.warn_overflow &= ~(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
             self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
             self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
+            self._fresh_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
         self.after_substep: list[Callable[[], None]] = []
+        self.after_reset: list[Callable[[torch.Tensor], None]] = []  # called with the reset mask (torch bool)
         self._graph = None
         self._make_views()
 
@@ -73,10 +78,11 @@ class Simulation:
         t = wp.to_torch
         d, m = self.d, self.m
         self.qpos, self.qvel, self.ctrl = t(d.qpos), t(d.qvel), t(d.ctrl)
-        self.xpos, self.xquat, self.cvel = t(d.xpos), t(d.xquat), t(d.cvel)
+        self.xpos, self.xquat, self.cvel, self.geom_xpos = t(d.xpos), t(d.xquat), t(d.cvel), t(d.geom_xpos)
         self.subtree_com, self.actuator_force = t(d.subtree_com), t(d.actuator_force)
         self.nefc, self.time = t(d.nefc), t(d.time)
         self.body_contact_force = t(self.body_contact_force_wp)
+        self._fresh_contact_force = t(self._fresh_contact_force_wp)
         self.geom_friction = t(m.geom_friction)
         self.body_mass, self.body_inertia = t(m.body_mass), t(m.body_inertia)
 
@@ -86,11 +92,17 @@ class Simulation:
             mjw.step(self.m, self.d)
             for hook in self.after_substep:
                 hook()
-        self.body_contact_force_wp.zero_()
+        self._contact_forces()
+
+    def _contact_forces(self, out: wp.array | None = None) -> None:
+        """Per-body contact forces (``body_contact_force``, or ``out``) from the contacts and constraint forces
+        now in ``d``."""
+        out = self.body_contact_force_wp if out is None else out
+        out.zero_()
         wp.launch(_body_contact_forces, dim=self.d.naconmax, inputs=[
             self.m.opt.cone, self.m.geom_bodyid, self.d.contact.frame, self.d.contact.friction,
             self.d.contact.dim, self.d.contact.efc_address, self.d.contact.worldid, self.d.contact.adhesion,
-            self.d.contact.geom, self.d.efc.force, self.d.njmax, self.d.nacon], outputs=[self.body_contact_force_wp])
+            self.d.contact.geom, self.d.efc.force, self.d.njmax, self.d.nacon], outputs=[out])
 
     def step(self, decimation: int) -> None:
         """Advance all worlds by ``decimation`` substeps; contact forces per body are refreshed at the end."""
@@ -115,12 +127,45 @@ class Simulation:
             wp.capture_launch(self._graph, stream=self._sim_stream)
             torch_stream.wait_stream(self._sim_stream)
 
+    # Warp launches: torch.compile leaves these methods to run as they are (graph breaks around them)
+    @torch.compiler.disable
     def reset_worlds(self, mask: torch.Tensor) -> None:
-        """Reset the masked worlds' Data to the model defaults (time, warm starts, applied forces, ...)."""
+        """Restore the masked worlds' Data to the model defaults: qpos0, zero velocities, time, controls, solver
+        warm start, applied forces, contacts (``mjw.reset_data``); then the ``after_reset`` hooks. Skipped on
+        the CPU when no world is masked (see ``forward``)."""
+        if not self.wp_device.is_cuda and not bool(mask.any()):
+            return
         with wp.ScopedDevice(self.wp_device):
-            mjw.reset_data(self.m, self.d, reset=wp.from_torch(mask.to(torch.bool), dtype=wp.bool))
+            mjw.reset_data(self.m, self.d, reset=wp.from_torch(mask.contiguous(), dtype=wp.bool))
+        for hook in self.after_reset:
+            hook(mask)
 
-    def forward(self) -> None:
-        """Recompute derived quantities (kinematics, contacts) from the current qpos/qvel."""
+    @torch.compiler.disable
+    def forward(self, mask: torch.Tensor) -> None:
+        """Recompute what derives from qpos/qvel/ctrl (bodies, contacts, constraint forces) without advancing
+        time, and the per-body contact forces of the worlds in ``mask`` (the others keep their last substep's).
+
+        Physics-neutral: ``mjw.forward`` leaves the solver's warm start alone, and the force fields' callbacks
+        (which integrate state once per substep, e.g. soil ruts) are left out; the next substep runs them. So
+        between policy steps ``d.contact`` holds these unfiltered contacts. It costs about a third of a policy
+        step's physics (4 substeps); on the CPU it is skipped when no world is masked (a host read, free there;
+        on a GPU it always runs, as the step must not wait for the device)."""
+        if not self.wp_device.is_cuda and not bool(mask.any()):
+            return
+        callbacks = self.m.callback
+        saved = callbacks.contactfilter, callbacks.passive
+        callbacks.contactfilter = callbacks.passive = None
+        try:
+            with wp.ScopedDevice(self.wp_device):
+                mjw.forward(self.m, self.d)
+                self._contact_forces(self._fresh_contact_force_wp)
+        finally:
+            callbacks.contactfilter, callbacks.passive = saved
+        self.body_contact_force[:] = torch.where(mask[:, None, None], self._fresh_contact_force,
+                                                 self.body_contact_force)
+
+    @torch.compiler.disable
+    def set_const(self) -> None:
+        """Derived model constants (subtree masses, inverse weights) after body masses or inertias changed."""
         with wp.ScopedDevice(self.wp_device):
-            mjw.forward(self.m, self.d)
+            mjw.set_const(self.m, self.d)

@@ -8,10 +8,13 @@ module, warms up torch and creates lazily built state such as the optimizer's), 
 with ``wp.capture_begin(external=True)``), and from then on each call is a single graph launch.
 
 What a graph replays is fixed at capture: the body must not branch on host values that change between steps
-nor wait for the device, and state kept from one step to the next must be updated in place (``x[:] = ...``),
-because a replay reads and writes the tensors that existed at capture. Tensors the body recomputes from
-scratch each step may be rebound; they are named in ``outputs`` and rebound to the graph's tensors after
-every replay. Any other tensor attribute that the body rebinds is an error at capture.
+nor wait for the device (its owner's wrapper checks what it can, e.g. the env's step runner rejects config reads).
+The body may rebind its owner's tensor attributes freely (``self.x = self.x + 1``): a replay reads and writes
+the tensors that existed at capture, so at the end of the capture ``StepGraph`` records a copy of every rebound
+tensor into the tensor the attribute held before, and binds the attribute back to it. State carried from one
+step to the next thus stays in one tensor whatever the body does, at the cost of one device copy per rebound
+tensor (none where the body works in place). Rebound non-tensor attributes (e.g. a dict of tensors) are bound to
+the objects the capture made after every replay.
 """
 
 from __future__ import annotations
@@ -28,22 +31,20 @@ def rebound_attributes(owner, before: dict) -> dict:
     return {name: value for name, value in vars(owner).items() if before.get(name) is not value}
 
 
-def carried_state_rebound(rebound: dict, outputs) -> list[str]:
-    """The rebound tensor attributes that are not step outputs: state a graph replay would lose."""
-    return sorted(name for name, value in rebound.items()
-                  if isinstance(value, (torch.Tensor, TensorDict)) and name not in outputs)
+def _same_memory(a: torch.Tensor, b: torch.Tensor) -> bool:
+    return a.data_ptr() == b.data_ptr() and a.shape == b.shape and a.stride() == b.stride()
 
 
 class StepGraph:
-    """``body()`` (a method of ``owner``) run through one CUDA graph from its second call on; ``warp``: the
+    """``body()`` (a method of ``owner``) run through one CUDA graph after ``warmup`` plain calls; ``warp``: the
     body launches Warp kernels too."""
 
-    def __init__(self, owner, body: Callable[[], None], outputs: tuple[str, ...], device: str, warp: bool = True):
-        self.owner, self.body, self.outputs, self.device = owner, body, frozenset(outputs), torch.device(device)
+    def __init__(self, owner, body: Callable[[], None], device: str, warp: bool = True, warmup: int = 1):
+        self.owner, self.body, self.device = owner, body, torch.device(device)
         self.warp = warp
         self.graph: torch.cuda.CUDAGraph | None = None
         self.stream: torch.cuda.Stream | None = None  # warm-up and capture run here (torch's recipe)
-        self.warmed_up = False
+        self.warmup = warmup
         self.bindings: dict = {}
 
     def __call__(self) -> None:
@@ -52,12 +53,12 @@ class StepGraph:
             if self.stream is None:
                 self.stream = torch.cuda.Stream(self.device)
             self.stream.wait_stream(current)
-            if not self.warmed_up:
+            if self.warmup > 0:
                 # on the capture stream: autograd's gradient accumulators created here keep running there
                 with torch.cuda.stream(self.stream):
                     self._run_body()
                 current.wait_stream(self.stream)
-                self.warmed_up = True
+                self.warmup -= 1
                 return
             self._capture()
         self.graph.replay()
@@ -85,13 +86,25 @@ class StepGraph:
                         wp.capture_end(stream=warp_stream)
             else:
                 self.body()
-        rebound = rebound_attributes(self.owner, before)
-        carried = carried_state_rebound(rebound, self.outputs)
-        if carried:
-            raise RuntimeError(
-                f"{type(self.owner).__name__}'s step rebinds {carried} while being captured as a CUDA graph. State "
-                f"kept from one step to the next must be updated in place (self.x[:] = ..., self.x.copy_(...)); a "
-                f"tensor recomputed from scratch every step goes in the graph's outputs (an env's step_outputs). "
-                f"Or turn the graph off (an env's cfg.sim.cuda_graph).")
-        self.bindings = rebound
+            rebound = rebound_attributes(self.owner, before)
+            kept = self._copy_back(rebound, before)
+        vars(self.owner).update(kept)
+        self.bindings = {name: value for name, value in rebound.items() if name not in kept}
         self.graph = graph
+
+    def _copy_back(self, rebound: dict, before: dict) -> dict:
+        """Record (into the graph) a copy of each rebound tensor into the one its attribute held before the
+        capture; those attributes point at their old tensors again."""
+        kept = {}
+        for name, new in rebound.items():
+            old = before.get(name)
+            if not (isinstance(new, torch.Tensor) and isinstance(old, torch.Tensor)):
+                continue
+            if old.shape != new.shape or old.dtype != new.dtype or old.device != new.device:
+                raise RuntimeError(
+                    f"{type(self.owner).__name__}.{name} changes from {tuple(old.shape)} {old.dtype} to "
+                    f"{tuple(new.shape)} {new.dtype} in a step captured as a CUDA graph; keep its shape and dtype.")
+            if not _same_memory(old, new):
+                old.copy_(new)
+            kept[name] = old
+        return kept

@@ -23,6 +23,7 @@ every action sampled in the rollout and in every mini-batch.
 
 from __future__ import annotations
 
+import math
 from itertools import chain
 
 import torch
@@ -64,13 +65,13 @@ class GentePPO(PPO):
             if not cuda:
                 self._minibatch_stages = (self._minibatch_step,)
             elif not self.is_multi_gpu:
-                self._minibatch_stages = (StepGraph(self, self._minibatch_step, (), self.device, warp=False),)
+                self._minibatch_stages = (StepGraph(self, self._minibatch_step, self.device, warp=False),)
             else:  # NCCL's all-reduce runs between the two graphs
-                self._minibatch_stages = (StepGraph(self, self._minibatch_gradients, (), self.device, warp=False),
+                self._minibatch_stages = (StepGraph(self, self._minibatch_gradients, self.device, warp=False),
                                           self._all_reduce_gradients,
-                                          StepGraph(self, self._apply_gradients, (), self.device, warp=False))
+                                          StepGraph(self, self._apply_gradients, self.device, warp=False))
             if cuda:
-                self._act_graph = StepGraph(self, self._act_step, ("_act_transition",), self.device, warp=False)
+                self._act_graph = StepGraph(self, self._act_step, self.device, warp=False)
                 self._act_observations: TensorDict | None = None  # what the act graph reads
 
     def act(self, obs: TensorDict) -> torch.Tensor:
@@ -197,9 +198,25 @@ class GentePPO(PPO):
                     owner, _, leaf = name.rpartition(".")
                     setattr(model.get_submodule(owner), leaf, before[name])
 
+    def _parameters_finite(self) -> torch.Tensor:
+        return torch.stack([torch.isfinite(p).all() for p in chain(self.actor.parameters(),
+                                                                      self.critic.parameters())]).all()
+
+    def _check_finite(self, losses: dict[str, float], parameters_finite: bool) -> None:
+        """Stop at the first non-finite loss or parameter: a NaN policy must not train on and be saved."""
+        if parameters_finite and all(math.isfinite(v) for v in losses.values()):
+            return
+        shown = ", ".join(f"{k} {v:.3g}" for k, v in losses.items())
+        raise FloatingPointError(
+            f"PPO update gave a non-finite {'loss' if parameters_finite else 'parameter'} (losses: {shown}; learning "
+            f"rate {self.learning_rate:.3g}); training stops here. Lower algorithm.learning_rate or look for "
+            f"infinite rewards or observations.")
+
     def update(self) -> dict[str, float]:
         if not self.device_side_update:
-            return super().update()
+            losses = super().update()
+            self._check_finite(losses, bool(self._parameters_finite()))
+            return losses
         self._loss_sums.zero_()
         for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
             self._load_batch(batch)
@@ -209,6 +226,10 @@ class GentePPO(PPO):
         self.storage.clear()
         num_updates = self.num_learning_epochs * self.num_mini_batches
         means = self._loss_sums / num_updates
-        value, surrogate, entropy, learning_rate = torch.cat([means, self._learning_rate_tensor().reshape(1)]).tolist()
-        self.learning_rate = learning_rate  # a float for the logger, read once per update
-        return {"value": value, "surrogate": surrogate, "entropy": entropy}
+        finite = self._parameters_finite().float().reshape(1)
+        value, surrogate, entropy, learning_rate, finite = torch.cat(
+            [means, self._learning_rate_tensor().reshape(1), finite]).tolist()  # the update's one host read
+        self.learning_rate = learning_rate  # a float for the logger
+        losses = {"value": value, "surrogate": surrogate, "entropy": entropy}
+        self._check_finite(losses, finite == 1.0)
+        return losses

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 
 
@@ -25,6 +26,8 @@ def _instantiate_nested(obj: object) -> None:
             instance = value()
             setattr(obj, name, instance)
             _instantiate_nested(instance)
+        elif dataclasses.is_dataclass(value):  # a term record (ObsTerm): each config instance gets its own copy
+            setattr(obj, name, dataclasses.replace(value))
 
 
 def class_to_dict(obj: object) -> dict | object:

@@ -2,15 +2,18 @@
 
 legged_gym's task shape on MuJoCo-Warp: PD position actuators run inside the physics; everything else is
 batched torch on zero-copy views of the simulator's arrays. Resets, command resampling and curriculum updates
-are masked tensor operations, so a policy step never waits on the host, and on GPU the whole step (the
-``decimation`` substeps, terrain force kernels, rewards, resets, observations) is one captured CUDA graph
-(``cfg.sim.cuda_graph``): state carried between steps is updated in place, and host-side work (pushes, logging)
-happens outside the graph.
+are masked tensor operations, so a policy step never waits on the host. A subclass adds ``_reward_<name>``
+methods (scaled by ``cfg.rewards.scales.<name>``) and ``_obs_<fn>`` methods (listed in ``cfg.observations``)
+in plain torch. How the step is run (eagerly, compiled with torch.compile, as one CUDA graph) is the business of
+``StepRunner`` (step_runner.py), which also checks the step's one rule: it reads no ``cfg``. Settings a run may
+change while it trains (command ranges, reward scales and parameters) live in device tensors, ``self.params``
+and ``self.reward_scale_vec``, changed with :meth:`set_param`; everything else is read once, at construction.
 """
 
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import torch
@@ -19,19 +22,51 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
+from legged_gente.envs.base.step_runner import StepRunner
+from legged_gente.envs.base.terms import obs_terms
 from legged_gente.sim.assembly import build_model, owns_sole_contacts
 from legged_gente.sim.backend import Simulation
-from legged_gente.utils.cuda_graph import StepGraph
 from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
 
 CUDA_GRAPH_MODES = ("env_step", "physics", "off")  # the values of cfg.sim.cuda_graph
+COMMAND_RANGES = ("lin_vel_x", "lin_vel_y", "ang_vel_yaw", "heading")  # cfg.commands.ranges, in command order
+
+
+def _quat_mul(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Hamilton product of (w, x, y, z) quaternions: the rotation b, then a."""
+    aw, ax, ay, az = a.unbind(-1)
+    bw, bx, by, bz = b.unbind(-1)
+    return torch.stack([aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                        aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw], dim=-1)
+
+
+class FeetAirTime:
+    """Time each foot has spent in the air and the touchdowns of this step (legged_gym's feet_air_time, with its
+    contact filter over two steps). Updated every step whatever the reward's scale; reset with the world."""
+
+    def __init__(self, num_envs: int, num_feet: int, device):
+        self.air_time = torch.zeros(num_envs, num_feet, device=device)  # s
+        self.last_contact = torch.zeros(num_envs, num_feet, dtype=torch.bool, device=device)
+        self.touchdown = torch.zeros(num_envs, num_feet, dtype=torch.bool, device=device)
+        self.touchdown_air_time = torch.zeros(num_envs, num_feet, device=device)  # s, of the swing just ended
+
+    def update(self, contact: torch.Tensor, dt: float) -> None:
+        filtered = contact | self.last_contact
+        self.last_contact.copy_(contact)
+        self.touchdown.copy_((self.air_time > 0.0) & filtered)
+        self.air_time += dt
+        self.touchdown_air_time.copy_(self.air_time * self.touchdown)
+        self.air_time *= ~filtered
+
+    def reset(self, mask: torch.Tensor) -> None:
+        m = mask[:, None]
+        self.air_time.masked_fill_(m, 0.0)
+        self.touchdown_air_time.masked_fill_(m, 0.0)
+        self.last_contact &= ~m
+        self.touchdown &= ~m
 
 
 class LeggedRobot(VecEnv):
-    step_outputs = ("actions", "policy_obs", "critic_obs", "rew_buf", "reset_buf", "time_out_buf", "base_pos",
-                    "base_quat", "base_lin_vel", "base_ang_vel", "projected_gravity", "dof_pos", "dof_vel", "feet_pos")
-    """Tensors the step recomputes from scratch (may be rebound); all other state is updated in place."""
-
     def __init__(self, cfg: LeggedRobotCfg, device: str = "cpu", train_cfg_steps_per_env: int = 24):
         self.cfg = cfg
         self.device = device
@@ -48,44 +83,55 @@ class LeggedRobot(VecEnv):
         self.num_actions = len(self.layout.joint_names)
         self.forces = self._create_forces()
 
+        self._read_settings()
         self._init_buffers()
         self._prepare_reward_function()
         self._init_origins()
         self._randomize_model()
+        self._prepare_observations()
         self.reset()
-        if self.sim.wp_device.is_cuda and cfg.sim.torch_compile:
-            # the step's torch logic (rewards, terminations, resets, curriculum, observations: a few hundred
-            # small operations) fused by TorchInductor into a few dozen kernels; compiled at the first step
-            self._post_physics_step = torch.compile(self._post_physics_step, fullgraph=False, dynamic=False)
-            print("[legged_gente] the step's torch logic is compiled (torch.compile) at the first step: about 20 s "
-                  "once per num_envs, cached afterwards; --set sim.torch_compile=False turns it off", flush=True)
-        self._step_graph = (StepGraph(self, self._step_body, self.step_outputs, device)
-                            if self.sim.wp_device.is_cuda and cfg.sim.cuda_graph == "env_step" else None)
+        self._runner = StepRunner(self)
 
     # ------------------------------------------------------------------------------------------------------
     # construction
     # ------------------------------------------------------------------------------------------------------
     def _validate_cfg(self) -> None:
+        """Every check of the config, each a ValueError saying what is wrong and what to use instead."""
         cfg = self.cfg
-        if self.num_envs < 1:
-            raise ValueError(f"cfg.env.num_envs must be >= 1, got {self.num_envs}.")
-        if cfg.control.decimation < 1:
-            raise ValueError(f"cfg.control.decimation must be >= 1, got {cfg.control.decimation}.")
-        if cfg.sim.cuda_graph not in CUDA_GRAPH_MODES:
-            raise ValueError(f"cfg.sim.cuda_graph={cfg.sim.cuda_graph!r}; use 'env_step' (the whole step in one "
-                             f"CUDA graph), 'physics' (only the substeps) or 'off'.")
-        if not isinstance(cfg.sim.torch_compile, bool):
-            raise ValueError(f"cfg.sim.torch_compile={cfg.sim.torch_compile!r}; use True (compile the step's torch "
-                             f"logic on GPU) or False.")
-        if cfg.terrain.solved_top_level not in ("random", "stay"):
-            raise ValueError(f"cfg.terrain.solved_top_level={cfg.terrain.solved_top_level!r}; use 'random' "
-                             f"(legged_gym) or 'stay'.")
-        if cfg.terrain.mesh_type not in ("plane", "heightfield"):
-            raise ValueError(f"cfg.terrain.mesh_type={cfg.terrain.mesh_type!r}; use 'plane' or 'heightfield'.")
-        if not cfg.asset.file:
-            raise ValueError("cfg.asset.file is empty: name the robot's MJCF file.")
-        if not cfg.asset.foot_bodies:
-            raise ValueError("cfg.asset.foot_bodies is empty: name the robot's feet (body names or patterns).")
+        checks = [
+            (self.num_envs >= 1, f"cfg.env.num_envs={self.num_envs}; use >= 1"),
+            (cfg.control.decimation >= 1, f"cfg.control.decimation={cfg.control.decimation}; use >= 1"),
+            (cfg.sim.cuda_graph in CUDA_GRAPH_MODES,
+             f"cfg.sim.cuda_graph={cfg.sim.cuda_graph!r}; use 'env_step' (the whole step in one CUDA graph), "
+             f"'physics' (only the substeps) or 'off'"),
+            (isinstance(cfg.sim.torch_compile, bool),
+             f"cfg.sim.torch_compile={cfg.sim.torch_compile!r}; use True (compile the step's torch logic on GPU) "
+             f"or False"),
+            (cfg.terrain.solved_top_level in ("random", "stay"),
+             f"cfg.terrain.solved_top_level={cfg.terrain.solved_top_level!r}; use 'random' (legged_gym) or 'stay'"),
+            (cfg.terrain.mesh_type in ("plane", "heightfield"),
+             f"cfg.terrain.mesh_type={cfg.terrain.mesh_type!r}; use 'plane' or 'heightfield'"),
+            (bool(cfg.asset.file), "cfg.asset.file is empty; name the robot's MJCF file"),
+            (bool(cfg.asset.foot_bodies),
+             "cfg.asset.foot_bodies is empty; name the robot's feet (body names or patterns)"),
+            (len(cfg.init_state.pos) == 3 and len(cfg.init_state.rot) == 4 and len(cfg.init_state.lin_vel) == 3
+             and len(cfg.init_state.ang_vel) == 3,
+             "cfg.init_state: pos, lin_vel and ang_vel take 3 numbers, rot 4 (w, x, y, z)"),
+            (abs(sum(q * q for q in cfg.init_state.rot) - 1.0) < 1e-3,
+             f"cfg.init_state.rot={list(cfg.init_state.rot)} is not a unit quaternion; use (w, x, y, z) of norm 1"),
+            (cfg.domain_rand.init_lin_vel_xy_noise >= 0,
+             f"cfg.domain_rand.init_lin_vel_xy_noise={cfg.domain_rand.init_lin_vel_xy_noise}; use >= 0 (m/s)"),
+        ]
+        for name in COMMAND_RANGES:
+            low, high = getattr(cfg.commands.ranges, name)
+            checks.append((low <= high, f"cfg.commands.ranges.{name}=[{low}, {high}]; use [low, high], low <= high"))
+        checks.append((cfg.terrain.mesh_type == "plane" or not cfg.forces.enabled
+                       or cfg.forces.friction_reference == cfg.terrain.static_friction,
+                       f"cfg.forces.friction_reference={cfg.forces.friction_reference} differs from "
+                       f"cfg.terrain.static_friction={cfg.terrain.static_friction}; set them equal"))
+        for ok, message in checks:
+            if not ok:
+                raise ValueError(message + ".")
 
     def _create_terrain(self):
         if self.cfg.terrain.mesh_type == "plane":
@@ -110,9 +156,6 @@ class LeggedRobot(VecEnv):
             self._force_obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces),
                                           device=self.device)
             return None
-        if self.cfg.forces.friction_reference != self.cfg.terrain.static_friction:
-            raise ValueError(f"cfg.forces.friction_reference={self.cfg.forces.friction_reference} differs from "
-                             f"cfg.terrain.static_friction={self.cfg.terrain.static_friction}; set them equal.")
         from legged_gente.external_forces.field import TerrainForces
 
         forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain.height_field, self.terrain.origin_xy,
@@ -120,8 +163,80 @@ class LeggedRobot(VecEnv):
                                seed=int(torch.randint(0, 2**31 - 1, ()).item()))  # follows torch's (per-rank) seed
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
+        self.sim.after_reset.append(self._reset_forces)
         self._force_obs = forces.privileged_obs()
         return forces
+
+    def _reset_forces(self, mask: torch.Tensor) -> None:
+        """New force-field draws for the worlds in ``mask`` (called by ``sim.reset_worlds``)."""
+        self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
+
+    def _read_settings(self) -> None:
+        """The config the step needs, read once: fixed settings as plain attributes, the ones a run may change
+        while it trains as device tensors (``self.params``; :meth:`set_param` changes them)."""
+        cfg, dev = self.cfg, self.device
+        self.clip_actions = float(cfg.normalization.clip_actions)
+        self.clip_observations = float(cfg.normalization.clip_observations)
+        self.action_scale = float(cfg.control.action_scale)
+        self.decimation = int(cfg.control.decimation)
+        self.max_qvel = float(cfg.sim.max_qvel)
+        self.njmax = int(cfg.sim.njmax)
+        self.only_positive_rewards = bool(cfg.rewards.only_positive_rewards)
+        self.heading_command = bool(cfg.commands.heading_command)
+        self.send_timeouts = bool(cfg.env.send_timeouts)
+        self.terminate_tilt_cos = math.cos(cfg.asset.terminate_tilt)
+        self.terminate_height = float(cfg.asset.terminate_height)
+        self.terrain_length = float(cfg.terrain.terrain_length)
+        self.solved_top_level = cfg.terrain.solved_top_level
+        self.terrain_curriculum = cfg.terrain.mesh_type == "heightfield" and cfg.terrain.curriculum and \
+            cfg.terrain.mode == "curriculum"
+        self.add_noise = bool(cfg.noise.add_noise)
+        rand = cfg.domain_rand
+        self.push_robots, self.max_push_vel_xy = bool(rand.push_robots), float(rand.max_push_vel_xy)
+        self.random_init_yaw, self.init_lin_vel_xy_noise = bool(rand.random_init_yaw), float(rand.init_lin_vel_xy_noise)
+        self.joint_pos_noise = float(cfg.init_state.joint_pos_noise)
+        self._resample_steps = max(1, int(round(cfg.commands.resampling_time / self.dt)))
+        self._push_steps = max(1, int(round(rand.push_interval_s / self.dt)))
+        init = cfg.init_state
+        self.init_base_state = torch.tensor(list(init.pos) + list(init.rot) + list(init.lin_vel) + list(init.ang_vel),
+                                            dtype=torch.float32, device=dev)
+        tensor = lambda v: torch.tensor(v, dtype=torch.float32, device=dev)  # noqa: E731
+        commands = {name: tensor(getattr(cfg.commands.ranges, name)) for name in COMMAND_RANGES}
+        commands.update(heading_stiffness=tensor(cfg.commands.heading_stiffness),
+                        still_fraction=tensor(cfg.commands.still_fraction))
+        rewards = {name: tensor(getattr(cfg.rewards, name)) for name in dir(cfg.rewards)
+                   if not name.startswith("_") and not isinstance(getattr(cfg.rewards, name), bool)
+                   and isinstance(getattr(cfg.rewards, name), (int, float, list, tuple))}
+        self.params = SimpleNamespace(commands=SimpleNamespace(**commands), rewards=SimpleNamespace(**rewards))
+
+    def set_param(self, path: str, value) -> None:
+        """Change a setting the step reads from a device tensor, in place (so that it takes effect under CUDA
+        graphs and torch.compile too), and in ``cfg``: ``"commands.ranges.<name>"`` ([low, high]),
+        ``"commands.heading_stiffness"``, ``"commands.still_fraction"``, ``"rewards.<number>"`` or
+        ``"rewards.scales.<term>"`` (a term of this env: its scale was non-zero at construction)."""
+        parts = path.split(".")
+        if parts[:2] == ["rewards", "scales"] and len(parts) == 3:
+            names = [name for name, _ in self.reward_functions]
+            if parts[2] not in names:
+                raise ValueError(f"rewards.scales.{parts[2]} is not a reward term of this env (terms: {names}); a "
+                                 f"term must have a non-zero scale at construction.")
+            self.reward_scale_vec[names.index(parts[2])] = float(value) * self.dt
+            self.reward_scales[parts[2]] = float(value) * self.dt
+            setattr(self.cfg.rewards.scales, parts[2], value)
+            return
+        group, name = (parts[0], parts[-1]) if len(parts) == 2 or parts[:2] == ["commands", "ranges"] else ("", "")
+        target = getattr(getattr(self.params, group, None), name, None) if group else None
+        if target is None or (group == "commands" and (name in COMMAND_RANGES) != (len(parts) == 3)):
+            valid = ([f"commands.ranges.{n}" for n in COMMAND_RANGES] + ["commands.heading_stiffness",
+                     "commands.still_fraction"] + [f"rewards.{n}" for n in vars(self.params.rewards)]
+                     + ["rewards.scales.<term>"])
+            raise ValueError(f"{path!r} is not a setting the step reads from a tensor; use one of {valid}.")
+        new = torch.as_tensor(value, dtype=torch.float32, device=self.device)
+        if new.shape != target.shape:
+            raise ValueError(f"{path} takes a value of shape {tuple(target.shape)}, got {value!r}.")
+        target.copy_(new)
+        owner = self.cfg.commands.ranges if len(parts) == 3 else getattr(self.cfg, group)
+        setattr(owner, name, value)
 
     def _init_buffers(self) -> None:
         n, dev, lay = self.num_envs, self.device, self.layout
@@ -133,36 +248,32 @@ class LeggedRobot(VecEnv):
         self.terminate_bodies = t(lay.terminate_bodies, torch.long)
         self.hip_ids = t(lay.hip_joint_ids, torch.long)
         self.default_dof_pos = t(lay.default_joint_pos)[None, :]
-        self.dof_limits = t(lay.joint_limits)
-        mid, half = self.dof_limits.mean(1), 0.5 * (self.dof_limits[:, 1] - self.dof_limits[:, 0])
+        self.dof_limits = t(lay.joint_limits)  # (-inf, inf) for an unlimited joint
+        limited = torch.isfinite(self.dof_limits).all(1)
+        mid = torch.where(limited, self.dof_limits.mean(1), 0.0)
+        half = torch.where(limited, 0.5 * (self.dof_limits[:, 1] - self.dof_limits[:, 0]), math.inf)
         soft = self.cfg.rewards.soft_dof_pos_limit
         self.soft_dof_limits = torch.stack([mid - soft * half, mid + soft * half], dim=1)
-        self.torque_limits = t(lay.torque_limits)
+        self.torque_limits = t(lay.torque_limits)  # N*m (inf: none)
         self.base = lay.base_body
         self.root_body = int(self.mjm.body_rootid[self.base])
 
-        self._step_actions = torch.zeros(n, self.num_actions, device=dev)  # the step's input, read by its graph
+        self._step_actions = torch.zeros(n, self.num_actions, device=dev)  # the step's input
         self.actions = torch.zeros(n, self.num_actions, device=dev)
         self.last_actions = torch.zeros_like(self.actions)
         self.last_dof_vel = torch.zeros(n, self.num_actions, device=dev)
         self._episode_length_buf = torch.zeros(n, dtype=torch.long, device=dev)
         self.reset_buf = torch.ones(n, dtype=torch.bool, device=dev)
         self.time_out_buf = torch.zeros(n, dtype=torch.bool, device=dev)
+        self.diverged_buf = torch.zeros(n, dtype=torch.bool, device=dev)
         self.rew_buf = torch.zeros(n, device=dev)
         self.commands = torch.zeros(n, 4, device=dev)  # vx, vy, yaw rate, heading
-        scales = self.cfg.normalization.obs_scales
-        self.commands_scale = torch.tensor([scales.lin_vel, scales.lin_vel, scales.ang_vel], device=dev)
-        self.feet_air_time = torch.zeros(n, len(lay.foot_bodies), device=dev)
-        self.last_contacts = torch.zeros(n, len(lay.foot_bodies), dtype=torch.bool, device=dev)
+        self.standing_still = torch.zeros(n, dtype=torch.bool, device=dev)  # a stand-still command: no turning
+        self.feet_air_time = FeetAirTime(n, len(lay.foot_bodies), dev)
         self.gravity_vec = torch.tensor([0.0, 0.0, -1.0], device=dev).repeat(n, 1)
         self.friction_coeffs = torch.full((n, 1), self.cfg.terrain.static_friction, device=dev)
         self.added_base_mass = torch.zeros(n, 1, device=dev)
         self.common_step_counter = 0
-        self._resample_steps = max(1, int(round(self.cfg.commands.resampling_time / self.dt)))
-        push = self.cfg.domain_rand
-        self._push_steps = max(1, int(round(push.push_interval_s / self.dt)))
-        self.init_base_state = torch.tensor(self.cfg.init_state.pos + self.cfg.init_state.rot +
-                                            self.cfg.init_state.lin_vel + self.cfg.init_state.ang_vel, device=dev)
         self.height_points = self._init_height_points()
         self.num_height_points = 0 if self.height_points is None else self.height_points.shape[0]
         if self.terrain is not None:
@@ -170,7 +281,7 @@ class LeggedRobot(VecEnv):
             self.terrain_origin_xy = torch.tensor(self.terrain.origin_xy, dtype=torch.float32, device=dev)
         # episode statistics, reduced on device and reported once per rollout (no per-step host sync)
         self._stat_count = torch.zeros((), device=dev)
-        self.diverged_resets = torch.zeros((), device=dev)
+        self.diverged_resets = torch.zeros((), device=dev)  # diverged resets since the last report (reset by it)
         self._update_state()
 
     def _init_height_points(self) -> torch.Tensor | None:
@@ -195,12 +306,12 @@ class LeggedRobot(VecEnv):
                 continue
             method = getattr(self, f"_reward_{name}", None)
             if method is None:
-                raise AttributeError(f"cfg.rewards.scales.{name} is non-zero but {type(self).__name__} has no "
-                                     f"_reward_{name} method; implement it or set the scale to 0.")
+                raise ValueError(f"cfg.rewards.scales.{name} is non-zero but {type(self).__name__} has no "
+                                 f"_reward_{name} method; implement it or set the scale to 0.")
             self.reward_scales[name] = scale * self.dt
             self.reward_functions.append((name, method))
         names = [name for name, _ in self.reward_functions]
-        self._reward_scale_vec = torch.tensor([self.reward_scales[n] for n in names], device=self.device)
+        self.reward_scale_vec = torch.tensor([self.reward_scales[n] for n in names], device=self.device)
         # termination is added after the only-positive clip, so that dying always costs something
         self._clipped_terms = torch.tensor([n != "termination" for n in names], device=self.device)
         self.episode_sums = torch.zeros(self.num_envs, len(names), device=self.device)
@@ -228,7 +339,8 @@ class LeggedRobot(VecEnv):
         self.env_origins = self.terrain_origins[self.terrain_levels, self.terrain_columns]
 
     def _randomize_model(self) -> None:
-        """Per-world friction and base mass, written into the batched model fields once at start."""
+        """Per-world friction and base mass, written into the batched model fields once at start; after a mass
+        change ``mjw.set_const`` recomputes what derives from it (subtree masses, the solver's inverse weights)."""
         rand = self.cfg.domain_rand
         if rand.randomize_friction:
             self.friction_coeffs = rand_uniform(*rand.friction_range, (self.num_envs, 1), self.device)
@@ -241,6 +353,32 @@ class LeggedRobot(VecEnv):
             self.sim.body_mass[:, self.base] = mass0 * ratio
             self.sim.body_inertia[:, self.base] = torch.as_tensor(
                 self.mjm.body_inertia[self.base], dtype=torch.float32, device=self.device) * ratio[:, None]
+            self.sim.set_const()
+
+    def _prepare_observations(self) -> None:
+        """The groups' term tables (cfg.observations) resolved to methods, widths, scale and noise vectors."""
+        available = {None: True, "heightfield": self.height_points is not None, "forces": self._force_obs is not None}
+        level = float(self.cfg.noise.noise_level)
+        self.observation_names: dict[str, list[str]] = {}
+        self._obs_groups = {}
+        for group in ("policy", "critic"):
+            path = f"cfg.observations.{group}"
+            entries = []
+            for name, term in obs_terms(getattr(self.cfg.observations, group), path):
+                if not available[term.when]:
+                    continue
+                method = getattr(self, f"_obs_{term.fn}", None)
+                if method is None:
+                    raise ValueError(f"{path}.{name}: fn={term.fn!r} but {type(self).__name__} has no _obs_{term.fn} "
+                                     f"method; implement it or name an existing one.")
+                width = method().shape[1]
+                scale = torch.as_tensor(term.scale, dtype=torch.float32, device=self.device).expand(width).clone()
+                entries.append((name, method, scale, term.clip, scale * term.noise * level))
+                self.observation_names.setdefault(group, []).extend(
+                    [name] if width == 1 else [f"{name}[{i}]" for i in range(width)])
+            self._obs_groups[group] = entries
+        self._noise_scale = torch.cat([e[4] for e in self._obs_groups["policy"]])
+        self.observation_names["critic"] = self.observation_names["policy"] + self.observation_names.get("critic", [])
 
     # ------------------------------------------------------------------------------------------------------
     # VecEnv
@@ -251,7 +389,7 @@ class LeggedRobot(VecEnv):
 
     @episode_length_buf.setter
     def episode_length_buf(self, value: torch.Tensor) -> None:
-        """An assignment (rsl-rl's random initial episode lengths) copies into the buffer the step graph reads."""
+        """An assignment (rsl-rl's random initial episode lengths) copies into the buffer the step reads."""
         self._episode_length_buf.copy_(value)
 
     def get_observations(self) -> TensorDict:
@@ -261,38 +399,35 @@ class LeggedRobot(VecEnv):
         all_envs = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
         self._reset_envs(all_envs)
         self._resample_commands(all_envs)
+        self.sim.forward(all_envs)
         self._update_state()
         self._compute_observations()
         return self.obs_buf.clone()
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
-        """One policy step. Returns copies: the step graph overwrites its buffers in place on the next step,
-        and rsl-rl keeps references to observations across it."""
+        """One policy step. Returns copies: the step overwrites its buffers in place on the next step, and
+        rsl-rl keeps references to observations across it."""
         if actions.shape != self._step_actions.shape:
             raise ValueError(f"actions of shape {tuple(actions.shape)}; this env takes (num_envs, num_actions) = "
                              f"{tuple(self._step_actions.shape)}")
         self._step_actions.copy_(actions)
-        if self._step_graph is not None:
-            self._step_graph()
-        else:
-            self._step_body()
+        self._runner()
         self.common_step_counter += 1
-        if self.cfg.domain_rand.push_robots and self.common_step_counter % self._push_steps == 0:
+        if self.push_robots and self.common_step_counter % self._push_steps == 0:
             # after the observations, as in legged_gym: the push shows in the next step
             self._push_robots()
-        extras = {"time_outs": self.time_out_buf.clone()}
+        extras = {"time_outs": self.time_out_buf.clone()} if self.send_timeouts else {}
         if self.common_step_counter % self._log_every == 0:
             extras["episode"] = self._episode_statistics()
         return self.obs_buf.clone(), self.rew_buf.clone(), self.reset_buf.clone(), extras
 
     def _step_body(self) -> None:
-        """Everything a step does on the device: this is what the step graph records."""
-        clip = self.cfg.normalization.clip_actions
-        self.actions = torch.clamp(self._step_actions, -clip, clip)
-        self.sim.ctrl[:] = self.default_dof_pos + self.cfg.control.action_scale * self.actions
+        """Everything a step does on the device (what StepRunner compiles and captures)."""
+        self.actions = torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions)
+        self.sim.ctrl[:] = self.default_dof_pos + self.action_scale * self.actions
         if self.forces is not None:
             self.forces.new_policy_step()
-        self.sim.step(self.cfg.control.decimation)
+        self.sim.step(self.decimation)
         self._post_physics_step()
 
     # ------------------------------------------------------------------------------------------------------
@@ -300,30 +435,29 @@ class LeggedRobot(VecEnv):
     # ------------------------------------------------------------------------------------------------------
     def _post_physics_step(self) -> None:
         self._episode_length_buf += 1
-        diverged = self._sanitize_diverged()
+        self.diverged_buf = self._diverged()
         self._update_state()
-        self._check_termination(diverged)
+        self.feet_air_time.update(self.foot_contacts(), self.dt)
+        self._check_termination(self.diverged_buf)
         self._compute_reward()
-        self._log_and_update_curriculum(self.reset_buf)
+        self._log_and_update_curriculum(self.reset_buf, self.diverged_buf)
         self._reset_envs(self.reset_buf)
         # new commands for the robots just reset and for those whose resampling time came (episode length 0
         # after a reset, so both are caught by the same test)
         self._resample_commands(self.episode_length_buf % self._resample_steps == 0)
+        self.sim.forward(self.reset_buf)  # bodies, contacts and contact forces of the reset worlds are fresh
         self._update_state()
+        self._update_heading_commands()
         self._compute_observations()
         self.last_actions[:] = self.actions
         self.last_dof_vel[:] = self.dof_vel
 
-    def _sanitize_diverged(self) -> torch.Tensor:
-        """Diverged worlds: state non-finite or absurdly fast, or constraint rows overflowed. Zero them and flag
-        them for reset, so that one exploding world never reaches the observation normalisers or the logs."""
+    def _diverged(self) -> torch.Tensor:
+        """Worlds whose state is non-finite or absurdly fast, or whose constraint rows overflowed ``njmax`` (MuJoCo
+        counts the rows it wanted, so ``nefc > njmax`` means rows were dropped): reset as time-outs."""
         # "not <=" is also true for NaN, which amax propagates
-        bad = ~(self.sim.qvel.abs().amax(1) <= self.cfg.sim.max_qvel) | ~torch.isfinite(self.sim.qpos).all(1)
-        bad |= self.sim.nefc >= self.cfg.sim.njmax
-        self.sim.qpos[:] = torch.where(bad[:, None], 0.0, self.sim.qpos)
-        self.sim.qvel[:] = torch.where(bad[:, None], 0.0, self.sim.qvel)
-        self.diverged_resets += bad.sum()
-        return bad
+        bad = ~(self.sim.qvel.abs().amax(1) <= self.max_qvel) | ~torch.isfinite(self.sim.qpos).all(1)
+        return bad | (self.sim.nefc > self.njmax)
 
     def _update_state(self) -> None:
         """Base and joint state in the frames the observations and rewards use (views, no copies of sim)."""
@@ -347,39 +481,41 @@ class LeggedRobot(VecEnv):
         return cvel[..., 3:6] + torch.cross(cvel[..., 0:3], offset, dim=-1)
 
     def _check_termination(self, diverged: torch.Tensor) -> None:
-        asset = self.cfg.asset
+        """Falls (contacts on terminating bodies, tilt, height) end an episode; time-outs and diverged worlds
+        end it as a truncation (``time_out_buf``: PPO bootstraps their value, no termination penalty)."""
         contact = torch.norm(self.contact_forces[:, self.terminate_bodies], dim=-1).gt(1.0).any(1) \
             if self.terminate_bodies.numel() else torch.zeros_like(diverged)
-        tilted = self.projected_gravity[:, 2] > -math.cos(asset.terminate_tilt)
+        tilted = self.projected_gravity[:, 2] > -self.terminate_tilt_cos
         self.reset_buf = contact | tilted | diverged
-        if asset.terminate_height > 0:
-            self.reset_buf |= (self.base_pos[:, 2] - self._ground_height(self.base_pos[:, :2])) < asset.terminate_height
-        self.time_out_buf = self.episode_length_buf >= self.max_episode_length
+        if self.terminate_height > 0:
+            self.reset_buf |= (self.base_pos[:, 2] - self._ground_height(self.base_pos[:, :2])) < self.terminate_height
+        self.time_out_buf = (self.episode_length_buf >= self.max_episode_length) | diverged
         self.reset_buf |= self.time_out_buf
 
     def _compute_reward(self) -> None:
+        """The scaled terms' sum; a diverged world's state is meaningless, so its reward is zero."""
         if not self.reward_functions:
-            self.rew_buf.zero_()
+            self.rew_buf = torch.zeros(self.num_envs, device=self.device)
             return
         terms = torch.stack([fn() for _, fn in self.reward_functions], dim=1)
-        terms = torch.nan_to_num(terms, nan=0.0, posinf=0.0, neginf=0.0) * self._reward_scale_vec
-        self.rew_buf = torch.where(self._clipped_terms, terms, 0.0).sum(dim=1)
-        if self.cfg.rewards.only_positive_rewards:
-            self.rew_buf.clamp_(min=0.0)
-        self.rew_buf += torch.where(self._clipped_terms, 0.0, terms).sum(dim=1)
+        terms = torch.nan_to_num(terms, nan=0.0, posinf=0.0, neginf=0.0) * self.reward_scale_vec
+        terms = torch.where(self.diverged_buf[:, None], 0.0, terms)
+        rew = torch.where(self._clipped_terms, terms, 0.0).sum(dim=1)
+        if self.only_positive_rewards:
+            rew = rew.clamp(min=0.0)
+        self.rew_buf = rew + torch.where(self._clipped_terms, 0.0, terms).sum(dim=1)
         self.episode_sums += terms
 
-    def _log_and_update_curriculum(self, done: torch.Tensor) -> None:
-        """Accumulate finished episodes' statistics on device, then move finished robots' terrain levels."""
-        mask = done.float()
+    def _log_and_update_curriculum(self, done: torch.Tensor, diverged: torch.Tensor) -> None:
+        """Accumulate finished episodes' statistics on device, then move finished robots' terrain levels. A
+        diverged world's episode says nothing about the policy: it neither counts nor moves level."""
+        finished = done & ~diverged
+        mask = finished.float()
         self._stat_reward_sums += mask @ self.episode_sums / self.max_episode_length_s
-        if self._terrain_curriculum:
-            self._update_terrain_curriculum(done)
+        if self.terrain_curriculum:
+            self._update_terrain_curriculum(finished)
         self._stat_count += mask.sum()
-
-    @property
-    def _terrain_curriculum(self) -> bool:
-        return self.terrain is not None and self.cfg.terrain.curriculum and self.cfg.terrain.mode == "curriculum"
+        self.diverged_resets += diverged.sum()
 
     def curriculum_state(self) -> dict[str, torch.Tensor]:
         """The robots' terrain levels, kept in checkpoints so that a resumed run climbs on from where it stopped."""
@@ -387,7 +523,7 @@ class LeggedRobot(VecEnv):
 
     def load_curriculum_state(self, state: dict[str, torch.Tensor]) -> str:
         """Restore ``curriculum_state()`` when it fits this env; says what happened (printed on --resume)."""
-        if not self._terrain_curriculum:
+        if not self.terrain_curriculum:
             return "no terrain curriculum in this env"
         levels = state["terrain_levels"]
         if levels.shape != self.terrain_levels.shape or int(levels.max()) >= self.max_terrain_level:
@@ -403,12 +539,12 @@ class LeggedRobot(VecEnv):
         (legged_gym's game-inspired curriculum). A robot that solves the hardest level goes to a random level
         (``solved_top_level = "random"``, legged_gym) or stays there (``"stay"``)."""
         distance = torch.norm(self.base_pos[:, :2] - self.env_origins[:, :2], dim=1)
-        move_up = distance > 0.5 * self.cfg.terrain.terrain_length
+        move_up = distance > 0.5 * self.terrain_length
         commanded = torch.norm(self.commands[:, :2], dim=1) * self.max_episode_length_s
         move_down = (distance < 0.5 * commanded) & ~move_up
         level = self.terrain_levels + move_up.long() - move_down.long()
         top = self.max_terrain_level - 1
-        if self.cfg.terrain.solved_top_level == "random":
+        if self.solved_top_level == "random":
             level = torch.where(level > top, torch.randint_like(level, 0, self.max_terrain_level), level)
         level = level.clamp(0, top)
         self.terrain_levels[:] = torch.where(done, level, self.terrain_levels)
@@ -417,7 +553,8 @@ class LeggedRobot(VecEnv):
                                           self.env_origins)
 
     def _episode_statistics(self) -> dict[str, torch.Tensor]:
-        """Means over the episodes that ended since the last report (once per rollout, still on device)."""
+        """Means over the episodes that ended since the last report (once per rollout, still on device); the
+        diverged resets since the last report."""
         count = self._stat_count.clamp(min=1.0)
         rewards = self._stat_reward_sums / count
         stats = {f"rew_{name}": rewards[i] for i, (name, _) in enumerate(self.reward_functions)}
@@ -426,56 +563,69 @@ class LeggedRobot(VecEnv):
         stats["diverged_resets"] = self.diverged_resets.clone()
         self._stat_reward_sums.zero_()
         self._stat_count.zero_()
+        self.diverged_resets.zero_()
         return stats
 
     def _reset_envs(self, mask: torch.Tensor) -> None:
-        """Masked reset: only worlds where ``mask`` is True get a new state; nothing leaves the device."""
+        """Masked reset: the worlds where ``mask`` is True get MuJoCo's default Data (``sim.reset_worlds``: warm
+        start, applied forces, time, ...), then the initial state (cfg.init_state, randomised by
+        cfg.domain_rand); every per-world buffer of the env is reset too. Nothing leaves the device."""
         n, dev = self.num_envs, self.device
         m = mask[:, None]
+        self.sim.reset_worlds(mask)
         qpos, qvel = self.sim.qpos, self.sim.qvel
-        dof_pos = self.default_dof_pos + rand_uniform(-1.0, 1.0, (n, self.num_actions), dev) * \
-            self.cfg.init_state.joint_pos_noise
+        dof_pos = self.default_dof_pos + rand_uniform(-1.0, 1.0, (n, self.num_actions), dev) * self.joint_pos_noise
         dof_pos = torch.clamp(dof_pos, self.dof_limits[:, 0], self.dof_limits[:, 1])
         base = self.init_base_state
-        base_pos = self.env_origins + base[0:3]
-        yaw = rand_uniform(-math.pi, math.pi, (n,), dev)
-        base_quat = yaw_quat(yaw)
+        rot = base[3:7].expand(n, 4)
+        if self.random_init_yaw:
+            rot = _quat_mul(yaw_quat(rand_uniform(-math.pi, math.pi, (n,), dev)), rot)
+        lin_vel = base[7:10].expand(n, 3).clone()
+        if self.init_lin_vel_xy_noise > 0:
+            a = self.init_lin_vel_xy_noise
+            lin_vel[:, 0:2] += rand_uniform(-a, a, (n, 2), dev)
         new_qpos = qpos.clone()
-        new_qpos[:, 0:3] = base_pos
-        new_qpos[:, 3:7] = base_quat
+        new_qpos[:, 0:3] = self.env_origins + base[0:3]
+        new_qpos[:, 3:7] = rot
         new_qpos[:, self.qpos_adr] = dof_pos
         new_qvel = torch.zeros_like(qvel)
-        new_qvel[:, 0:2] = rand_uniform(-0.5, 0.5, (n, 2), dev)
-        # (ctrl needs no reset: the next step writes it before the physics runs)
+        new_qvel[:, 0:3] = lin_vel
+        new_qvel[:, 3:6] = base[10:13]
         qpos[:] = torch.where(m, new_qpos, qpos)
         qvel[:] = torch.where(m, new_qvel, qvel)
-        self.sim.time[:] = torch.where(mask, 0.0, self.sim.time)
-        self.sim.body_contact_force[:] = torch.where(m[..., None], 0.0, self.sim.body_contact_force)
-        for buf in (self.actions, self.last_actions, self.last_dof_vel, self.feet_air_time):
+        # the PD targets of a zero action until the next step sets them (reset_data zeroed them)
+        self.sim.ctrl[:] = torch.where(m, self.default_dof_pos, self.sim.ctrl)
+        for buf in (self.actions, self.last_actions, self.last_dof_vel):
             buf[:] = torch.where(m, 0.0, buf)
-        self.last_contacts &= ~m
+        self.feet_air_time.reset(mask)
         self.episode_length_buf[:] = torch.where(mask, 0, self.episode_length_buf)
         self.episode_sums.masked_fill_(m, 0.0)
-        if self.forces is not None:
-            self._reset_forces(mask)
-
-    @torch.compiler.disable
-    def _reset_forces(self, mask: torch.Tensor) -> None:
-        """New force-field draws for the envs in ``mask`` (Warp kernels: left out of torch.compile)."""
-        self.forces.reset(wp.from_torch(mask.contiguous(), dtype=wp.bool))
 
     def _resample_commands(self, mask: torch.Tensor) -> None:
-        n, dev, ranges = self.num_envs, self.device, self.cfg.commands.ranges
-        new = torch.stack([rand_uniform(*ranges.lin_vel_x, (n,), dev), rand_uniform(*ranges.lin_vel_y, (n,), dev),
-                           rand_uniform(*ranges.ang_vel_yaw, (n,), dev), rand_uniform(*ranges.heading, (n,), dev)], 1)
+        n, dev, c = self.num_envs, self.device, self.params.commands
+        new = torch.stack([rand_uniform(c.lin_vel_x[0], c.lin_vel_x[1], (n,), dev),
+                           rand_uniform(c.lin_vel_y[0], c.lin_vel_y[1], (n,), dev),
+                           rand_uniform(c.ang_vel_yaw[0], c.ang_vel_yaw[1], (n,), dev),
+                           rand_uniform(c.heading[0], c.heading[1], (n,), dev)], 1)
         small = torch.norm(new[:, :2], dim=1) < 0.2  # too slow to learn a gait from: stand still instead
-        still = torch.rand(n, device=dev) < self.cfg.commands.still_fraction
+        still = torch.rand(n, device=dev) < c.still_fraction
         new[:, :2] *= (~(small | still))[:, None]
         new[:, 2] *= (~still)
         self.commands[:] = torch.where(mask[:, None], new, self.commands)
+        self.standing_still[:] = torch.where(mask, still, self.standing_still)
+
+    def _update_heading_commands(self) -> None:
+        """In heading mode the yaw rate turns the base towards the commanded heading (clamped to the yaw range);
+        a stand-still command keeps yaw rate 0."""
+        if not self.heading_command:
+            return
+        c = self.params.commands
+        heading_error = wrap_to_pi(self.commands[:, 3] - yaw_of(self.base_quat))
+        yaw_rate = torch.clamp(c.heading_stiffness * heading_error, c.ang_vel_yaw[0], c.ang_vel_yaw[1])
+        self.commands[:, 2] = torch.where(self.standing_still, 0.0, yaw_rate)
 
     def _push_robots(self) -> None:
-        v = self.cfg.domain_rand.max_push_vel_xy
+        v = self.max_push_vel_xy
         self.sim.qvel[:, 0:2] += rand_uniform(-v, v, (self.num_envs, 2), self.device)
 
     def _ground_height(self, xy: torch.Tensor) -> torch.Tensor:
@@ -493,39 +643,27 @@ class LeggedRobot(VecEnv):
         return (h[i0, j0] * (1 - fx) * (1 - fy) + h[i0 + 1, j0] * fx * (1 - fy) +
                 h[i0, j0 + 1] * (1 - fx) * fy + h[i0 + 1, j0 + 1] * fx * fy)
 
-    def _measure_heights(self) -> torch.Tensor:
-        """Heights of the scan points (in the base's yaw frame) below the base, relative to the target height."""
-        yaw = yaw_quat(yaw_of(self.base_quat))
-        points = quat_rotate(yaw[:, None, :].expand(-1, self.num_height_points, -1),
-                             self.height_points[None].expand(self.num_envs, -1, -1))
-        points = points[..., :2] + self.base_pos[:, None, :2]
-        return self.base_pos[:, 2:3] - self.cfg.rewards.base_height_target - self._ground_height(points)
-
-    def _task_observations(self) -> torch.Tensor:
-        """Extra proprioceptive observations a task adds (e.g. a gait clock); none by default."""
-        return torch.zeros(self.num_envs, 0, device=self.device)
-
+    # ------------------------------------------------------------------------------------------------------
+    # observations: the terms cfg.observations lists (each (num_envs, k), before its scale and noise)
+    # ------------------------------------------------------------------------------------------------------
     def _compute_observations(self) -> None:
-        s = self.cfg.normalization.obs_scales
-        if self.cfg.commands.heading_command:
-            heading_error = wrap_to_pi(self.commands[:, 3] - yaw_of(self.base_quat))
-            yaw_rate = self.cfg.commands.heading_stiffness * heading_error
-            self.commands[:, 2] = yaw_rate.clamp(*self.cfg.commands.ranges.ang_vel_yaw)
-        parts = [self.base_lin_vel * s.lin_vel, self.base_ang_vel * s.ang_vel, self.projected_gravity,
-                 self.commands[:, :3] * self.commands_scale, (self.dof_pos - self.default_dof_pos) * s.dof_pos,
-                 self.dof_vel * s.dof_vel, self.actions, self._task_observations()]
-        if self.height_points is not None:
-            parts.append(torch.clamp(self._measure_heights(), -1.0, 1.0) * s.height_measurements)
-        clean = torch.cat(parts, dim=-1)
-        policy = clean + self._noise(clean) if self.cfg.noise.add_noise else clean
-        feet_forces = self.contact_forces[:, self.feet].flatten(1) * 0.01
-        privileged = [clean, self.friction_coeffs, self.added_base_mass, feet_forces]
-        if self._force_obs is not None:
-            privileged.append(self._force_obs)
-        clip = self.cfg.normalization.clip_observations
-        critic = torch.nan_to_num(torch.cat(privileged, dim=-1), nan=0.0)
+        """Each group's terms (clipped, scaled) in table order; the policy's copy gets each term's noise, the
+        critic sees the policy's terms noise-free, then its own."""
+        def group(name: str) -> torch.Tensor:
+            parts = []
+            for _, method, scale, clip, _ in self._obs_groups[name]:
+                value = method()
+                if clip is not None:
+                    value = value.clamp(*clip)
+                parts.append(value * scale)
+            return torch.cat(parts, dim=-1) if parts else torch.zeros(self.num_envs, 0, device=self.device)
+
+        clean = group("policy")
+        policy = clean + (2.0 * torch.rand_like(clean) - 1.0) * self._noise_scale if self.add_noise else clean
+        critic = torch.cat([clean, group("critic")], dim=-1)
+        clip = self.clip_observations
         self.policy_obs = torch.nan_to_num(policy, nan=0.0).clamp(-clip, clip)
-        self.critic_obs = critic.clamp(-clip, clip)
+        self.critic_obs = torch.nan_to_num(critic, nan=0.0).clamp(-clip, clip)
 
     @property
     def obs_buf(self) -> TensorDict:
@@ -533,17 +671,46 @@ class LeggedRobot(VecEnv):
         return TensorDict({"policy": self.policy_obs, "critic": self.critic_obs}, batch_size=[self.num_envs],
                           device=self.device)
 
-    def _noise(self, clean: torch.Tensor) -> torch.Tensor:
-        if not hasattr(self, "_noise_scale"):
-            ns, s, lvl = self.cfg.noise.noise_scales, self.cfg.normalization.obs_scales, self.cfg.noise.noise_level
-            na, nt = self.num_actions, self._task_observations().shape[1]
-            pieces = [torch.full((3,), ns.lin_vel * s.lin_vel), torch.full((3,), ns.ang_vel * s.ang_vel),
-                      torch.full((3,), ns.gravity), torch.zeros(3), torch.full((na,), ns.dof_pos * s.dof_pos),
-                      torch.full((na,), ns.dof_vel * s.dof_vel), torch.zeros(na), torch.zeros(nt)]
-            if self.height_points is not None:
-                pieces.append(torch.full((self.num_height_points,), ns.height_measurements * s.height_measurements))
-            self._noise_scale = torch.cat(pieces).to(self.device) * lvl
-        return (2.0 * torch.rand_like(clean) - 1.0) * self._noise_scale
+    def _obs_base_lin_vel(self):
+        return self.base_lin_vel
+
+    def _obs_base_ang_vel(self):
+        return self.base_ang_vel
+
+    def _obs_projected_gravity(self):
+        return self.projected_gravity
+
+    def _obs_commands(self):
+        return self.commands[:, :3]
+
+    def _obs_dof_pos(self):
+        return self.dof_pos - self.default_dof_pos
+
+    def _obs_dof_vel(self):
+        return self.dof_vel
+
+    def _obs_actions(self):
+        return self.actions
+
+    def _obs_height_scan(self):
+        """Base height above the scan points (in the base's yaw frame) minus the target base height."""
+        yaw = yaw_quat(yaw_of(self.base_quat))
+        points = quat_rotate(yaw[:, None, :].expand(-1, self.num_height_points, -1),
+                             self.height_points[None].expand(self.num_envs, -1, -1))
+        points = points[..., :2] + self.base_pos[:, None, :2]
+        return self.base_pos[:, 2:3] - self.params.rewards.base_height_target - self._ground_height(points)
+
+    def _obs_friction(self):
+        return self.friction_coeffs
+
+    def _obs_added_base_mass(self):
+        return self.added_base_mass
+
+    def _obs_feet_contact_forces(self):
+        return self.contact_forces[:, self.feet].flatten(1)
+
+    def _obs_force_fields(self):
+        return self._force_obs
 
     # ------------------------------------------------------------------------------------------------------
     # helpers for rewards
@@ -565,7 +732,7 @@ class LeggedRobot(VecEnv):
 
     def _reward_base_height(self):
         height = self.base_pos[:, 2] - self._ground_height(self.base_pos[:, :2])
-        return torch.square(height - self.cfg.rewards.base_height_target)
+        return torch.square(height - self.params.rewards.base_height_target)
 
     def _reward_torques(self):
         return torch.sum(torch.square(self.torques), dim=1)
@@ -587,6 +754,11 @@ class LeggedRobot(VecEnv):
     def _reward_termination(self):
         return (self.reset_buf & ~self.time_out_buf).float()
 
+    def _reward_torque_limits(self):
+        """Torque above soft_torque_limit times the actuator's force limit (legged_gym)."""
+        excess = self.torques.abs() - self.torque_limits * self.params.rewards.soft_torque_limit
+        return torch.sum(excess.clamp(min=0.0), dim=1)
+
     def _reward_dof_pos_limits(self):
         below = (self.soft_dof_limits[:, 0] - self.dof_pos).clamp(min=0.0)
         above = (self.dof_pos - self.soft_dof_limits[:, 1]).clamp(min=0.0)
@@ -594,23 +766,17 @@ class LeggedRobot(VecEnv):
 
     def _reward_tracking_lin_vel(self):
         error = torch.sum(torch.square(self.commands[:, :2] - self.base_lin_vel[:, :2]), dim=1)
-        return torch.exp(-error / self.cfg.rewards.tracking_sigma)
+        return torch.exp(-error / self.params.rewards.tracking_sigma)
 
     def _reward_tracking_ang_vel(self):
         error = torch.square(self.commands[:, 2] - self.base_ang_vel[:, 2])
-        return torch.exp(-error / self.cfg.rewards.tracking_sigma)
+        return torch.exp(-error / self.params.rewards.tracking_sigma)
 
     def _reward_feet_air_time(self):
         """Reward steps whose swing lasted longer than the target, paid at touchdown (legged_gym)."""
-        contact = self.foot_contacts()
-        contact_filt = contact | self.last_contacts
-        self.last_contacts.copy_(contact)
-        first_contact = (self.feet_air_time > 0.0) & contact_filt
-        self.feet_air_time += self.dt
-        reward = torch.sum((self.feet_air_time - self.cfg.rewards.feet_air_time_target) * first_contact, dim=1)
-        reward *= torch.norm(self.commands[:, :2], dim=1) > 0.1
-        self.feet_air_time *= ~contact_filt
-        return reward
+        air = self.feet_air_time
+        reward = torch.sum((air.touchdown_air_time - self.params.rewards.feet_air_time_target) * air.touchdown, dim=1)
+        return reward * (torch.norm(self.commands[:, :2], dim=1) > 0.1)
 
     def _reward_feet_stumble(self):
         forces = self.contact_forces[:, self.feet]
@@ -621,5 +787,5 @@ class LeggedRobot(VecEnv):
         return torch.sum(torch.abs(self.dof_pos - self.default_dof_pos), dim=1) * still
 
     def _reward_feet_contact_forces(self):
-        excess = torch.norm(self.contact_forces[:, self.feet], dim=-1) - self.cfg.rewards.max_contact_force
+        excess = torch.norm(self.contact_forces[:, self.feet], dim=-1) - self.params.rewards.max_contact_force
         return torch.sum(excess.clamp(min=0.0), dim=1)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 from legged_gente.envs.base.base_config import BaseConfig, class_to_dict
+from legged_gente.envs.base.terms import ObsTerm
 from legged_gente.external_forces.config import ForcesConfig
 
 
@@ -17,7 +18,7 @@ class LeggedRobotCfg(BaseConfig):
         num_envs = 4096
         env_spacing = 3.0  # m, grid spacing of robots on a plane
         episode_length_s = 20.0  # s
-        send_timeouts = True  # report time-outs to the runner for value bootstrapping
+        send_timeouts = True  # report time-outs (extras["time_outs"]) so that PPO bootstraps their value
 
     class terrain:
         mesh_type = "plane"  # "plane" | "heightfield"
@@ -41,16 +42,18 @@ class LeggedRobotCfg(BaseConfig):
         solved_top_level = "random"
         static_friction = 1.0
         seed = 0
-        # height scan (m, in the base's yaw frame); used when the terrain is not a plane
+        # height scan (m, in the base's yaw frame): the "height_scan" observation on a heightfield
         measure_heights = True
         measured_points_x = [-0.8 + 0.1 * i for i in range(17)]
         measured_points_y = [-0.5 + 0.1 * i for i in range(11)]
 
     class commands:
         resampling_time = 10.0  # s
-        heading_command = True  # yaw rate follows a heading error
+        heading_command = True  # yaw rate follows a heading error (except for stand-still commands)
         heading_stiffness = 0.5  # 1/s, yaw rate per rad of heading error
         still_fraction = 0.1  # fraction of resampled commands that ask the robot to stand still
+        # commands.ranges, heading_stiffness and still_fraction are read by the step from device tensors
+        # (env.params.commands); change them at run time with env.set_param("commands.ranges.lin_vel_x", [a, b])
 
         class ranges:
             lin_vel_x = [-1.0, 1.0]  # m/s
@@ -59,10 +62,12 @@ class LeggedRobotCfg(BaseConfig):
             heading = [-math.pi, math.pi]  # rad
 
     class init_state:
+        """The state every reset starts from; domain_rand.random_init_yaw / init_lin_vel_xy_noise add to it."""
+
         pos = [0.0, 0.0, 1.0]  # m, base position above the spawn point
-        rot = [1.0, 0.0, 0.0, 0.0]  # (w, x, y, z)
-        lin_vel = [0.0, 0.0, 0.0]
-        ang_vel = [0.0, 0.0, 0.0]
+        rot = [1.0, 0.0, 0.0, 0.0]  # (w, x, y, z), base orientation
+        lin_vel = [0.0, 0.0, 0.0]  # m/s, base linear velocity in the world frame
+        ang_vel = [0.0, 0.0, 0.0]  # rad/s, base angular velocity in the base frame (MuJoCo's free joint)
         default_joint_angles: dict = {}  # joint name or fnmatch pattern -> rad
         joint_pos_noise = 0.1  # rad, uniform noise on reset
 
@@ -76,7 +81,6 @@ class LeggedRobotCfg(BaseConfig):
         file = ""  # MJCF path (relative paths are resolved against the project root)
         base_body = ""  # the floating base (body with the free joint); "" = the free joint's body
         foot_bodies: list = []  # names or fnmatch patterns
-        knee_bodies: list = []
         penalize_contacts_on: list = []  # bodies whose contacts are penalised (and therefore collide)
         terminate_after_contacts_on: list = []  # bodies whose contacts end the episode
         hip_joints: list = []  # joints penalised for deviating from default (biped hip yaw/roll)
@@ -84,6 +88,8 @@ class LeggedRobotCfg(BaseConfig):
         terminate_tilt = 1.0  # rad of base tilt that ends the episode
 
     class domain_rand:
+        random_init_yaw = True  # each reset turns init_state.rot by a yaw drawn uniformly in [-pi, pi)
+        init_lin_vel_xy_noise = 0.5  # m/s, each reset adds U(-a, a) to init_state.lin_vel's x and y; 0: none
         randomize_friction = True
         friction_range = [0.5, 1.25]
         randomize_base_mass = False
@@ -118,32 +124,38 @@ class LeggedRobotCfg(BaseConfig):
         base_height_target = 1.0  # m
         max_contact_force = 500.0  # N, above this feet_contact_forces penalises
         feet_air_time_target = 0.5  # s
-        gait_period = 0.8  # s, biped gait phase
-        stance_fraction = 0.55  # phase fraction a foot should be on the ground
-        swing_height_target = 0.08  # m, foot clearance in swing
+        soft_torque_limit = 1.0  # fraction of the actuator's force limit above which torque_limits penalises
+        # every number in this class (scales included) is read by the step from device tensors (env.params.rewards,
+        # env.reward_scale_vec): change them at run time with env.set_param("rewards.tracking_sigma", 0.2) or
+        # env.set_param("rewards.scales.feet_air_time", 2.0)
+
+    class observations:
+        """One table per group: each term's function, scale, noise and clip (see terms.ObsTerm). The critic sees
+        the policy's terms without noise, then its own (privileged) terms."""
+
+        class policy:
+            base_lin_vel = ObsTerm(fn="base_lin_vel", scale=2.0, noise=0.1)
+            base_ang_vel = ObsTerm(fn="base_ang_vel", scale=0.25, noise=0.2)
+            projected_gravity = ObsTerm(fn="projected_gravity", noise=0.05)
+            commands = ObsTerm(fn="commands", scale=(2.0, 2.0, 0.25))  # vx, vy, yaw rate
+            dof_pos = ObsTerm(fn="dof_pos", scale=1.0, noise=0.01)  # relative to the default pose
+            dof_vel = ObsTerm(fn="dof_vel", scale=0.05, noise=1.5)
+            actions = ObsTerm(fn="actions")
+            height_scan = ObsTerm(fn="height_scan", scale=5.0, noise=0.1, clip=(-1.0, 1.0), when="heightfield")
+
+        class critic:
+            friction = ObsTerm(fn="friction")
+            added_base_mass = ObsTerm(fn="added_base_mass")  # kg
+            feet_contact_forces = ObsTerm(fn="feet_contact_forces", scale=0.01)  # N
+            force_fields = ObsTerm(fn="force_fields", when="forces")
 
     class normalization:
-        class obs_scales:
-            lin_vel = 2.0
-            ang_vel = 0.25
-            dof_pos = 1.0
-            dof_vel = 0.05
-            height_measurements = 5.0
-
         clip_observations = 100.0
         clip_actions = 100.0
 
     class noise:
-        add_noise = True
-        noise_level = 1.0
-
-        class noise_scales:
-            dof_pos = 0.01
-            dof_vel = 1.5
-            lin_vel = 0.1
-            ang_vel = 0.2
-            gravity = 0.05
-            height_measurements = 0.1
+        add_noise = True  # the policy's observations get each term's noise (cfg.observations)
+        noise_level = 1.0  # multiplies every term's noise
 
     class sim:
         dt = 0.005  # s, physics substep
@@ -157,13 +169,15 @@ class LeggedRobotCfg(BaseConfig):
         njmax = 160  # constraint rows per world: 4 per pyramidal condim-3 contact + joint limits; a fallen robot
         # on rough ground can touch with many bodies at once, and an overflowing world is reset as diverged
         # on GPU: "env_step" records the whole step (physics, force kernels, rewards, resets, observations)
-        # into one CUDA graph; "physics" only the substep loop (for env code that branches on host values);
-        # "off" launches everything one by one. Ignored on the CPU.
+        # into one CUDA graph (envs/base/step_runner.py); "physics" only the substep loop (for env code that
+        # branches on host values); "off" launches everything one by one. Ignored on the CPU.
         cuda_graph = "env_step"
         # on GPU: torch.compile the step's torch logic (rewards, terminations, resets, curriculum, observations),
         # which fuses its few hundred small operations into a few dozen kernels; compiled at the first step
         torch_compile = True
-        max_qvel = 1000.0  # m/s or rad/s; a world moving faster has diverged (real ones reach 1e6+) and is reset
+        # m/s or rad/s; a world moving faster has diverged (real ones reach 1e6+): it is reset (as a time-out, not
+        # counted in the curriculum or the episode statistics) and counted in Episode/diverged_resets
+        max_qvel = 1000.0
 
     class forces(ForcesConfig):
         """Terrain force fields (water, soil, ground friction) where the material map has them.

@@ -7,18 +7,40 @@ import math
 import torch
 
 from legged_gente.envs.base.legged_robot import LeggedRobot
+from legged_gente.sim.assembly import match_names
 
 
 class GenteBiped(LeggedRobot):
+    def _init_buffers(self) -> None:
+        super()._init_buffers()
+        # the sole geoms of each foot (cfg.asset.sole_geoms), (num_feet, soles per foot), and their radii
+        geoms = [self.mjm.geom(i).name for i in range(self.mjm.ngeom)]
+        soles = [self.mjm.geom(name).id for name in match_names(self.cfg.asset.sole_geoms, geoms, "geom")]
+        per_foot = [[g for g in soles if self.mjm.geom_bodyid[g] == foot] for foot in self.layout.foot_bodies]
+        if any(len(f) != len(per_foot[0]) or not f for f in per_foot):
+            raise ValueError(f"cfg.asset.sole_geoms={self.cfg.asset.sole_geoms} gives {[len(f) for f in per_foot]} "
+                             f"geoms on the feet {self.cfg.asset.foot_bodies}; name the same number (>= 1) on each.")
+        self.sole_geoms = torch.tensor(per_foot, dtype=torch.long, device=self.device)
+        # a sphere's (or the lowest point of a box's) distance below its centre
+        low = [self.mjm.geom_size[g, 0] if self.mjm.geom_type[g] == 2 else self.mjm.geom_size[g, 2]
+               for g in soles]
+        self.sole_depth = torch.tensor(low, dtype=torch.float32, device=self.device).view_as(self.sole_geoms)
+
     def _gait_phase(self) -> torch.Tensor:
-        """Per-foot phase in [0, 1): the two feet half a period apart."""
+        """Per-foot phase in [0, 1): the feet evenly spaced over the period."""
         t = self.episode_length_buf.float() * self.dt
-        phase = torch.remainder(t / self.cfg.rewards.gait_period, 1.0)
+        phase = torch.remainder(t / self.params.rewards.gait_period, 1.0)
         num_feet = self.feet.shape[0]
         offsets = torch.arange(num_feet, device=self.device) / num_feet
         return torch.remainder(phase[:, None] + offsets[None], 1.0)
 
-    def _task_observations(self) -> torch.Tensor:
+    def sole_clearance(self) -> torch.Tensor:
+        """(num_envs, num_feet) height of each foot's lowest sole point above the ground under it (m)."""
+        pos = self.sim.geom_xpos[:, self.sole_geoms]  # (n, feet, soles, 3)
+        height = pos[..., 2] - self.sole_depth - self._ground_height(pos[..., :2])
+        return height.amin(dim=-1)
+
+    def _obs_gait_clock(self):
         phase = self._gait_phase()[:, 0]
         return torch.stack([torch.sin(2 * math.pi * phase), torch.cos(2 * math.pi * phase)], dim=1)
 
@@ -27,13 +49,14 @@ class GenteBiped(LeggedRobot):
 
     def _reward_gait_contact(self):
         """Each foot on the ground in its stance phase and in the air in its swing phase."""
-        stance = self._gait_phase() < self.cfg.rewards.stance_fraction
+        stance = self._gait_phase() < self.params.rewards.stance_fraction
         return torch.sum(~(self.foot_contacts() ^ stance), dim=1).float()
 
     def _reward_feet_swing_height(self):
-        clearance = self.feet_pos[..., 2] - self._ground_height(self.feet_pos[..., :2])
+        """Squared error of the sole's clearance from the target, for feet in swing."""
         swing = ~self.foot_contacts()
-        return torch.sum(torch.square(clearance - self.cfg.rewards.swing_height_target) * swing, dim=1)
+        error = self.sole_clearance() - self.params.rewards.swing_height_target
+        return torch.sum(torch.square(error) * swing, dim=1)
 
     def _reward_hip_deviation(self):
         return torch.sum(torch.square(self.dof_pos[:, self.hip_ids] - self.default_dof_pos[:, self.hip_ids]), dim=1)

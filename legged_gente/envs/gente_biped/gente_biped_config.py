@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO
+from legged_gente.envs.base.terms import ObsTerm
 
 
 class GenteBipedCfg(LeggedRobotCfg):
@@ -45,7 +46,7 @@ class GenteBipedCfg(LeggedRobotCfg):
     class asset(LeggedRobotCfg.asset):
         file = "resources/robots/gente_biped/gente_biped.xml"
         foot_bodies = ["*_foot"]
-        knee_bodies = ["*_shank"]
+        sole_geoms = ["*_sole_*"]  # the collision spheres under each foot: swing height is measured at them
         penalize_contacts_on = ["*_thigh", "*_shank"]
         terminate_after_contacts_on = ["pelvis", "torso"]
         hip_joints = ["*_hip_yaw", "*_hip_roll"]
@@ -65,12 +66,16 @@ class GenteBipedCfg(LeggedRobotCfg):
             lin_vel_y = [-0.5, 0.5]
             ang_vel_yaw = [-1.0, 1.0]
 
+    class observations(LeggedRobotCfg.observations):
+        class policy(LeggedRobotCfg.observations.policy):
+            gait_clock = ObsTerm(fn="gait_clock")  # sin, cos of the first foot's gait phase
+
     class rewards(LeggedRobotCfg.rewards):
         base_height_target = 0.98
         only_positive_rewards = True
-        gait_period = 0.8
-        stance_fraction = 0.55
-        swing_height_target = 0.08
+        gait_period = 0.8  # s, the gait clock's period
+        stance_fraction = 0.55  # fraction of the period a foot should be on the ground
+        swing_height_target = 0.08  # m, clearance of the sole (its lowest point) above the ground in swing
 
         class scales(LeggedRobotCfg.rewards.scales):
             tracking_lin_vel = 1.0

@@ -53,7 +53,6 @@ class GenteQuadrupedCfg(LeggedRobotCfg):
     class asset(LeggedRobotCfg.asset):
         file = "resources/robots/gente_quadruped/gente_quadruped.xml"
         foot_bodies = ["*_foot"]
-        knee_bodies = ["*_calf"]
         penalize_contacts_on = ["*_thigh", "*_calf"]
         terminate_after_contacts_on = ["trunk"]
         terminate_height = 0.0
