@@ -104,6 +104,7 @@ def terminated_run(tmp_path_factory):
     env.update(PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1", OMP_NUM_THREADS="1")
     cmd = [sys.executable, str(REPO / "legged_gente/scripts/train.py"), "--task", "gente_biped_flat", "--device",
            "cpu", "--num-envs", "1", "--max_iterations", "100000", "--set", "runner.num_steps_per_env=2",
+           "--set", "algorithm.num_mini_batches=1",
            "--set", "actor.hidden_dims=[8]", "--set", "critic.hidden_dims=[8]", "--set", "runner.save_interval=1000"]
     proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines, deadline = [], time.monotonic() + 240

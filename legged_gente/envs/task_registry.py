@@ -56,6 +56,14 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
         if (value <= low) if kind is float else (value < low):
             bound = f"> {low}" if kind is float else f">= {low}"
             raise ValueError(f"{name}={value!r}: must be {bound} (--set {name}=...)")
+    if env_cfg is not None and train_cfg is not None:
+        batch = env_cfg.env.num_envs * train_cfg.runner.num_steps_per_env
+        if batch < train_cfg.algorithm.num_mini_batches:
+            raise ValueError(f"env.num_envs * runner.num_steps_per_env = {env_cfg.env.num_envs} * "
+                             f"{train_cfg.runner.num_steps_per_env} = {batch} samples cannot fill "
+                             f"algorithm.num_mini_batches={train_cfg.algorithm.num_mini_batches} (an empty mini-batch "
+                             f"makes the loss NaN); raise --num_envs or runner.num_steps_per_env, or lower "
+                             f"algorithm.num_mini_batches")
 
 
 def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
