@@ -28,6 +28,7 @@ class Cfg(ForcesConfig):
     drag_coefficient = CD
     soil = False
     friction_from_map = False
+    sole_contact = False  # water only: these scenes have no terrain geom for analytic sole contacts
     leg_geom_names = ["leg"]
     foot_geom_names: list = []
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from legged_gente.envs.task_registry import LOG_ROOT, apply_args
+from legged_gente.envs.task_registry import apply_args, default_log_root
 from legged_gente.utils.args import build_parser, parse_args
 
 
@@ -41,7 +41,7 @@ def build_arg_parser():
     p.add_argument("--traces", help="gente-evaluate's traces.npz (with the benchmark folder as source)")
     p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
     p.add_argument("--step", type=int, help="open the rollout paused at this policy step")
-    p.add_argument("--log_root", default=str(LOG_ROOT), help="where runs are (default: logs/)")
+    p.add_argument("--log_root", default=None, help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
     return p
 
 
@@ -125,7 +125,8 @@ def _make_play(args):
         policy = lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)  # noqa: E731
     else:
         train_cfg.runner.resume = True
-        runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=args.log_root)
+        log_root = args.log_root or default_log_root()
+        runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=log_root)
         policy = runner.get_inference_policy(device=env.device)
     return env, policy, Recorder(env, args.task, min(args.robots, env.num_envs))
 

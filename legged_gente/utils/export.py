@@ -20,22 +20,12 @@ ONNX_OPSET = 18
 
 
 def policy_observation_layout(env) -> list[tuple[str, float]]:
-    """(name, scale) of each entry of the env's ``policy`` observation, in the order LeggedRobot builds it
-    (``_compute_observations``): base velocities, gravity, commands, joint positions and velocities, last
-    actions, task terms, height scan. The observation is ``scale * quantity`` (joint positions relative to the
-    default ones; heights clipped to +-1 m first)."""
-    s = env.cfg.normalization.obs_scales
-    joints = list(env.layout.joint_names)
-    layout = [(f"base_lin_vel_{a}", s.lin_vel) for a in "xyz"]
-    layout += [(f"base_ang_vel_{a}", s.ang_vel) for a in "xyz"]
-    layout += [(f"projected_gravity_{a}", 1.0) for a in "xyz"]
-    layout += [("command_lin_vel_x", s.lin_vel), ("command_lin_vel_y", s.lin_vel), ("command_ang_vel_yaw", s.ang_vel)]
-    layout += [(f"dof_pos_rel/{j}", s.dof_pos) for j in joints]
-    layout += [(f"dof_vel/{j}", s.dof_vel) for j in joints]
-    layout += [(f"last_action/{j}", 1.0) for j in joints]
-    layout += [(f"task_{i}", 1.0) for i in range(env._task_observations().shape[1])]
-    layout += [(f"height_scan_{i}", s.height_measurements) for i in range(env.num_height_points)]
-    return layout
+    """(name, scale) of each entry of the env's ``policy`` observation, from the env's observation term table
+    (``cfg.observations.policy``, resolved by the env): the observation is ``scale * term`` (clipped first where
+    the term says so)."""
+    names = env.observation_names["policy"]
+    scales = torch.cat([entry[2] for entry in env._obs_groups["policy"]]).tolist()
+    return list(zip(names, scales))
 
 
 def deployment_metadata(env, checkpoint: str | None = None, task: str | None = None) -> dict[str, str]:
