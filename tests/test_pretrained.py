@@ -53,10 +53,10 @@ def test_evaluate_pretrained_records_the_file(tmp_path):
 
 def test_a_task_without_a_shipped_policy(capsys):
     with pytest.raises(SystemExit) as exit_info:
-        play_script.main(["--task", "gente_quadruped", "--device", "cpu", "--num_envs", "1", "--pretrained"])
+        play_script.main(["--task", "gente_quadruped_flat", "--device", "cpu", "--num_envs", "1", "--pretrained"])
     assert exit_info.value.code == 2
     line = capsys.readouterr().err.strip().splitlines()[-1]
-    assert "no policy is shipped for task 'gente_quadruped'" in line and SHIPPED in line
+    assert "no policy is shipped for task 'gente_quadruped_flat'" in line and SHIPPED in line
 
 
 def test_ship_policy_keeps_the_actor_and_the_run_config(tmp_path):
