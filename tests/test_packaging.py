@@ -79,6 +79,15 @@ def test_shipped_files_are_package_data():
     assert [n for n in needed if not shipped(n)] == []
 
 
+def test_flat_benchmark_is_one_flat_tile():
+    """`--benchmark flat` (the tracking-error-on-flat measurement): one 20 m tile, every height 0, no material."""
+    (item,) = load_benchmark("flat")
+    heights, materials = item.spec().build()
+    assert heights.shape == (200, 200) and not heights.any()
+    assert shipped("benchmarks/flat/manifest.json") and shipped(str(item.spec_path.relative_to(PACKAGE)))
+    assert not materials.has_water().any() and not materials.has_soil().any() and (materials.friction == 1.0).all()
+
+
 def test_shipped_data_is_found_from_any_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     biped = "resources/robots/gente_biped/gente_biped.xml"
@@ -90,7 +99,7 @@ def test_shipped_data_is_found_from_any_directory(tmp_path, monkeypatch):
     assert resolve_path(biped) == Path(biped)
     with pytest.raises(FileNotFoundError, match="robot file 'my_robot.xml' not found"):
         resolve_path("my_robot.xml")
-    with pytest.raises(FileNotFoundError, match=r"shipped benchmark: \['gente100', 'gente_original'\]"):
+    with pytest.raises(FileNotFoundError, match=r"shipped benchmark: \['flat', 'gente100', 'gente_original'\]"):
         load_benchmark("gente1000")
 
 
