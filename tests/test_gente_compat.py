@@ -18,7 +18,6 @@ from legged_gente.generation.backends.openai_backend import OpenAIBackend
 from legged_gente.generation.gente_compat import (
     GENTE_TOOLS,
     gente_tool_schemas,
-    heightmap_tile,
     import_heightmap,
     import_transcript,
     translate_call,
@@ -129,16 +128,9 @@ def test_heightmap_overflow_detection():
     fine = (ramp * 10).astype(np.int16)  # at most 1990 units = 9.95 m
     hm = import_heightmap(fine)
     assert not hm.overflowed and hm.heights[199, 0] == pytest.approx(1990 * 0.005)
-    heights, material = heightmap_tile(hm)
-    assert heights.dtype == np.float32 and material.shape == (200, 200)
     wrapped = (ramp * 200).astype(np.int16)  # 199 * 200 = 39800 > 32767: wraps once, between rows 163 and 164
     hm = import_heightmap(wrapped)
     assert hm.overflowed and hm.wrap_edges == 200
-    with pytest.raises(ValueError, match="wrapped around int16"):
-        heightmap_tile(hm)
-    tall = np.full((200, 200), 4000, np.int16)  # 20 m
-    with pytest.raises(ValueError, match="20.0 m > 10.0 m"):
-        heightmap_tile(import_heightmap(tall))
     with pytest.raises(ValueError, match="2-D int16"):
         import_heightmap(np.zeros((4, 4), np.float32))
 
