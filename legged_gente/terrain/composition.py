@@ -185,13 +185,12 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
             region = call["region"]
             rect = regions[region] if isinstance(region, str) else tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
             parts.append(Part(Region(*rect), [Operation(call["tool"], dict(call["params"]), call.get("mode") or "set")]))
-        base = None
-        if data.get("heightmap") is not None:
-            base = heightmap_ground(data["heightmap"], size_x, size_y, resolution, base_dir)
-        return TileSpec(size_x, size_y, resolution, int(data["seed"]), parts, base)
+        seed, heightmap = int(data["seed"]), data.get("heightmap")
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"not a terrain spec document ({type(exc).__name__}: {exc}); pass a spec.json written by "
                          f"gente-generate") from None
+    base = None if heightmap is None else heightmap_ground(heightmap, size_x, size_y, resolution, base_dir)
+    return TileSpec(size_x, size_y, resolution, seed, parts, base)
 
 
 def heightmap_ground(entry: Any, size_x: float, size_y: float, resolution: float,

@@ -37,33 +37,34 @@ def unwrapped(raw: np.ndarray) -> np.ndarray:
 
 
 def heightmap_heights(raw: np.ndarray, vertical_scale: float, max_abs_height: float, what: str = "the heightmap") -> np.ndarray:
-    """``raw * vertical_scale`` as float32 metres; raises ValueError (one line, with the fix) for a map that
+    """``raw * vertical_scale`` as float32 metres; raises ValueError (one line, with the fix, no final full stop)
+    for a map that
     is not 2-D numbers, is empty, holds NaN/inf, wrapped around its integer range or exceeds ``max_abs_height``."""
-    if not (isinstance(vertical_scale, (int, float)) and np.isfinite(vertical_scale) and vertical_scale > 0):
+    if isinstance(vertical_scale, bool) or not (isinstance(vertical_scale, (int, float)) and np.isfinite(vertical_scale) and vertical_scale > 0):
         raise ValueError(f"{what}: vertical_scale={vertical_scale!r} must be a positive number of metres per unit "
-                         f"(GenTe's maps: 0.005).")
+                         f"(GenTe's maps: 0.005)")
     raw = np.asarray(raw)
     if raw.ndim != 2 or min(raw.shape) < 2:
         raise ValueError(f"{what} has shape {raw.shape}; a heightmap is a 2-D array of at least 2 x 2 cells "
-                         f"(axis 0 along x, axis 1 along y).")
+                         f"(axis 0 along x, axis 1 along y)")
     if raw.size > MAX_HEIGHTMAP_CELLS:
-        raise ValueError(f"{what} has {raw.size} cells; the limit is {MAX_HEIGHTMAP_CELLS}: downsample it.")
+        raise ValueError(f"{what} has {raw.size} cells; the limit is {MAX_HEIGHTMAP_CELLS}: downsample it")
     if raw.dtype == np.bool_ or not (np.issubdtype(raw.dtype, np.integer) or np.issubdtype(raw.dtype, np.floating)):
-        raise ValueError(f"{what} holds {raw.dtype} values; a heightmap holds integers or floats.")
+        raise ValueError(f"{what} holds {raw.dtype} values; a heightmap holds integers or floats")
     if np.issubdtype(raw.dtype, np.floating) and not np.all(np.isfinite(raw)):
-        raise ValueError(f"{what} holds {int((~np.isfinite(raw)).sum())} NaN or infinite values; fill them with heights.")
+        raise ValueError(f"{what} holds {int((~np.isfinite(raw)).sum())} NaN or infinite values; fill them with heights")
     edges = wrap_edges(raw)
     if edges:
         true = unwrapped(raw)
         peak = float(np.abs(true).max()) * vertical_scale
         raise ValueError(f"{what} wrapped around the {raw.dtype} range at {edges} cell edges (its heights overflowed; "
                          f"unwrapped they reach |height| {peak:.1f} m): rebuild it without overflow, e.g. from its tool "
-                         f"calls.")
+                         f"calls")
     heights = raw.astype(np.float64) * vertical_scale
     peak = float(np.abs(heights).max())
     if peak > max_abs_height:
         raise ValueError(f"{what} reaches |height| {peak:.2f} m > {max_abs_height} m; lower vertical_scale or "
-                         f"rebuild the map lower.")
+                         f"rebuild the map lower")
     return heights.astype(np.float32)
 
 
@@ -71,10 +72,10 @@ def load_heightmap(path: str | Path, vertical_scale: float, max_abs_height: floa
     """A ``.npy`` heightmap file in metres (see :func:`heightmap_heights`); never unpickles."""
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"heightmap file {str(path)[:200]} does not exist; give a .npy path (relative to the spec file).")
+        raise ValueError(f"heightmap file {str(path)[:200]} does not exist; give a .npy path (relative to the spec file)")
     try:
         raw = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
         raise ValueError(f"heightmap file {str(path)[:200]} is not a readable .npy array ({str(exc)[:120]}); save it "
-                         f"with numpy.save.") from None
+                         f"with numpy.save") from None
     return heightmap_heights(raw, vertical_scale, max_abs_height, f"heightmap {path.name[:100]}")
