@@ -217,3 +217,28 @@ def test_hill_rising_above_the_horizon_is_a_slope_ahead():
     assert len(slopes) == 1 and slopes[0].params["direction"] == "up"
     assert slopes[0].params["slope"] == HILL_SLOPE  # a curved outline: how steep cannot be read from it
     assert slopes[0].rect(20, 20)[0] == 10.0  # ahead: the front half of the tile
+
+
+def test_upright_blue_panes_are_not_water_but_a_pond_and_a_stream_are():
+    # Overcast sky over a grey plaza, horizon at row 40; a grey facade standing from row 5 down to row 56 with
+    # slate-blue window panes, the lowest row of panes (rows 44-50) below the horizon.
+    im = _photo(*SKIES["overcast"], (150, 150, 150), horizon=40, noise=3.0)
+    im[5:56, 20:70] = (140, 140, 140)
+    im[52:56, 20:70] = (90, 90, 92)  # the facade's darker base
+    for r0 in (10, 27, 44):
+        for c0 in (26, 42, 58):
+            im[r0:r0 + 6, c0:c0 + 6] = (40, 60, 80)  # hue 210, the colour of dark water
+    panes = plan_image(_png(im))
+    assert "water" not in features(panes.calls), panes.notes
+    # A pond on the ground at those rows is foreshortened: 6 rows for 100 columns lies flat.
+    pond = _photo(*SKIES["overcast"], (150, 150, 150), horizon=40, noise=3.0)
+    pond[44:50, 30:130] = (40, 60, 80)
+    assert "water" in features(plan_image(_png(pond)).calls)
+    # A stream running away from the camera, 30 columns wide at the bottom and 4 at the horizon: 80 rows for 30
+    # columns is taller than a patch 4 times longer than wide can look at 3 m (4 * 1.6 / 3 = 2.1), but it
+    # narrows towards the horizon as a strip lying on the ground does.
+    stream = _photo(*SKIES["overcast"], (120, 110, 90), horizon=40, noise=3.0)
+    for r in range(40, H):
+        half = 2 + 13 * (r - 40) / (H - 40)
+        stream[r, int(80 - half):int(80 + half)] = (40, 70, 110)
+    assert "water" in features(plan_image(_png(stream)).calls)

@@ -21,6 +21,8 @@ Two kinds of images, told apart by :func:`is_sketch`:
      (r - horizon)`` (a pinhole camera over flat ground), so the tile's back half (``Z < Z_NEAR + size_x / 2``)
      is the lower part of the picture and its front half a thin band under the horizon. Pixels are classified
      by colour (water, ice, snow, sand, mud, grass, grey ground) and texture (gravel: rough; trunks: trees).
+     Water-coloured blobs taller than a patch lying on the ground can look at their distance (foreshortening)
+     stand upright (window panes, doors, blue cars) and are not ground.
   4. *Cues*: foam, wave crests and a water band with land beyond it (a river) make water flow; water across
      the view is one band at its distance; small dark blobs with their shadows on the ground are rocks (low
      obstacles); a run of regular, thick horizontal bands is one flight of stairs.
@@ -409,6 +411,33 @@ def _hill_slope(cols: np.ndarray, top: np.ndarray, aspect: float) -> float:
     return HILL_SLOPE
 
 
+WATER_ELONGATION = 4.0
+"""Longest a patch of water on the ground may be along the view, in widths (a stream running away from the camera)."""
+
+
+def _upright_water(water: np.ndarray, ground: np.ndarray, horizon: int) -> np.ndarray:
+    """Water-coloured blobs that cannot lie on the ground: window panes, doors, signs, blue cars.
+
+    Foreshortening (pinhole camera at ``CAMERA_HEIGHT`` over flat ground): a patch dX wide and dZ deep at
+    distance Z spans f * dX / Z columns and f * CAMERA_HEIGHT * dZ / Z**2 rows, so rows / columns =
+    (CAMERA_HEIGHT / Z) * (dZ / dX). A blob taller than that allows with dZ / dX = :data:`WATER_ELONGATION`, at
+    the distance of its nearest (lowest) row, is upright, unless it narrows towards the horizon as a strip
+    lying on the ground does (its width in the picture is f * dX / Z): a stream running away from the camera.
+    """
+    labels, n = ndimage.label(water & ground)
+    out = np.zeros_like(water)
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        blob = labels[sl] == k
+        rows, cols = blob.shape
+        z = Z_NEAR * (PH - horizon) / max(sl[0].stop - 0.5 - horizon, 0.5)  # distance of its lowest row's centre
+        widths = blob.sum(1)
+        quarter = max(rows // 4, 1)
+        narrows = widths[:quarter].mean() < 0.6 * widths[-quarter:].mean()
+        if rows / cols > WATER_ELONGATION * CAMERA_HEIGHT / z and not narrows:
+            out[sl] |= blob
+    return out
+
+
 def read_photo(img: Image.Image) -> PhotoReading:
     """Read a photo in perspective (module docstring); the findings, before any tool call is made."""
     rgb = np.asarray(img.resize((PW, PH), Image.Resampling.BOX), np.float32) / 255.0
@@ -457,6 +486,8 @@ def read_photo(img: Image.Image) -> PhotoReading:
         objects = ndimage.binary_fill_holes(objects)  # windows and doors belong to their building
     objects |= _standing(rgb, ~sky & ~objects & (rows >= horizon), horizon, classes)
     ground = ~sky & ~objects & (rows >= horizon)
+    upright = _upright_water(classes == SURFACES.index("water"), ground, horizon)
+    ground &= ~upright
     surface = np.where(ground, classes, -1)
     if grey:
         surface = np.where(surface >= 0, np.where(surface == SURFACES.index("gravel"), surface, SURFACES.index("grey")), -1)
