@@ -221,10 +221,12 @@ def test_hill_rising_above_the_horizon_is_a_slope_ahead():
 
 def test_upright_blue_panes_are_not_water_but_a_pond_and_a_stream_are():
     # Overcast sky over a grey plaza, horizon at row 40; a grey facade standing from row 5 down to row 56 with
-    # slate-blue window panes, the lowest row of panes (rows 44-50) below the horizon.
+    # slate-blue window panes, the lowest row of panes (rows 44-50) below the horizon and on the facade's darker
+    # base, so not enclosed by the facade. Each pane is 6 x 6 pixels: lying on the ground 4-10 rows under the
+    # horizon it would be tens of metres away, and 6 rows tall it would be a puddle ~30 times longer than wide.
     im = _photo(*SKIES["overcast"], (150, 150, 150), horizon=40, noise=3.0)
     im[5:56, 20:70] = (140, 140, 140)
-    im[52:56, 20:70] = (90, 90, 92)  # the facade's darker base
+    im[50:56, 20:70] = (90, 90, 92)  # the facade's darker base, right under the lowest panes
     for r0 in (10, 27, 44):
         for c0 in (26, 42, 58):
             im[r0:r0 + 6, c0:c0 + 6] = (40, 60, 80)  # hue 210, the colour of dark water
