@@ -190,6 +190,29 @@ def test_converter_on_a_made_up_clone(tmp_path):
     assert [i["id"] for i in manifest["items"]] == ["single_text_01", "multi_image_02"]
 
 
+def test_converter_writes_heightmap_specs(tmp_path):
+    import importlib.util
+
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "legged_gente/benchmarks/gente_original/build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    ramp = np.arange(200)[:, None] * np.ones((1, 200), np.int64)
+    for i, units in enumerate([5, 200], start=1):  # 199 * 5 = 995 units; 199 * 200 = 39800 wraps around int16
+        folder = tmp_path / "GenTe" / "dataset" / "multi_parts" / "image" / str(i)
+        folder.mkdir(parents=True)
+        (folder / "data.json").write_text(json.dumps({"tool_calls": []}))
+        np.save(folder / "array.npy", (ramp * units).astype(np.int16))
+    result = build.build_heightmaps(tmp_path / "GenTe", tmp_path / "hm")
+    assert result["written"] == 1 and list(result["refused"]) == ["multi_image_02"]
+    assert "wrapped around the int16 range" in result["refused"]["multi_image_02"]
+    (item,) = load_benchmark(tmp_path / "hm")
+    heights, _ = item.spec().build()
+    assert heights[199, 7] == pytest.approx(199 * 5 * 0.005)  # 4.975 m at the far edge
+    assert not list((tmp_path / "hm").rglob("*.npy"))  # the clone's files are named, not copied
+
+
 def test_the_shipped_benchmark_loads():
     from legged_gente.evaluation.benchmark import load_benchmark
 
