@@ -4,10 +4,11 @@ import dataclasses
 
 import pytest
 
-from legged_gente.generation.checker import check_spec, declared_bounds, required_tools
+from legged_gente.generation.checker import check_spec, required_tools
 from legged_gente.evaluation.report import BASE_GROUND, CATEGORY_OF_TOOL, categories_of
 from legged_gente.generation.pipeline import generate_spec
 from legged_gente.generation.validation import ToolCall
+from legged_gente.terrain.composition import stacked_height_bounds
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
 
 PROMPT = "a knee-deep river crossing a meadow with trees and muddy banks"
@@ -65,8 +66,8 @@ def test_blocked_spawn_is_rejected(good, tmp_path):
 
 def test_out_of_bounds_is_rejected(good, tmp_path, monkeypatch):
     spec, path = good
-    lo, hi = declared_bounds(spec)
-    assert lo < 0 < hi  # the river cuts below 0; pillars rise above
+    bounds = stacked_height_bounds(spec.to_tile_spec())
+    assert bounds.lo.min() < 0 < bounds.hi.max()  # the river cuts below 0; pillars rise above
     # Declare every geometric atomic 10 cm lower than it builds: the built tile must then exceed its bounds.
     for name, atomic in ATOMIC_TERRAINS.items():
         if atomic.kind == "geometric":

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from legged_gente.generation.backends.image import LEGEND, MAX_CALLS, OBSTACLE_HEIGHT, is_sketch, plan_image, read_photo
+from legged_gente.generation.backends.image import HILL_SLOPE, LEGEND, MAX_CALLS, OBSTACLE_HEIGHT, is_sketch, plan_image, read_photo
 from legged_gente.generation.score import DEFAULT_SET, features
 from legged_gente.generation.spec import TerrainSpec
 
@@ -176,3 +176,71 @@ def test_docs_list_the_legend():
     for name, legend in LEGEND.items():
         r, g, b = legend.rgb
         assert f"| `{name}` | ({r}, {g}, {b}) | `#{r:02x}{g:02x}{b:02x}` |" in doc, name
+
+
+def _ground_to_skyline(skyline_rows, ground=(70, 130, 50), seed=0):
+    """A photo whose ground (textured) reaches up to ``skyline_rows[c]`` in column c, a blue sky gradient above."""
+    rng = np.random.default_rng(seed)
+    rows = np.arange(H)[:, None]
+    t = (rows / H)[..., None]
+    sky = np.asarray(SKIES["blue"][0]) * (1 - t) + np.asarray(SKIES["blue"][1]) * t
+    im = np.where((rows >= np.asarray(skyline_rows)[None, :])[..., None],
+                  np.asarray(ground) + rng.normal(0, 18, (H, W, 3)), sky + rng.normal(0, 3, (H, W, 3)))
+    return np.clip(im, 0, 255).astype(np.uint8)
+
+
+def test_level_ground_gives_no_slope():
+    r = plan_image(_png(_ground_to_skyline(np.full(W, 50))))
+    assert "slope" not in features(r.calls)
+
+
+def test_tilted_horizon_gives_the_side_slope():
+    # A plane sloping sideways at angle theta, seen by a level pinhole camera: a line of constant depth on it
+    # (its far edge against the sky) rises tan(theta) * dx in height for dx across, i.e. f * tan(theta) * dx / Z
+    # rows for f * dx / Z columns: the skyline's tilt in the picture is tan(theta) (square pixels).
+    tilt = 0.4  # rows per column
+    skyline = 76 - tilt * np.arange(W)  # 76 at the left edge, 12 at the right
+    slopes = [c for c in plan_image(_png(_ground_to_skyline(skyline))).calls if c.tool == "pyramid_slope"]
+    assert len(slopes) == 1
+    assert slopes[0].params["slope"] == pytest.approx(np.arctan(0.4), abs=0.03)  # 0.38 rad
+    # the same scene stretched to twice the width: 0.2 rows per column, a gentler slope of atan(0.2) = 0.20 rad
+    wide = Image.fromarray(_ground_to_skyline(skyline)).resize((2 * W, H))
+    slopes = [c for c in plan_image(wide).calls if c.tool == "pyramid_slope"]
+    assert slopes[0].params["slope"] == pytest.approx(np.arctan(0.4 / 2), abs=0.03)
+
+
+def test_hill_rising_above_the_horizon_is_a_slope_ahead():
+    c = np.arange(W)
+    skyline = 60 - 25 * np.sin(np.pi * np.clip((c - 15) / 130, 0, 1))  # a smooth ridge 25 rows above the horizon
+    r = plan_image(_png(_ground_to_skyline(skyline)))
+    slopes = [c for c in r.calls if c.tool == "pyramid_slope"]
+    assert len(slopes) == 1 and slopes[0].params["direction"] == "up"
+    assert slopes[0].params["slope"] == HILL_SLOPE  # a curved outline: how steep cannot be read from it
+    assert slopes[0].rect(20, 20)[0] == 10.0  # ahead: the front half of the tile
+
+
+def test_upright_blue_panes_are_not_water_but_a_pond_and_a_stream_are():
+    # Overcast sky over a grey plaza, horizon at row 40; a grey facade standing from row 5 down to row 56 with
+    # slate-blue window panes, the lowest row of panes (rows 44-50) below the horizon and on the facade's darker
+    # base, so not enclosed by the facade. Each pane is 6 x 6 pixels: lying on the ground 4-10 rows under the
+    # horizon it would be tens of metres away, and 6 rows tall it would be a puddle ~30 times longer than wide.
+    im = _photo(*SKIES["overcast"], (150, 150, 150), horizon=40, noise=3.0)
+    im[5:56, 20:70] = (140, 140, 140)
+    im[50:56, 20:70] = (90, 90, 92)  # the facade's darker base, right under the lowest panes
+    for r0 in (10, 27, 44):
+        for c0 in (26, 42, 58):
+            im[r0:r0 + 6, c0:c0 + 6] = (40, 60, 80)  # hue 210, the colour of dark water
+    panes = plan_image(_png(im))
+    assert "water" not in features(panes.calls), panes.notes
+    # A pond on the ground at those rows is foreshortened: 6 rows for 100 columns lies flat.
+    pond = _photo(*SKIES["overcast"], (150, 150, 150), horizon=40, noise=3.0)
+    pond[44:50, 30:130] = (40, 60, 80)
+    assert "water" in features(plan_image(_png(pond)).calls)
+    # A stream running away from the camera, 30 columns wide at the bottom and 4 at the horizon: 80 rows for 30
+    # columns is taller than a patch 4 times longer than wide can look at 3 m (4 * 1.6 / 3 = 2.1), but it
+    # narrows towards the horizon as a strip lying on the ground does.
+    stream = _photo(*SKIES["overcast"], (120, 110, 90), horizon=40, noise=3.0)
+    for r in range(40, H):
+        half = 2 + 13 * (r - 40) / (H - 40)
+        stream[r, int(80 - half):int(80 + half)] = (40, 70, 110)
+    assert "water" in features(plan_image(_png(stream)).calls)

@@ -18,7 +18,6 @@ from legged_gente.generation.backends.openai_backend import OpenAIBackend
 from legged_gente.generation.gente_compat import (
     GENTE_TOOLS,
     gente_tool_schemas,
-    heightmap_tile,
     import_heightmap,
     import_transcript,
     translate_call,
@@ -129,16 +128,9 @@ def test_heightmap_overflow_detection():
     fine = (ramp * 10).astype(np.int16)  # at most 1990 units = 9.95 m
     hm = import_heightmap(fine)
     assert not hm.overflowed and hm.heights[199, 0] == pytest.approx(1990 * 0.005)
-    heights, material = heightmap_tile(hm)
-    assert heights.dtype == np.float32 and material.shape == (200, 200)
     wrapped = (ramp * 200).astype(np.int16)  # 199 * 200 = 39800 > 32767: wraps once, between rows 163 and 164
     hm = import_heightmap(wrapped)
     assert hm.overflowed and hm.wrap_edges == 200
-    with pytest.raises(ValueError, match="wrapped around int16"):
-        heightmap_tile(hm)
-    tall = np.full((200, 200), 4000, np.int16)  # 20 m
-    with pytest.raises(ValueError, match="20.0 m > 10.0 m"):
-        heightmap_tile(import_heightmap(tall))
     with pytest.raises(ValueError, match="2-D int16"):
         import_heightmap(np.zeros((4, 4), np.float32))
 
@@ -196,6 +188,29 @@ def test_converter_on_a_made_up_clone(tmp_path):
     assert "SECRET SCENE" not in written
     manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
     assert [i["id"] for i in manifest["items"]] == ["single_text_01", "multi_image_02"]
+
+
+def test_converter_writes_heightmap_specs(tmp_path):
+    import importlib.util
+
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "legged_gente/benchmarks/gente_original/build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    ramp = np.arange(200)[:, None] * np.ones((1, 200), np.int64)
+    for i, units in enumerate([5, 200], start=1):  # 199 * 5 = 995 units; 199 * 200 = 39800 wraps around int16
+        folder = tmp_path / "GenTe" / "dataset" / "multi_parts" / "image" / str(i)
+        folder.mkdir(parents=True)
+        (folder / "data.json").write_text(json.dumps({"tool_calls": []}))
+        np.save(folder / "array.npy", (ramp * units).astype(np.int16))
+    result = build.build_heightmaps(tmp_path / "GenTe", tmp_path / "hm")
+    assert result["written"] == 1 and list(result["refused"]) == ["multi_image_02"]
+    assert "wrapped around the int16 range" in result["refused"]["multi_image_02"]
+    (item,) = load_benchmark(tmp_path / "hm")
+    heights, _ = item.spec().build()
+    assert heights[199, 7] == pytest.approx(199 * 5 * 0.005)  # 4.975 m at the far edge
+    assert not list((tmp_path / "hm").rglob("*.npy"))  # the clone's files are named, not copied
 
 
 def test_the_shipped_benchmark_loads():

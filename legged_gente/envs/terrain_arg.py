@@ -20,7 +20,7 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
     if path.suffix == ".json":
         try:  # the terrain takes the spec's own tile size and resolution; its calls are checked when it is built
-            spec = tile_spec_from_document(json.loads(path.read_text()))
+            spec = tile_spec_from_document(json.loads(path.read_text()), path.parent)
         except ValueError as exc:  # also json.JSONDecodeError
             raise ValueError(f"--terrain {value}: {exc}") from None
         terrain = env_cfg.terrain
@@ -40,4 +40,8 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
             raise ValueError(f"--terrain {value}: the module defines no subclass of LeggedRobotCfg.terrain")
         env_cfg.terrain = classes[0]()
         return
+    if path.suffix == ".npy":
+        raise ValueError(f"--terrain {value}: a bare heightmap has no cell size or height scale; pass a spec .json "
+                         f"naming it: {{..., \"resolution\": <cell m>, \"heightmap\": {{\"file\": \"{path.name}\", "
+                         f"\"vertical_scale\": <m per unit>}}}} (docs/terrain.md)")
     raise ValueError(f"--terrain {value!r}: expected 'plane', a .json spec or a .py terrain config module")

@@ -20,8 +20,7 @@ import numpy as np
 from legged_gente.generation.backends.image import LEGEND
 from legged_gente.generation.backends.planner import Step, recipe_steps
 from legged_gente.generation.spec import TerrainSpec
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT
-from legged_gente.terrain.registry import ATOMIC_TERRAINS
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT, stacked_height_bounds
 from legged_gente.terrain.terrain import SPAWN_FOOTPRINT, SPAWN_MAX_RANGE, Terrain
 
 MIN_RELIEF = 0.02
@@ -60,25 +59,6 @@ def required_tools(prompt: str | None = None, names: tuple[str, ...] = ()) -> li
     return sorted({s.tool for s in _named_steps(steps)})
 
 
-def declared_bounds(spec: TerrainSpec) -> tuple[float, float]:
-    """(min, max) heights the spec's calls can make, from each atomic's declared ``height_bounds``.
-
-    Interval arithmetic over the calls in order, from flat ground at 0 m: a ``set`` call's region takes the
-    atomic's range, an ``add`` call's region the current range shifted by it; cells outside a region keep
-    theirs, and seam blending mixes the two convexly, so the tile's range is the union of both.
-    """
-    lo = hi = 0.0
-    for call in spec.calls:
-        atomic = ATOMIC_TERRAINS[call.tool]
-        if atomic.kind != "geometric":
-            continue
-        x0, y0, x1, y1 = call.rect(spec.size_x, spec.size_y)
-        a, b = atomic.height_bounds(dict(call.params), x1 - x0, y1 - y0)
-        new_lo, new_hi = (a, b) if call.mode == "set" else (lo + a, hi + b)
-        lo, hi = min(lo, new_lo), max(hi, new_hi)
-    return lo, hi
-
-
 def _visible(tool: str, heights: np.ndarray, material, window: tuple[slice, slice], ground_friction: float) -> bool:
     if tool == "water":
         return bool(material.has_water()[window].any())
@@ -113,12 +93,17 @@ def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[st
     if not spec.calls or (float(heights.max() - heights.min()) <= MIN_RELIEF and not has_material):
         problems.append("empty: the spec builds flat, plain ground (no relief, water, soil or low friction).")
 
-    lo, hi = declared_bounds(spec)
-    lo, hi = max(lo, -MAX_ABS_HEIGHT), min(hi, MAX_ABS_HEIGHT)
-    hmin, hmax = float(heights.min()), float(heights.max())
-    if hmin < lo - BOUNDS_TOLERANCE or hmax > hi + BOUNDS_TOLERANCE:
-        problems.append(f"out of bounds: heights span [{hmin:.3f}, {hmax:.3f}] m but the calls declare "
-                        f"[{lo:.3f}, {hi:.3f}] m.")
+    # Per cell, against the terrain's own worst-case bound on stacked heights (the one validation uses).
+    bounds = stacked_height_bounds(spec.to_tile_spec())
+    ii, jj = np.meshgrid(np.arange(heights.shape[0]) * res, np.arange(heights.shape[1]) * res, indexing="ij")
+    lo, hi = bounds.at(ii, jj)
+    lo, hi = np.maximum(lo, -MAX_ABS_HEIGHT), np.minimum(hi, MAX_ABS_HEIGHT)
+    outside = (heights < lo - BOUNDS_TOLERANCE) | (heights > hi + BOUNDS_TOLERANCE)
+    if outside.any():
+        i, j = np.argwhere(outside)[0]
+        problems.append(f"out of bounds: {int(outside.sum())} cells lie outside the heights their calls can make, e.g. "
+                        f"{float(heights[i, j]):.3f} m at ({i * res:.1f}, {j * res:.1f}) m, where the calls allow "
+                        f"[{float(lo[i, j]):.3f}, {float(hi[i, j]):.3f}] m.")
 
     ox, oy = (float(v) for v in terrain.terrain_origins[0, 0, :2])
     half = SPAWN_FOOTPRINT / 2

@@ -23,6 +23,7 @@ import ast
 import dataclasses
 import json
 import math
+from pathlib import Path
 from typing import Any, Callable, Mapping
 
 import numpy as np
@@ -36,8 +37,7 @@ from legged_gente.generation.validation import (
     validate_call,
     validate_spec_dict,
 )
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT
-from legged_gente.terrain.materials import MaterialMap
+from legged_gente.terrain.heightmap import wrap_edges
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
 
 GENTE_CELL = 0.1
@@ -48,9 +48,6 @@ GENTE_TILE = 20.0
 """m, side of GenTe's tile (200 cells)."""
 PART_REGIONS = {1: "back_right", 2: "front_right", 3: "back_left", 4: "front_left"}
 """GenTe's ``part`` -> our named region (GenTe's part 2 is the second half along x, part 3 along y)."""
-
-WRAP_JUMP = 2**15
-"""int16 units: a jump between neighbouring cells larger than half the int16 range can only be a wrap-around."""
 
 BLOCKING = ("invented_tool", "no_equivalent", "unreadable_arguments", "bad_value", "rejected")
 """Issue kinds that leave a GenTe call without any translated call."""
@@ -561,24 +558,22 @@ class GenteHeightmap:
 def import_heightmap(array: Any) -> GenteHeightmap:
     """GenTe's int16 heightmap -> float32 metres (x along axis 0, 0.005 m per unit) and overflow detection.
 
-    GenTe adds heights in int16 without checks, so a tall stack wraps from +32767 to -32768. A wrap shows as a
-    jump of more than half the int16 range between neighbouring cells (no real terrain of 0.1 m cells jumps
-    164 m); ``wrap_edges`` counts those neighbour pairs.
+    GenTe adds heights in int16 without checks, so a tall stack wraps from +32767 to -32768; the terrain
+    library's :func:`~legged_gente.terrain.heightmap.wrap_edges` counts the neighbour pairs where it did.
     """
     a = np.asarray(array)
     if a.ndim != 2 or a.dtype != np.int16:
         raise ValueError(f"a GenTe heightmap is a 2-D int16 array; got {a.dtype} of shape {a.shape}.")
+    edges = wrap_edges(a)
     a32 = a.astype(np.int32)
-    edges = int((np.abs(np.diff(a32, axis=0)) > WRAP_JUMP).sum() + (np.abs(np.diff(a32, axis=1)) > WRAP_JUMP).sum())
     return GenteHeightmap((a32 * GENTE_VERTICAL).astype(np.float32), edges > 0, edges, (int(a32.min()), int(a32.max())))
 
 
-def heightmap_tile(heightmap: GenteHeightmap) -> tuple[np.ndarray, MaterialMap]:
-    """A GenTe heightmap as a tile (heights, rigid MaterialMap) like ``TerrainSpec.build``; refuses broken maps."""
-    if heightmap.overflowed:
-        raise ValueError(f"the heightmap wrapped around int16 at {heightmap.wrap_edges} cell edges; its heights are "
-                         f"garbage there: import its transcript instead.")
-    peak = float(np.abs(heightmap.heights).max())
-    if peak > MAX_ABS_HEIGHT:
-        raise ValueError(f"the heightmap reaches |height| {peak:.1f} m > {MAX_ABS_HEIGHT} m; import its transcript instead.")
-    return heightmap.heights.copy(), MaterialMap.rigid(heightmap.heights.shape)
+def heightmap_spec(file: str, name: str, base_dir: str | Path | None = None) -> TerrainSpec:
+    """A validated spec whose ground is GenTe's ``array.npy`` at ``file`` (relative to ``base_dir``, the folder the
+    spec is saved in): 0.1 m cells, 0.005 m per unit, a 20 m x 20 m tile. Raises ValidationError naming the
+    problem (not 200 x 200 int16 cells, wrapped around int16, beyond the height bound)."""
+    doc = TerrainSpec(calls=[], name=name, size_x=GENTE_TILE, size_y=GENTE_TILE, resolution=GENTE_CELL,
+                      source={"gente_heightmap": Path(file).name}, backend="gente_import",
+                      heightmap={"file": str(file), "vertical_scale": GENTE_VERTICAL}).to_dict()
+    return TerrainSpec.from_dict(doc, base_dir=base_dir)

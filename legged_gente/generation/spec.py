@@ -11,6 +11,15 @@ Example document::
      "calls": [{"tool": "natural_ground", "region": "full", "mode": "set", "params": {...}},
                {"tool": "soil", "region": {"x0": 0, "y0": 0, "x1": 10, "y1": 20}, "params": {...}}],
      "source": {"text": "a forest trail"}, "backend": "planner", "model": null}
+
+A spec may also name a heightmap as the ground under its calls (an imported GenTe ``array.npy``, a survey)::
+
+    {..., "resolution": 0.1, "size_x": 20.0, "size_y": 20.0,
+     "heightmap": {"file": "array.npy", "vertical_scale": 0.005}, "calls": []}
+
+``file`` is relative to the spec file; the cell size is ``resolution``, and the sizes must be the map's cells
+times it. Nothing about the map is guessed: a wrong size, a wrapped-around (overflowed) integer map or one
+beyond the height bound is refused with the reason.
 """
 
 from __future__ import annotations
@@ -68,9 +77,14 @@ class TerrainSpec:
     backend: str = "planner"
     model: str | None = None
     version: int = SPEC_VERSION
+    heightmap: dict[str, Any] | None = None
+    """``{"file", "vertical_scale"}``: the ground under the calls (None: flat 0 m)."""
+    base_dir: Path | None = dataclasses.field(default=None, compare=False, repr=False)
+    """Folder a relative heightmap ``file`` is read from (the spec file's; None: the working directory)."""
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        extra = {} if self.heightmap is None else {"heightmap": dict(self.heightmap)}
+        return extra | {
             "version": self.version,
             "name": self.name,
             "size_x": float(self.size_x),
@@ -84,15 +98,17 @@ class TerrainSpec:
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any], registry: Any = None) -> "TerrainSpec":
-        """Validate ``data`` (schema, every call against its tool) and build the spec; raises ValidationError."""
-        data, calls = validate_spec_dict(data, registry)
+    def from_dict(cls, data: dict[str, Any], registry: Any = None, base_dir: str | Path | None = None) -> "TerrainSpec":
+        """Validate ``data`` (schema, heightmap, every call against its tool) and build the spec; raises
+        ValidationError. A relative heightmap file is read from ``base_dir``."""
+        data, calls = validate_spec_dict(data, registry, base_dir)
         fields = {k: data[k] for k in ("name", "size_x", "size_y", "resolution", "seed", "source", "backend", "model")}
-        return cls(calls=calls, version=data["version"], **fields)
+        base = None if base_dir is None else Path(base_dir)
+        return cls(calls=calls, version=data["version"], heightmap=data.get("heightmap"), base_dir=base, **fields)
 
     def validated(self, registry: Any = None) -> "TerrainSpec":
         """A re-validated copy (e.g. after editing calls by hand)."""
-        return TerrainSpec.from_dict(self.to_dict(), registry)
+        return TerrainSpec.from_dict(self.to_dict(), registry, self.base_dir)
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), indent=2) + "\n"
@@ -117,7 +133,7 @@ class TerrainSpec:
             raise ValidationError([f"spec {path}: the file is {size} bytes; a spec is at most {MAX_SPEC_BYTES} bytes."])
         try:
             data = parse_json(path.read_bytes(), "the file's contents", MAX_SPEC_BYTES)
-            return cls.from_dict(data, registry)
+            return cls.from_dict(data, registry, path.parent)
         except ValidationError as exc:
             raise ValidationError([f"{path}: {m}" for m in exc.messages]) from None
 
@@ -125,7 +141,7 @@ class TerrainSpec:
         """The terrain library's ``TileSpec``: one ``Part`` per call, in call order (read as training reads it)."""
         from legged_gente.terrain.composition import tile_spec_from_document
 
-        return tile_spec_from_document(self.to_dict())
+        return tile_spec_from_document(self.to_dict(), self.base_dir)
 
     def build(self) -> tuple[np.ndarray, MaterialMap]:
         """Heights (float32 ``(nx, ny)``, metres) and the aligned MaterialMap; deterministic."""

@@ -25,7 +25,16 @@ import numpy as np
 from jsonschema import Draft202012Validator
 
 from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_regions
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT, SEAM_BAND, Region, tile_spec_from_document
+from legged_gente.terrain.composition import (
+    MAX_ABS_HEIGHT,
+    Operation,
+    Part,
+    Region,
+    TileSpec,
+    heightmap_ground,
+    stacked_height_bounds,
+    tile_spec_from_document,
+)
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 SPEC_VERSION = 1
@@ -284,41 +293,25 @@ def validate_call(
 
 
 def check_height_stack(
-    calls: list[ToolCall], size_x: float, size_y: float, registry: Mapping[str, AtomicTerrain] | None = None
+    calls: list[ToolCall], size_x: float, size_y: float, registry: Mapping[str, AtomicTerrain] | None = None,
+    base: np.ndarray | None = None,
 ) -> None:
-    """Raise ValidationError if the calls, in order, can make |height| exceed the builder's ``MAX_ABS_HEIGHT``.
+    """Raise ValidationError if the calls, in order, on ``base`` (a heightmap, None: flat 0 m) can make |height|
+    exceed the builder's ``MAX_ABS_HEIGHT``: the terrain's own worst-case bound (:func:`stacked_height_bounds`)."""
+    bounds = stacked_height_bounds(calls_tile(calls, size_x, size_y, base=base), registry)
+    if bounds.first_beyond is not None:
+        call = calls[bounds.first_beyond]
+        raise ValidationError([
+            f"calls[{bounds.first_beyond}] ({call.tool} with mode {call.mode!r}) can make |height| reach "
+            f"{bounds.peak:.2f} m > {MAX_ABS_HEIGHT} m where regions stack; lower its heights, use mode 'set', or move it."
+        ])
 
-    Interval arithmetic per region of the tile, from flat ground at 0 m: the tile is cut at every call's
-    rectangle and its seam band (``SEAM_BAND`` m wide); inside a rectangle a ``set`` call gives the atomic's
-    declared range (``height_bounds`` on the rectangle widened by the band, as the builder generates it) and
-    an ``add`` call shifts the current range by it; in the band the builder blends old and new heights
-    convexly, so the range is the union of both. This bounds every height the builder can make.
-    """
-    registry = ATOMIC_TERRAINS if registry is None else registry
-    geometric = [(i, c) for i, c in enumerate(calls) if registry[c.tool].kind == "geometric"]
-    if not geometric:
-        return
-    rects = [c.rect(size_x, size_y) for _, c in geometric]
-    band = SEAM_BAND
-    cut_x = sorted({0.0, float(size_x)} | {min(max(v, 0.0), size_x) for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)})
-    cut_y = sorted({0.0, float(size_y)} | {min(max(v, 0.0), size_y) for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)})
-    cx = (np.array(cut_x[:-1]) + np.array(cut_x[1:]))[:, None] / 2.0
-    cy = (np.array(cut_y[:-1]) + np.array(cut_y[1:]))[None, :] / 2.0
-    lo = np.zeros((cx.shape[0], cy.shape[1]))
-    hi = np.zeros_like(lo)
-    for (i, call), (x0, y0, x1, y1) in zip(geometric, rects):
-        a, b = registry[call.tool].height_bounds(dict(call.params), x1 - x0 + 2 * band, y1 - y0 + 2 * band)
-        new_lo, new_hi = (np.full_like(lo, a), np.full_like(hi, b)) if call.mode == "set" else (lo + a, hi + b)
-        inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
-        near = (cx > x0 - band) & (cx < x1 + band) & (cy > y0 - band) & (cy < y1 + band)
-        lo = np.where(inside, new_lo, np.where(near, np.minimum(lo, new_lo), lo))
-        hi = np.where(inside, new_hi, np.where(near, np.maximum(hi, new_hi), hi))
-        peak = max(-float(lo.min()), float(hi.max()))
-        if peak > MAX_ABS_HEIGHT:
-            raise ValidationError([
-                f"calls[{i}] ({call.tool} with mode {call.mode!r}) can make |height| reach {peak:.2f} m > "
-                f"{MAX_ABS_HEIGHT} m where regions stack; lower its heights, use mode 'set', or move it."
-            ])
+
+def calls_tile(calls: list[ToolCall], size_x: float, size_y: float, resolution: float = 0.1, seed: int = 0,
+               base: np.ndarray | None = None) -> TileSpec:
+    """Validated calls as the terrain library's ``TileSpec``: one part per call, in order (as the builder reads them)."""
+    parts = [Part(Region(*c.rect(size_x, size_y)), [Operation(c.tool, dict(c.params), c.mode or "set")]) for c in calls]
+    return TileSpec(size_x, size_y, resolution, seed, parts, base)
 
 
 SPEC_SCHEMA: dict[str, Any] = {
@@ -348,6 +341,15 @@ SPEC_SCHEMA: dict[str, Any] = {
         "source": {"type": "object", "maxProperties": 16},
         "backend": {"type": "string", "maxLength": 256},
         "model": {"type": ["string", "null"], "maxLength": 256},
+        "heightmap": {
+            "type": "object",
+            "description": "ground under the calls: a .npy array (relative to the spec file), one value per cell "
+                           "of `resolution` m, times vertical_scale metres",
+            "properties": {"file": {"type": "string", "maxLength": 1000},
+                           "vertical_scale": {"type": "number", "exclusiveMinimum": 0, "maximum": 1.0}},
+            "required": ["file", "vertical_scale"],
+            "additionalProperties": False,
+        },
     },
     "required": ["version", "name", "size_x", "size_y", "resolution", "seed", "calls", "source", "backend", "model"],
     "additionalProperties": False,
@@ -377,12 +379,13 @@ def _describe_spec_error(err: jsonschema.ValidationError) -> str:
 
 
 def validate_spec_dict(
-    data: Any, registry: Mapping[str, AtomicTerrain] | None = None
+    data: Any, registry: Mapping[str, AtomicTerrain] | None = None, base_dir: Any = None
 ) -> tuple[dict[str, Any], list[ToolCall]]:
     """Validate a spec document (see :class:`legged_gente.generation.spec.TerrainSpec`); return it and its calls.
 
-    Accepts only what builds: the document's schema and limits, every call, the tile's cell grid and the
-    stacked heights. Raises :class:`ValidationError`, and nothing else.
+    Accepts only what builds: the document's schema and limits, its heightmap (read from ``base_dir``, the spec
+    file's folder), every call, the tile's cell grid and the stacked heights. Raises :class:`ValidationError`,
+    and nothing else.
     """
     problem = plain_json_problem(data)
     if problem:
@@ -393,6 +396,12 @@ def validate_spec_dict(
     problem = _tile_problem(data["size_x"], data["size_y"], data["resolution"])
     if problem:
         raise ValidationError([f"spec: {problem}."])
+    base = None
+    if "heightmap" in data:
+        try:
+            base = heightmap_ground(data["heightmap"], data["size_x"], data["size_y"], data["resolution"], base_dir)
+        except ValueError as exc:
+            raise ValidationError([f"spec: {exc}."]) from None
     calls, messages = [], []
     for i, c in enumerate(data["calls"]):
         args = {**c["params"], "region": c["region"]}
@@ -405,11 +414,11 @@ def validate_spec_dict(
     if messages:
         raise ValidationError(messages)
     try:
-        check_height_stack(calls, data["size_x"], data["size_y"], registry)
+        check_height_stack(calls, data["size_x"], data["size_y"], registry, base)
     except ValidationError as exc:
         # The interval bound is a worst case; this spec's own seed may stay within the bound: build to know.
         try:
-            tile_spec_from_document(data).build()
+            tile_spec_from_document(data, base_dir).build()
         except ValueError as build_exc:
             raise ValidationError([f"spec: {build_exc}"] + [f"spec: {m}" for m in exc.messages]) from None
     return data, calls

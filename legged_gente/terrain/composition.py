@@ -1,6 +1,7 @@
 """Tile composition: a tile is a list of parts (rectangles in metres), each a sequence of atomic operations.
 
-Parts are painted in order over flat ground at 0 m. Inside a part, its operations run on a working copy of
+Parts are painted in order over the tile's ground: flat at 0 m, or a heightmap (``TileSpec.base``, read from a
+``.npy`` file by :mod:`.heightmap`). Inside a part, its operations run on a working copy of
 the tile's current heights: ``set`` replaces them with the atomic's heights, ``add`` adds the atomic's heights
 (rocks on hills). The part then replaces the tile inside its rectangle, and fades out over a band of
 ``SEAM_BAND`` metres outside it (the atomic is generated over the rectangle widened by that band, weighted by
@@ -16,10 +17,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Callable, Literal
+from pathlib import Path
+from typing import Any, Callable, Literal, Mapping
 
 import numpy as np
 
+from .heightmap import load_heightmap
 from .materials import MaterialMap
 from .registry import ATOMIC_TERRAINS, AtomicTerrain
 
@@ -117,15 +120,21 @@ class Part:
 
 @dataclasses.dataclass
 class TileSpec:
-    """A tile of ``size_x`` x ``size_y`` m at ``resolution`` m: parts painted in order, random draws from ``seed``."""
+    """A tile of ``size_x`` x ``size_y`` m at ``resolution`` m: parts painted in order, random draws from ``seed``.
+
+    ``base``: the ground the parts are painted on (float32 metres, one value per cell), or None for flat 0 m.
+    """
 
     size_x: float
     size_y: float
     resolution: float
     seed: int
     parts: list[Part]
+    base: np.ndarray | None = None
 
     def to_dict(self) -> dict[str, Any]:
+        if self.base is not None:
+            raise ValueError("a tile on a heightmap has no dict form; keep the spec document that names its .npy file.")
         return {
             "size_x": float(self.size_x),
             "size_y": float(self.size_y),
@@ -158,23 +167,114 @@ class TileSpec:
         return build_tile(self, ground_friction)
 
 
-def tile_spec_from_document(data: Any) -> TileSpec:
+def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> TileSpec:
     """The tile of a terrain spec document, the ``spec.json`` that gente-generate writes: ``size_x``, ``size_y``,
     ``resolution``, ``seed`` and ``calls`` of ``{"tool", "region" (a named region or {x0, y0, x1, y1}), "params",
     "mode"}`` applied in order. The parameters and regions are checked when the tile is built; the generation
-    package validates whole documents (``TerrainSpec.load``) and builds its tiles through this function."""
+    package validates whole documents (``TerrainSpec.load``) and builds its tiles through this function.
+
+    An optional ``"heightmap": {"file": "map.npy", "vertical_scale": 0.005}`` makes the array in ``file`` (a path
+    relative to ``base_dir``, the spec file's folder) the ground under the calls: one value per ``resolution``
+    cell, times ``vertical_scale`` metres; ``size_x`` and ``size_y`` must be its cells times ``resolution``."""
     try:
         size_x, size_y = float(data["size_x"]), float(data["size_y"])
+        resolution = float(data["resolution"])
         regions = named_regions(size_x, size_y)
         parts = []
         for call in data["calls"]:
             region = call["region"]
             rect = regions[region] if isinstance(region, str) else tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
             parts.append(Part(Region(*rect), [Operation(call["tool"], dict(call["params"]), call.get("mode") or "set")]))
-        return TileSpec(size_x, size_y, float(data["resolution"]), int(data["seed"]), parts)
+        seed, heightmap = int(data["seed"]), data.get("heightmap")
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"not a terrain spec document ({type(exc).__name__}: {exc}); pass a spec.json written by "
                          f"gente-generate") from None
+    base = None if heightmap is None else heightmap_ground(heightmap, size_x, size_y, resolution, base_dir)
+    return TileSpec(size_x, size_y, resolution, seed, parts, base)
+
+
+def heightmap_ground(entry: Any, size_x: float, size_y: float, resolution: float,
+                     base_dir: str | Path | None = None) -> np.ndarray:
+    """A spec document's ``heightmap`` entry read as the ground of a ``size_x`` x ``size_y`` m tile (float32 m)."""
+    if not isinstance(entry, dict) or set(entry) != {"file", "vertical_scale"} or not isinstance(entry["file"], str):
+        raise ValueError('"heightmap" must be {"file": "<map>.npy", "vertical_scale": <metres per unit>}; '
+                         'the cell size is the spec\'s resolution')
+    path = Path(entry["file"])
+    if not path.is_absolute():
+        path = Path(base_dir or ".") / path
+    heights = load_heightmap(path, entry["vertical_scale"], MAX_ABS_HEIGHT)
+    cells = tuple(n / resolution for n in (size_x, size_y))
+    if any(abs(c - n) > 1e-6 for c, n in zip(cells, heights.shape)):
+        raise ValueError(f"heightmap {path.name[:100]} has {heights.shape[0]} x {heights.shape[1]} cells; at "
+                         f"resolution {resolution:g} m that is size_x={heights.shape[0] * resolution:g}, "
+                         f"size_y={heights.shape[1] * resolution:g} m, not {size_x:g} x {size_y:g} m: set those")
+    return heights
+
+
+def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] | None = None) -> "HeightBounds":
+    """Bounds on every height the builder can make from ``spec``: interval arithmetic over its parts in order.
+
+    The tile is cut at every part's rectangle and its seam band (``SEAM_BAND`` m wide). It starts as the
+    ground's range (0 m, or the heightmap's min..max); inside a rectangle a ``set`` operation gives the
+    atomic's declared range (``height_bounds`` on the rectangle widened by the band, as the builder generates
+    it) and an ``add`` operation shifts the current range by it; in the band the builder blends old and new
+    heights convexly, so the range is the union of both. Parameters must be complete (``check_params``).
+    """
+    registry = ATOMIC_TERRAINS if registry is None else registry
+    band = SEAM_BAND
+    rects = [(p.region.x0, p.region.y0, p.region.x1, p.region.y1) for p in spec.parts]
+    cut_x = sorted({0.0, float(spec.size_x)} | {min(max(v, 0.0), spec.size_x) for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)})
+    cut_y = sorted({0.0, float(spec.size_y)} | {min(max(v, 0.0), spec.size_y) for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)})
+    cx = (np.array(cut_x[:-1]) + np.array(cut_x[1:]))[:, None] / 2.0
+    cy = (np.array(cut_y[:-1]) + np.array(cut_y[1:]))[None, :] / 2.0
+    ground = (0.0, 0.0) if spec.base is None else (float(spec.base.min()), float(spec.base.max()))
+    lo = np.full((cx.shape[0], cy.shape[1]), ground[0])
+    hi = np.full_like(lo, ground[1])
+    first_beyond = None
+    for k, (part, (x0, y0, x1, y1)) in enumerate(zip(spec.parts, rects)):
+        for op in part.ops:
+            atomic = registry[op.terrain]
+            if atomic.kind != "geometric":
+                continue
+            a, b = atomic.height_bounds(dict(op.params), x1 - x0 + 2 * band, y1 - y0 + 2 * band)
+            new_lo, new_hi = (np.full_like(lo, a), np.full_like(hi, b)) if op.mode == "set" else (lo + a, hi + b)
+            inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+            near = (cx > x0 - band) & (cx < x1 + band) & (cy > y0 - band) & (cy < y1 + band)
+            lo = np.where(inside, new_lo, np.where(near, np.minimum(lo, new_lo), lo))
+            hi = np.where(inside, new_hi, np.where(near, np.maximum(hi, new_hi), hi))
+            if first_beyond is None and max(-float(lo.min()), float(hi.max())) > MAX_ABS_HEIGHT:
+                first_beyond = k
+    return HeightBounds(np.array(cut_x), np.array(cut_y), lo, hi, first_beyond)
+
+
+@dataclasses.dataclass
+class HeightBounds:
+    """Height bounds (m) per cell of the grid cut at ``cuts_x`` x ``cuts_y`` m (see :func:`stacked_height_bounds`)."""
+
+    cuts_x: np.ndarray
+    cuts_y: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    first_beyond: int | None
+    """Index of the first part after which |height| may exceed ``MAX_ABS_HEIGHT`` (None: never)."""
+
+    @property
+    def peak(self) -> float:
+        return max(-float(self.lo.min()), float(self.hi.max()))
+
+    def at(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) at points (m from the tile corner); a point on a cut takes the looser of its two sides."""
+        x, y = np.broadcast_arrays(np.asarray(x, np.float64), np.asarray(y, np.float64))
+        nx, ny = self.lo.shape
+        bounds = []
+        for side in ("left", "right"):
+            i = np.clip(np.searchsorted(self.cuts_x, x, side=side) - 1, 0, nx - 1)
+            j = np.clip(np.searchsorted(self.cuts_y, y, side=side) - 1, 0, ny - 1)
+            bounds.append((self.lo[i, j], self.hi[i, j]))
+        (lo_a, hi_a), (lo_b, hi_b) = bounds
+        lo = np.minimum(lo_a, lo_b)
+        hi = np.maximum(hi_a, hi_b)
+        return lo, hi
 
 
 def _json_params(params: dict[str, Any]) -> dict[str, Any]:
@@ -203,7 +303,10 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
     """Heights (float32 (nx, ny), m) and MaterialMap of ``spec``; rigid ground has ``ground_friction``."""
     nx, ny = _shape(spec)
     res = spec.resolution
-    heights = np.zeros((nx, ny), np.float64)
+    if spec.base is not None and spec.base.shape != (nx, ny):
+        raise ValueError(f"the tile's heightmap has {spec.base.shape} cells; its {spec.size_x} x {spec.size_y} m at "
+                         f"{spec.resolution} m need {(nx, ny)}.")
+    heights = np.zeros((nx, ny), np.float64) if spec.base is None else spec.base.astype(np.float64)
     material = MaterialMap.rigid((nx, ny), friction=ground_friction)
     pad = int(math.ceil(SEAM_BAND / res))
     physical: list[tuple[int, int, int, int, Operation, AtomicTerrain, dict[str, Any], np.random.Generator]] = []

@@ -214,7 +214,7 @@ class Terrain:
     def _generated_tile(self, path: Path):
         def build():
             try:
-                tile = tile_spec_from_document(json.loads(path.read_text()))
+                tile = tile_spec_from_document(json.loads(path.read_text()), path.parent)
                 return tile.build(ground_friction=float(self.cfg.static_friction))
             except FileNotFoundError:
                 raise FileNotFoundError(f"terrain spec {path} does not exist; list the spec.json files that "

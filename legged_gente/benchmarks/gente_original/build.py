@@ -11,6 +11,14 @@ for ``gente-evaluate --benchmark``), ``report.json`` (per item: every issue of t
 heightmap's overflow check) and ``REPORT.md`` (the summary). GenTe's scene texts and photos are not copied,
 and nothing is downloaded: the clone is the only input. The scenes are an evaluation set: nothing in the
 project is tuned to them.
+
+GenTe's own heightmaps as terrains (not shipped: they stay in the clone)::
+
+    python legged_gente/benchmarks/gente_original/build.py --gente /tmp/GenTe --heightmaps /tmp/gente_heightmaps
+    gente-evaluate --benchmark /tmp/gente_heightmaps ...      # or --terrain /tmp/gente_heightmaps/specs/<id>.json
+
+writes a spec per ``array.npy`` that names the clone's file (0.1 m cells, 0.005 m per unit) and a manifest of
+those that build; a heightmap that wrapped around int16 or exceeds the height bound is listed with the reason.
 """
 
 from __future__ import annotations
@@ -24,7 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from legged_gente.generation.gente_compat import BLOCKING, GENTE_TOOLS, import_heightmap, import_transcript
+from legged_gente.generation.gente_compat import BLOCKING, GENTE_TOOLS, heightmap_spec, import_heightmap, import_transcript
+from legged_gente.generation.validation import ValidationError
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
 
 OUT = Path(__file__).resolve().parent
@@ -146,10 +155,38 @@ def _markdown(s: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def build_heightmaps(gente: Path, out: Path) -> dict:
+    """Specs on GenTe's heightmaps in ``out/specs`` (naming the clone's files) and ``out/manifest.json``."""
+    (out / "specs").mkdir(parents=True, exist_ok=True)
+    items, refused = [], {}
+    for item_id, _, kind, folder in transcripts(gente):
+        npy = folder / "array.npy"
+        if not npy.is_file():
+            continue
+        try:
+            spec = heightmap_spec(str(npy.resolve()), f"{item_id}_heightmap")
+        except ValidationError as exc:
+            refused[item_id] = str(exc)
+            continue
+        spec.save(out / "specs" / f"{item_id}.json")
+        items.append({"id": item_id, "kind": kind, "spec": f"specs/{item_id}.json"})
+    manifest = {"name": "gente_original_heightmaps", "tile_size": [20.0, 20.0], "resolution": 0.1,
+                "source": f"github.com/HaronW/GenTe dataset/ at {_commit(gente)}", "items": items}
+    (out / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
+    return {"written": len(items), "refused": refused}
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--gente", type=Path, required=True, help="a clone of https://github.com/HaronW/GenTe")
+    p.add_argument("--heightmaps", type=Path, help="instead: write specs on GenTe's heightmaps into this folder")
     args = p.parse_args(argv)
+    if args.heightmaps:
+        result = build_heightmaps(args.gente, args.heightmaps)
+        print(f"{result['written']} heightmap specs in {args.heightmaps}; refused {len(result['refused'])}:")
+        for item_id, reason in result["refused"].items():
+            print(f"  {item_id}: {reason}")
+        return 0
     summary = build(args.gente)
     print(f"imported {summary['imported']} of {summary['transcripts']} transcripts into {OUT}; invented tools: "
           f"{summary['invented_tools'] or 'none'}; overflowed heightmaps: {len(summary['heightmaps_overflowed'])}")

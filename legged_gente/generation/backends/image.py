@@ -14,12 +14,15 @@ Two kinds of images, told apart by :func:`is_sketch`:
      cannot become water, nor a white one snow).
   2. *Horizon*: where the sky ends in the columns that show most of it. Non-sky things rising above it are
      clouds or far scenery (hazy ridges, a thin band: tree line, skyline), a *hill* (a wide smooth-edged region
-     of the near ground's surface: a slope), or *tall obstacles* (trees, buildings, walls, towers); below it,
+     of the near ground's surface: a slope; a straight tilted outline is a side slope of the angle of its tilt,
+     a curved one a hill ahead), or *tall obstacles* (trees, buildings, walls, towers); below it,
      compact blobs standing at least ``STANDING`` m tall (cars, benches, blocks) are tall obstacles too.
   3. *Ground*: below the horizon, row ``r`` sees the ground at distance ``Z = Z_NEAR * (bottom - horizon) /
      (r - horizon)`` (a pinhole camera over flat ground), so the tile's back half (``Z < Z_NEAR + size_x / 2``)
      is the lower part of the picture and its front half a thin band under the horizon. Pixels are classified
      by colour (water, ice, snow, sand, mud, grass, grey ground) and texture (gravel: rough; trunks: trees).
+     Water-coloured blobs taller than a patch lying on the ground can look at their distance (foreshortening)
+     stand upright (window panes, doors, blue cars) and are not ground.
   4. *Cues*: foam, wave crests and a water band with land beyond it (a river) make water flow; water across
      the view is one band at its distance; small dark blobs with their shadows on the ground are rocks (low
      obstacles); a run of regular, thick horizontal bands is one flight of stairs.
@@ -383,6 +386,58 @@ def _is_water(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarray) -> n
     return (h >= 170) & (h < 255) & ((s >= 0.15) | ((s >= 0.08) & (v < 0.6))) & (chroma >= 0.05)
 
 
+HILL_SLOPE = 0.15
+"""rad (~9 degrees): the slope ahead when a hill rises above the horizon; its steepness cannot be read from its
+outline, whose height depends on how far away it is."""
+SIDE_TILT = 0.1
+"""Rows per column (in the original's square pixels) from which a straight skyline reads as a side slope."""
+
+
+def _hill_slope(cols: np.ndarray, top: np.ndarray, aspect: float) -> float:
+    """Slope (rad) of ground whose upper edge against the sky is ``top[k]`` (analysis rows) in column ``cols[k]``.
+
+    A plane sloping sideways at angle theta, seen by a level pinhole camera, rises tan(theta) * dx over dx across
+    at any depth Z: f * tan(theta) * dx / Z rows for f * dx / Z columns, so its skyline is a straight line tilted
+    by tan(theta) in square pixels, whatever the distance and the focal length. ``aspect`` (height / width of the
+    original) converts the analysis grid's rows per column into the original's. A curved outline is a hill
+    ahead, of :data:`HILL_SLOPE`.
+    """
+    k, b = np.polyfit(cols, top, 1)
+    tilt = abs(k) * (PW / PH) * aspect
+    residual = top - (k * cols + b)
+    straight = float(np.var(residual)) < 0.1 * float(np.var(top)) if np.var(top) > 0 else False
+    if tilt > SIDE_TILT and straight:
+        return float(np.clip(np.arctan(tilt), HILL_SLOPE, ATOMIC_TERRAINS["pyramid_slope"].params["slope"].high))
+    return HILL_SLOPE
+
+
+WATER_ELONGATION = 4.0
+"""Longest a patch of water on the ground may be along the view, in widths (a stream running away from the camera)."""
+
+
+def _upright_water(water: np.ndarray, ground: np.ndarray, horizon: int) -> np.ndarray:
+    """Water-coloured blobs that cannot lie on the ground: window panes, doors, signs, blue cars.
+
+    Foreshortening (pinhole camera at ``CAMERA_HEIGHT`` over flat ground): a patch dX wide and dZ deep at
+    distance Z spans f * dX / Z columns and f * CAMERA_HEIGHT * dZ / Z**2 rows, so rows / columns =
+    (CAMERA_HEIGHT / Z) * (dZ / dX). A blob taller than that allows with dZ / dX = :data:`WATER_ELONGATION`, at
+    the distance of its nearest (lowest) row, is upright, unless it narrows towards the horizon as a strip
+    lying on the ground does (its width in the picture is f * dX / Z): a stream running away from the camera.
+    """
+    labels, n = ndimage.label(water & ground)
+    out = np.zeros_like(water)
+    for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+        blob = labels[sl] == k
+        rows, cols = blob.shape
+        z = Z_NEAR * (PH - horizon) / max(sl[0].stop - 0.5 - horizon, 0.5)  # distance of its lowest row's centre
+        widths = blob.sum(1)
+        quarter = max(rows // 4, 1)
+        narrows = widths[:quarter].mean() < 0.6 * widths[-quarter:].mean()
+        if rows / cols > WATER_ELONGATION * CAMERA_HEIGHT / z and not narrows:
+            out[sl] |= blob
+    return out
+
+
 def read_photo(img: Image.Image) -> PhotoReading:
     """Read a photo in perspective (module docstring); the findings, before any tool call is made."""
     rgb = np.asarray(img.resize((PW, PH), Image.Resampling.BOX), np.float32) / 255.0
@@ -413,8 +468,7 @@ def read_photo(img: Image.Image) -> PhotoReading:
         same = np.bincount(classes[lower], minlength=len(SURFACES)).argmax() == near_class if lower.any() else False
         if width > 0.6 and rise >= 0.1 * PH and detail < 0.012 and (same or np.linalg.norm(colour - near_ground) < 0.2):
             top = np.argmax(comp[:, cols], axis=0).astype(float)  # the ridge: upper edge per column
-            tilt = abs(np.polyfit(cols, top, 1)[0]) * PW / PH
-            slope = max(slope, 0.25 if tilt > 0.2 else 0.15)  # the ground itself rises ahead: ~14 or ~9 degrees
+            slope = max(slope, _hill_slope(cols, top, img.height / img.width))
             continue
         hue, sat = float(np.median(h[comp])), float(s[comp].mean())
         hazy = 180 <= hue < 260 and 0.05 <= sat < 0.45  # far mountains, blue with distance
@@ -432,6 +486,8 @@ def read_photo(img: Image.Image) -> PhotoReading:
         objects = ndimage.binary_fill_holes(objects)  # windows and doors belong to their building
     objects |= _standing(rgb, ~sky & ~objects & (rows >= horizon), horizon, classes)
     ground = ~sky & ~objects & (rows >= horizon)
+    upright = _upright_water(classes == SURFACES.index("water"), ground, horizon)
+    ground &= ~upright
     surface = np.where(ground, classes, -1)
     if grey:
         surface = np.where(surface >= 0, np.where(surface == SURFACES.index("gravel"), surface, SURFACES.index("grey")), -1)
