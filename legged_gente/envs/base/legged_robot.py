@@ -624,6 +624,21 @@ class LeggedRobot(VecEnv):
         yaw_rate = torch.clamp(c.heading_stiffness * heading_error, c.ang_vel_yaw[0], c.ang_vel_yaw[1])
         self.commands[:, 2] = torch.where(self.standing_still, 0.0, yaw_rate)
 
+    def set_commands(self, commands: torch.Tensor, still: torch.Tensor | None = None) -> TensorDict:
+        """Command the robots from outside the step (a joystick, an evaluation task): ``commands`` (num_envs, 4) =
+        vx, vy (m/s), yaw rate (rad/s), heading (rad); ``still``: the robots told to stand still (in heading mode
+        they do not turn). Written in place, headings turned into yaw rates and the observations refreshed, so
+        the policy's next action sees them; returns those observations. The step still resamples commands (at
+        resets and every ``commands.resampling_time``): call this again after each step to keep yours."""
+        if commands.shape != self.commands.shape:
+            raise ValueError(f"commands of shape {tuple(commands.shape)}; this env takes (num_envs, 4) = "
+                             f"{tuple(self.commands.shape)}: vx, vy, yaw rate, heading")
+        self.commands.copy_(commands)
+        self.standing_still.copy_(torch.zeros_like(self.standing_still) if still is None else still)
+        self._update_heading_commands()
+        self._compute_observations()
+        return self.obs_buf.clone()
+
     def _push_robots(self) -> None:
         v = self.max_push_vel_xy
         self.sim.qvel[:, 0:2] += rand_uniform(-v, v, (self.num_envs, 2), self.device)
