@@ -165,6 +165,12 @@ class LeggedRobot(VecEnv):
         self.sim.after_substep.append(forces.after_substep)
         self.sim.after_reset.append(self._reset_forces)
         self._force_obs = forces.privileged_obs()
+        # the post-reset forward runs the fields' callbacks and hooks: their observation is refreshed for the
+        # reset worlds, and every other per-world array of the fields (ruts, slip, loads, ...) is put back
+        obs_ptr = forces.obs.ptr
+        self.sim.observed.append(self._force_obs)
+        self.sim.substep_state.extend(wp.to_torch(a) for a in vars(forces).values() if isinstance(a, wp.array)
+                                      and a.shape[0] == self.num_envs and a.ptr != obs_ptr)
         return forces
 
     def _reset_forces(self, mask: torch.Tensor) -> None:
@@ -445,7 +451,7 @@ class LeggedRobot(VecEnv):
         # new commands for the robots just reset and for those whose resampling time came (episode length 0
         # after a reset, so both are caught by the same test)
         self._resample_commands(self.episode_length_buf % self._resample_steps == 0)
-        self.sim.forward(self.reset_buf)  # bodies, contacts and contact forces of the reset worlds are fresh
+        self.sim.forward(self.reset_buf)  # the reset worlds' bodies, contacts, contact forces, force-field obs
         self._update_state()
         self._update_heading_commands()
         self._compute_observations()
