@@ -259,3 +259,18 @@ def test_a_reset_leaves_the_critics_force_observation_fresh(env):
         assert all(torch.equal(a[[0, 1, 2, 4]], b[[0, 1, 2, 4]]) for a, b in zip(observed, env.sim.observed))
     finally:
         env.terrain_columns[3] = soil
+
+
+def test_the_ground_friction_is_one_setting():
+    """cfg.terrain.static_friction is the ground's friction for MuJoCo's ground geom and for the force fields'
+    scaling of contact friction by cell friction (their reference); forces.friction_reference is not a second
+    setting of it."""
+    cfg = SmallCurriculum()
+    cfg.terrain.static_friction = 0.8
+    env = GenteBiped(cfg, device="cpu")
+    assert env.forces.cfg.friction_reference == 0.8
+    assert env.mjm.geom("terrain").friction[0] == pytest.approx(0.8)
+    assert cfg.forces.friction_reference is None  # the env's config is left as it was
+    cfg.forces.friction_reference = 0.9
+    with pytest.raises(ValueError, match=r"friction_reference=0.9: .*static_friction \(0.8\); set that instead"):
+        GenteBiped(cfg, device="cpu")

@@ -12,6 +12,7 @@ and ``self.reward_scale_vec``, changed with :meth:`set_param`; everything else i
 
 from __future__ import annotations
 
+import copy
 import math
 from types import SimpleNamespace
 
@@ -125,10 +126,9 @@ class LeggedRobot(VecEnv):
         for name in COMMAND_RANGES:
             low, high = getattr(cfg.commands.ranges, name)
             checks.append((low <= high, f"cfg.commands.ranges.{name}=[{low}, {high}]; use [low, high], low <= high"))
-        checks.append((cfg.terrain.mesh_type == "plane" or not cfg.forces.enabled
-                       or cfg.forces.friction_reference == cfg.terrain.static_friction,
-                       f"cfg.forces.friction_reference={cfg.forces.friction_reference} differs from "
-                       f"cfg.terrain.static_friction={cfg.terrain.static_friction}; set them equal"))
+        checks.append((cfg.forces.friction_reference is None,
+                       f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
+                       f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
         for ok, message in checks:
             if not ok:
                 raise ValueError(message + ".")
@@ -158,8 +158,10 @@ class LeggedRobot(VecEnv):
             return None
         from legged_gente.external_forces.field import TerrainForces
 
+        forces_cfg = copy.copy(self.cfg.forces)
+        forces_cfg.friction_reference = float(self.cfg.terrain.static_friction)  # the ground geom's friction
         forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain.height_field, self.terrain.origin_xy,
-                               self.terrain.resolution, material, self.cfg.forces,
+                               self.terrain.resolution, material, forces_cfg,
                                seed=int(torch.randint(0, 2**31 - 1, ()).item()))  # follows torch's (per-rank) seed
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
