@@ -246,3 +246,32 @@ def test_diverged_robots_are_failures_counted_apart_and_enter_no_mean(tmp_path):
     assert overall["energy_per_m"] == pytest.approx(energy_per_m)
     # a zero-action biped stands: well under a metre in 0.4 s, and its tracking error is about its command
     assert overall["distance"] < 1.0 and overall["tracking_error"] < 1.5
+
+
+def test_the_evaluation_gives_the_same_metrics_through_the_compiled_step():
+    """The env's step with its torch logic compiled (cfg.sim.torch_compile's torch.compile, here on the CPU with
+    eager random numbers), run twice, gives the per-robot metrics of the plain step: the evaluation reads only
+    what a step leaves."""
+    from unittest.mock import patch
+
+    import torch._inductor.config as inductor_config
+
+    from legged_gente.envs.base.step_runner import StepRunner
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[1:]), 2, "cpu", 0.2)
+    env = evaluation.env
+
+    def policy(obs):
+        return 0.3 * torch.tanh(obs["policy"][:, :env.num_actions])  # depends on what the env observes
+
+    plain = evaluation.run(policy, settle_s=0.04, progress=False).metrics
+    env._runner = StepRunner(env, compile=True)
+    with patch.object(inductor_config, "fallback_random", True):
+        runs = [evaluation.run(policy, settle_s=0.04, progress=False).metrics for _ in range(2)]
+    for metrics in runs:
+        for name in ("tracking_error", "progress", "distance", "energy", "time_s"):
+            np.testing.assert_allclose(metrics[name], plain[name], rtol=1e-4, atol=1e-5, err_msg=name)
+        for name in ("fell", "diverged"):
+            assert (metrics[name] == plain[name]).all()
