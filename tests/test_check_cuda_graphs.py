@@ -78,3 +78,8 @@ def test_all_agreeing_exits_with_0(tool, monkeypatch, capsys):
     monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--device", "cpu"])
     tool.main()
     assert "all checks agree" in capsys.readouterr().out
+
+
+def test_the_evaluation_check_runs(tool):
+    """The GPU check's evaluation part end to end on the CPU (where every run steps plainly, so they agree)."""
+    assert tool.evaluation_agrees("gente_biped", robots_per_terrain=2, episode_s=0.2, device="cpu")
