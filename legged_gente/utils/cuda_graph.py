@@ -90,9 +90,14 @@ class StepGraph:
                 self.body()
             rebound = rebound_attributes(self.owner, before)
             kept = self._copy_back(rebound, before)
+        self._bind(rebound, kept)
+        self.graph = graph
+
+    def _bind(self, rebound: dict, kept: dict) -> None:
+        """The owner's attributes as every replay leaves them: the rebound tensors' old tensors (``kept``), the
+        other rebound objects as the capture made them."""
         self.bindings = rebound | kept
         vars(self.owner).update(self.bindings)
-        self.graph = graph
 
     def _copy_back(self, rebound: dict, before: dict) -> dict:
         """Record (into the graph) a copy of each rebound tensor into the one its attribute held before the
