@@ -125,8 +125,9 @@ def test_a_non_finite_update_stops_rsl_rl_fallback_path(monkeypatch):
 def test_the_same_mini_batches_give_rsl_rls_losses_gradients_and_learning_rate(monkeypatch):
     """The same mini-batch (the whole rollout, two epochs: the second sees a KL below half the desired one)
     through rsl-rl's PPO.update and GentePPO's device-side steps: the losses, the clipped gradients Adam is
-    given at each step and the adapted learning rate agree. rsl-rl 5.5 computes its loss, KL rule and learning-rate rule inline in PPO.update with host reads,
-    so GentePPO computes them itself; this pins the two together (an rsl-rl upgrade that changes them fails here)."""
+    given at each step and the adapted learning rate agree. rsl-rl 5.5 computes its loss, KL rule and
+    learning-rate rule inline in PPO.update with host reads, so GentePPO computes them itself; this pins the two
+    together (an rsl-rl upgrade that changes them fails here)."""
 
     def one_batch(alg_class):
         generator = torch.Generator().manual_seed(0)
