@@ -261,6 +261,26 @@ def test_step_graph_keeps_rebound_state_in_its_tensors():
         graph._copy_back(rebound_attributes(owner, before), before)
 
 
+def test_step_graph_binds_captured_attributes_back_after_every_replay():
+    """Code run eagerly between replays (a reset, refreshed observations) may rebind a captured attribute; the
+    next replay writes the captured tensor, so the attribute must point at it again afterwards."""
+    from types import SimpleNamespace
+
+    from legged_gente.utils.cuda_graph import StepGraph, rebound_attributes
+
+    owner = SimpleNamespace(carried=torch.zeros(3), name="x")
+    captured, before = owner.carried, dict(vars(owner))
+    owner.carried, owner.name = owner.carried + 1.0, "y"  # what the captured body does
+    graph = StepGraph.__new__(StepGraph)
+    graph.owner = owner
+    rebound = rebound_attributes(owner, before)
+    graph._bind(rebound, graph._copy_back(rebound, before))
+    graph.graph = SimpleNamespace(replay=lambda: captured.add_(1.0))  # a replay writes the captured tensor
+    owner.carried = torch.full((3,), 7.0)  # an eager reset between replays rebinds it
+    graph()
+    assert owner.carried is captured and torch.equal(owner.carried, torch.full((3,), 2.0)) and owner.name == "y"
+
+
 def test_observation_terms_are_per_config_instance():
     from legged_gente.utils.args import apply_overrides
     from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedFlatCfgPPO

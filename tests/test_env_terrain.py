@@ -131,7 +131,7 @@ def test_low_friction_tiles_lower_contact_friction(env):
     """The solver sees the cell's friction in the contacts of the robot on the low-friction tile."""
     env.reset()
     env.step(torch.zeros(env.num_envs, env.num_actions))
-    env.sim.step(1)  # a substep's contacts (the step ends with a refresh that leaves the force fields' filter out)
+    env.sim.step(1)  # a substep's contacts
     d = env.sim.d
     n = int(d.nacon.numpy()[0])
     world = d.contact.worldid.numpy()[:n]
@@ -225,3 +225,52 @@ def test_the_step_logic_compiles_to_the_same_numbers():
     for (p, c, r, d), (pc, cc, rc, dc) in zip(eager, compiled):
         assert torch.allclose(p, pc, atol=1e-4) and torch.allclose(c, cc, atol=1e-4)
         assert torch.allclose(r, rc, atol=1e-6) and torch.equal(d, dc)
+
+
+def test_a_reset_leaves_the_critics_force_observation_fresh(env):
+    """Robot 3 stands on the soil tile (dry sand), then times out and is reset onto the rigid, dry tile of
+    column 0: the force fields' observation of its feet that the critic sees right after the reset must be that
+    tile's (no water: depth 0; no soil: flag 0, sinkage 0, soil parameters 0), not the soil it stood on."""
+    soil = TYPES.index("hills+soil:preset=dry_sand")
+    assert soil == 3 and env.terrain_columns[3] == soil
+    env.reset()
+    for _ in range(10):
+        env.step(torch.zeros(env.num_envs, env.num_actions))
+    feet = env.forces.privileged_obs().reshape(env.num_envs, 2, 12)
+    assert feet[3, :, 3].any()  # on soil before the reset
+    try:
+        env.terrain_columns[3] = 0  # its next episode is on column 0's tile (random_uniform: rigid, dry)
+        env.episode_length_buf[3] = env.max_episode_length - 1
+        obs, _, done, _ = env.step(torch.zeros(env.num_envs, env.num_actions))
+        assert done[3]
+        feet = env.forces.privileged_obs().reshape(env.num_envs, 2, 12)[3]
+        assert torch.all(feet[:, 0] == 0.0)  # water depth
+        assert torch.all(feet[:, 3:5] == 0.0)  # on-soil flag, sinkage
+        assert torch.all(feet[:, 6:12] == 0.0)  # soil parameters
+        assert torch.equal(obs["critic"][3, -24:], feet.flatten())  # what the critic sees
+        # the refresh is physics-neutral: what the fields integrate is untouched in every world, and the worlds
+        # not refreshed keep their observations and contact forces
+        env.step(torch.zeros(env.num_envs, env.num_actions))
+        state = [t.clone() for t in env.sim.substep_state]
+        observed = [t.clone() for t in env.sim.observed]
+        assert len(state) >= 8 and len(observed) == 2
+        env.sim.forward(torch.tensor([False, False, False, True, False]))
+        assert all(torch.equal(a, b) for a, b in zip(state, env.sim.substep_state))
+        assert all(torch.equal(a[[0, 1, 2, 4]], b[[0, 1, 2, 4]]) for a, b in zip(observed, env.sim.observed))
+    finally:
+        env.terrain_columns[3] = soil
+
+
+def test_the_ground_friction_is_one_setting():
+    """cfg.terrain.static_friction is the ground's friction for MuJoCo's ground geom and for the force fields'
+    scaling of contact friction by cell friction (their reference); forces.friction_reference is not a second
+    setting of it."""
+    cfg = SmallCurriculum()
+    cfg.terrain.static_friction = 0.8
+    env = GenteBiped(cfg, device="cpu")
+    assert env.forces.cfg.friction_reference == 0.8
+    assert env.mjm.geom("terrain").friction[0] == pytest.approx(0.8)
+    assert cfg.forces.friction_reference is None  # the env's config is left as it was
+    cfg.forces.friction_reference = 0.9
+    with pytest.raises(ValueError, match=r"friction_reference=0.9: .*static_friction \(0.8\); set that instead"):
+        GenteBiped(cfg, device="cpu")

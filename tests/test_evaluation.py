@@ -119,8 +119,6 @@ def test_one_evaluation_runs_several_times():
     from legged_gente.evaluation.evaluator import Evaluation
 
     evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[:1]), 1, "cpu", 0.2, "waypoints")
-    # its hooks branch on host values every step: no whole-step graph, no torch.compile (on a GPU)
-    assert evaluation.env_cfg.sim.cuda_graph == "physics" and evaluation.env_cfg.sim.torch_compile is False
 
     def still(obs):
         return torch.zeros(evaluation.env.num_envs, evaluation.env.num_actions)
@@ -174,3 +172,106 @@ def test_a_standing_policy_scores_zero(tmp_path):
     overall = json.loads((tmp_path / "report.json").read_text())["overall"]
     assert overall["robots"] == 4 and overall["success_rate"] == 0.0
     assert overall["tracking_error"] > 0.25
+
+
+def test_the_evaluation_steps_the_tasks_own_env_as_in_training():
+    """No hooks inside the step and no graph or compile switch: the evaluation reads what a step leaves, so the
+    step may run as one CUDA graph with its torch logic compiled (cfg.sim's defaults) on a GPU."""
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[:1]), 1, "cpu", 0.1)
+    default, _ = task_registry.get_cfgs("gente_biped")
+    assert evaluation.env_cfg.sim.cuda_graph == default.sim.cuda_graph == "env_step"
+    assert evaluation.env_cfg.sim.torch_compile is default.sim.torch_compile is True
+    env_class = task_registry.tasks["gente_biped"][0]
+    assert type(evaluation.env) is env_class  # no subclass: nothing of the evaluation runs inside the step
+
+
+def test_set_commands_reaches_the_next_observation_and_stand_still_does_not_turn():
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    env = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[:1]), 2, "cpu", 0.1).env
+    env.reset()
+    heading = torch.tensor([2.0, 2.0])  # rad; both robots face about 0 rad after the reset (yaw randomised)
+    commands = torch.stack([torch.tensor([0.6, 0.0]), torch.zeros(2), torch.zeros(2), heading], 1)
+    obs = env.set_commands(commands, still=torch.tensor([False, True]))
+    names = env.observation_names["policy"]
+    vx = obs["policy"][:, names.index("commands[0]")]
+    yaw_rate = obs["policy"][:, names.index("commands[2]")]
+    assert vx.tolist() == pytest.approx([0.6 * 2.0, 0.0])  # the commands term's scale is 2 for vx
+    assert yaw_rate[0].abs() > 0 and yaw_rate[1] == 0.0  # robot 1 stands still: no turn to its heading
+    with pytest.raises(ValueError, match="vx, vy, yaw rate, heading"):
+        env.set_commands(torch.zeros(2, 3))
+
+
+def test_diverged_robots_are_failures_counted_apart_and_enter_no_mean(tmp_path):
+    """Two of four robots blow up at step 5: robot 2 is launched at 300 m/s (below sim.max_qvel, so the env
+    does not flag it; no robot base moves faster than MAX_BASE_SPEED), robot 3 gets a NaN joint angle (the env
+    flags and resets it). Both count as diverged and failed, neither as a fall, and the report's means are
+    those of robots 0 and 1 alone."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import MAX_BASE_SPEED, Evaluation
+    from legged_gente.evaluation.report import build_report
+
+    items = load_benchmark(str(BENCHMARK), ITEMS[1:])
+    evaluation = Evaluation("gente_biped", items, 4, "cpu", 0.4)
+    env = evaluation.env
+    assert 300.0 > MAX_BASE_SPEED and 300.0 < env.max_qvel
+    calls = []
+
+    def policy(obs):
+        calls.append(1)
+        if len(calls) == 5:
+            env.sim.qvel[2, 0] = 300.0  # m/s, world x
+            env.sim.qpos[3, 7] = math.nan
+        return torch.zeros(env.num_envs, env.num_actions)
+
+    task = evaluation.make_task(stand_fraction=0.0)
+    result = evaluation.run(policy, task, settle_s=0.04, progress=False)
+    m = result.metrics
+    assert m["diverged"].tolist() == [False, False, True, True]
+    assert not m["fell"][2:].any()
+    report = build_report(result, items)
+    overall, terrain = report["overall"], report["terrains"][0]
+    assert overall["diverged"] == terrain["diverged"] == 2 and overall["robots"] == 4
+    assert overall["success_rate"] <= 0.5  # the diverged half fails
+    healthy = slice(0, 2)
+    assert overall["tracking_error"] == pytest.approx(float(np.mean(m["tracking_error"][healthy])))
+    assert overall["distance"] == pytest.approx(float(np.mean(m["distance"][healthy])))
+    assert overall["progress"] == pytest.approx(float(np.mean(m["progress"][healthy])))
+    energy_per_m = float(m["energy"][healthy].sum() / m["distance"][healthy].sum())
+    assert overall["energy_per_m"] == pytest.approx(energy_per_m)
+    # a zero-action biped stands: well under a metre in 0.4 s, and its tracking error is about its command
+    assert overall["distance"] < 1.0 and overall["tracking_error"] < 1.5
+
+
+def test_the_evaluation_gives_the_same_metrics_through_the_compiled_step():
+    """The env's step with its torch logic compiled (cfg.sim.torch_compile's torch.compile, here on the CPU with
+    eager random numbers), run twice, gives the per-robot metrics of the plain step: the evaluation reads only
+    what a step leaves."""
+    from unittest.mock import patch
+
+    import torch._inductor.config as inductor_config
+
+    from legged_gente.envs.base.step_runner import StepRunner
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), ITEMS[1:]), 2, "cpu", 0.2)
+    env = evaluation.env
+
+    def policy(obs):
+        return 0.3 * torch.tanh(obs["policy"][:, :env.num_actions])  # depends on what the env observes
+
+    plain = evaluation.run(policy, settle_s=0.04, progress=False).metrics
+    env._runner = StepRunner(env, compile=True)
+    with patch.object(inductor_config, "fallback_random", True):
+        runs = [evaluation.run(policy, settle_s=0.04, progress=False).metrics for _ in range(2)]
+    for metrics in runs:
+        for name in ("tracking_error", "progress", "distance", "energy", "time_s"):
+            np.testing.assert_allclose(metrics[name], plain[name], rtol=1e-4, atol=1e-5, err_msg=name)
+        for name in ("fell", "diverged"):
+            assert (metrics[name] == plain[name]).all()

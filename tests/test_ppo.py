@@ -120,3 +120,42 @@ def test_a_non_finite_update_stops_rsl_rl_fallback_path(monkeypatch):
     monkeypatch.setattr(GentePPO, "__init__", init)
     with pytest.raises(FloatingPointError, match="non-finite"):
         updated(GentePPO, float("1e999"))
+
+
+def test_the_same_mini_batches_give_rsl_rls_losses_gradients_and_learning_rate(monkeypatch):
+    """The same mini-batch (the whole rollout, two epochs: the second sees a KL below half the desired one)
+    through rsl-rl's PPO.update and GentePPO's device-side steps: the losses, the clipped gradients Adam is
+    given at each step and the adapted learning rate agree. rsl-rl 5.5 computes its loss, KL rule and
+    learning-rate rule inline in PPO.update with host reads, so GentePPO computes them itself; this pins the two
+    together (an rsl-rl upgrade that changes them fails here)."""
+
+    def one_batch(alg_class):
+        generator = torch.Generator().manual_seed(0)
+        cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
+        cfg["num_steps_per_env"], cfg["multi_gpu"] = STEPS, None
+        cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=2, learning_rate=1e-3)
+        torch.manual_seed(0)
+        alg = PPO.construct_algorithm(observations(generator),
+                                      SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS), cfg, "cpu")
+        obs = observations(generator)
+        for _ in range(STEPS):
+            alg.act(obs)
+            obs = observations(generator)
+            dones = torch.rand(NUM_ENVS, generator=generator) < 0.1
+            alg.process_env_step(obs, torch.randn(NUM_ENVS, generator=generator), dones, {"time_outs": dones})
+        alg.compute_returns(obs)
+        gradients = []
+        monkeypatch.setattr(alg.optimizer, "step", lambda: gradients.append(
+            torch.cat([p.grad.flatten() for p in chain(alg.actor.parameters(), alg.critic.parameters())])))
+        losses = alg.update()
+        return losses, gradients, alg.learning_rate
+
+    from itertools import chain
+
+    reference_losses, reference_gradients, reference_lr = one_batch(PPO)
+    losses, gradients, lr = one_batch(GentePPO)
+    assert len(gradients) == len(reference_gradients) == 2
+    assert losses == pytest.approx(reference_losses, rel=1e-5, abs=1e-7)
+    for mine, theirs in zip(gradients, reference_gradients):
+        assert torch.allclose(mine, theirs, rtol=1e-4, atol=1e-7)
+    assert lr == pytest.approx(reference_lr, rel=1e-6) and lr > 1e-3  # adapted

@@ -10,7 +10,12 @@ cfg.sim.torch_compile = True), one through the whole-step graph uncompiled, and 
 captured ("physics"), without observation noise and pushes. The first steps (before any reset, so before any
 random draw) must agree value by value within 1e-3, the run's mean reward within 10% (after resets the order of
 random draws differs, so resets and commands do); resets, terrain levels and episode lengths are printed.
-Any mismatch, of the env or of PPO, exits with 1.
+Any mismatch, of the env, the evaluation or PPO (a NaN difference included), exits with 1.
+
+Evaluation: ``gente-evaluate``'s rollout (the shipped policy of the task on two benchmark terrains) through the
+env's default step (whole-step graph, compiled) twice, the second run after a reset that follows the capture,
+and once with plain launches: the diverged and fallen robots must be the same, the mean tracking error and
+distance agree within STATISTICS_TOLERANCE.
 
 PPO update: GentePPO with its mini-batch graphs and rsl-rl's PPO update the same networks on the same
 synthetic rollouts (one mini-batch per epoch, so the shuffling draws do not matter); parameters, losses and
@@ -25,6 +30,7 @@ parameters equal, the graph's sampled actions standard normal around the mean.
 from __future__ import annotations
 
 import argparse
+import math
 
 import torch
 
@@ -125,8 +131,8 @@ def check_ppo(device: str, num_envs: int, tolerance: float) -> bool:
     agree = True
     for i, ((p, losses, lr), (q, ref_losses, ref_lr)) in enumerate(zip(mine, theirs)):
         difference = float((p - q).abs().max())
-        loss_difference = max(abs(losses[k] - ref_losses[k]) / max(abs(ref_losses[k]), 1e-3) for k in ref_losses
-                              if k in losses)
+        loss_difference = largest([abs(losses[k] - ref_losses[k]) / max(abs(ref_losses[k]), 1e-3) for k in ref_losses
+                                    if k in losses])
         agree &= difference <= tolerance and loss_difference <= tolerance and abs(lr - ref_lr) <= 1e-6 * ref_lr
         print(f"{rank}update {i + 1}: max |diff| actor parameters {difference:.2e} (largest {q.abs().max():.2f}), "
               f"largest relative loss difference {loss_difference:.1e}, learning rate {lr:.3e} vs {ref_lr:.3e}")
@@ -196,6 +202,11 @@ def main() -> None:
             print(f"MISMATCH: the env step differs across graph and compile modes (first steps by more than "
                   f"{ENV_TOLERANCE}, or mean rewards by more than {STATISTICS_TOLERANCE:.0%})")
             agree = False
+        if evaluation_agrees(args.task):
+            print("the evaluation agrees through the whole-step graph and with plain launches")
+        else:
+            print("MISMATCH: the evaluation differs between the whole-step graph and plain launches")
+            agree = False
     if not agree:
         raise SystemExit(1)
     print("all checks agree")
@@ -205,30 +216,90 @@ ENV_TOLERANCE = 1e-3  # largest accepted difference of the first steps' observat
 STATISTICS_TOLERANCE = 0.1  # largest accepted relative difference of the run's mean reward
 
 
+def largest(differences: list[float]) -> float:
+    """The largest difference, NaN counting as infinite (Python's max skips a NaN that is not first)."""
+    return max((d if not math.isnan(d) else math.inf for d in differences), default=0.0)
+
+
 def env_steps(task: str, num_envs: int, steps: int, seed: int) -> bool:
     """The env-step graph with the torch logic compiled (the default), without, and the physics-only graph
-    without: True when their first steps agree value by value (no noise, no resets yet) and their mean rewards
-    over the run agree within STATISTICS_TOLERANCE (after the first resets their random draws differ)."""
+    without (see :func:`compare_env_runs`)."""
     runs = {"env_step+compile": run(task, num_envs, steps, "env_step", seed, True),
             "env_step": run(task, num_envs, steps, "env_step", seed, False),
             "physics": run(task, num_envs, steps, "physics", seed, False)}
-    reference = runs["physics"]
+    return compare_env_runs(runs)
+
+
+def compare_env_runs(runs: dict[str, dict], reference: str = "physics") -> bool:
+    """True when every run's first steps agree with the reference run's value by value (no noise, no resets
+    yet) and their mean rewards over the run within STATISTICS_TOLERANCE (after the first resets their random
+    draws differ)."""
+    ref_run = runs[reference]
     agree = True
-    for name in ("env_step+compile", "env_step"):
-        for i, ((gp, gc, gr), (pp, pc, pr)) in enumerate(zip(runs[name]["first"], reference["first"])):
+    for name in (n for n in runs if n != reference):
+        if len(runs[name]["first"]) != len(ref_run["first"]):
+            print(f"{name}: {len(runs[name]['first'])} first steps, {reference}: {len(ref_run['first'])}")
+            agree = False
+        for i, ((gp, gc, gr), (pp, pc, pr)) in enumerate(zip(runs[name]["first"], ref_run["first"])):
             differences = [float((gp - pp).abs().max()), float((gc - pc).abs().max()), float((gr - pr).abs().max())]
-            agree &= max(differences) <= ENV_TOLERANCE
-            print(f"{name} vs physics, step {i + 1}: max |diff| policy obs {differences[0]:.2e}, critic obs "
+            agree &= largest(differences) <= ENV_TOLERANCE
+            print(f"{name} vs {reference}, step {i + 1}: max |diff| policy obs {differences[0]:.2e}, critic obs "
                   f"{differences[1]:.2e}, reward {differences[2]:.2e}")
-        mean, ref = float(runs[name]["reward"].mean()), float(reference["reward"].mean())
-        agree &= abs(mean - ref) <= STATISTICS_TOLERANCE * abs(ref) + 1e-4
+        mean, ref = float(runs[name]["reward"].mean()), float(ref_run["reward"].mean())
+        agree &= abs(mean - ref) <= STATISTICS_TOLERANCE * abs(ref) + 1e-4  # False for a NaN
     print(f"{'':>22}" + "".join(f"{name:>18}" for name in runs))
     for label, key, reduce in (("mean reward", "reward", torch.mean), ("resets (all steps)", "resets", torch.sum),
                                ("final terrain level", "level", lambda x: x[-1])):
         print(f"{label:>22}" + "".join(f"{float(reduce(r[key])):>18.4f}" for r in runs.values()))
     for key in ("episode_length", "time"):
         print(f"{key:>22}" + "".join(f"{r[key]:>18.4f}" for r in runs.values()))
-    return agree
+    return bool(agree)
+
+
+EVALUATION_ITEMS = ["image_05_sketch_blocks", "text_15_concrete_staircase_between_two"]  # gente100: no water, no soil
+
+
+def evaluation_agrees(task: str, robots_per_terrain: int = 32, episode_s: float = 2.0, device: str = "cuda") -> bool:
+    """gente-evaluate's rollout through the env's default step (twice) and with plain launches (see the module
+    docstring; on the CPU, where the default step is plain too, this checks only that the check runs)."""
+    from legged_gente.envs.base.step_runner import StepRunner
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
+
+    evaluation = Evaluation(task, load_benchmark("gente100", EVALUATION_ITEMS), robots_per_terrain, device, episode_s)
+    policy = load_policy(evaluation, pretrained=True)
+    settle_s = episode_s / 4
+
+    def rollout():
+        return evaluation.run(policy, settle_s=settle_s, progress=False)
+
+    runs = {"graph": rollout(), "graph, again": rollout()}
+    evaluation.env._runner = StepRunner(evaluation.env, compile=False, graph=False)
+    runs["plain launches"] = rollout()
+    return compare_evaluations({name: result.metrics for name, result in runs.items()}, "plain launches")
+
+
+def compare_evaluations(runs: dict[str, dict], reference: str) -> bool:
+    """True when every run has the reference run's diverged and fallen robots, and its mean tracking error and
+    distance over the robots that did not diverge agree within STATISTICS_TOLERANCE (+ 0.02)."""
+    import numpy as np
+
+    def summary(m):
+        kept = ~m["diverged"]
+        return {"diverged": int(m["diverged"].sum()), "falls": int(m["fell"].sum()),
+                "tracking_error": float(m["tracking_error"][kept].mean()),
+                "distance": float(m["distance"][kept].mean())}
+
+    ref = summary(runs[reference])
+    agree = True
+    for name, metrics in runs.items():
+        got = summary(metrics)
+        print(f"evaluation, {name:>15}: " + ", ".join(f"{k} {v:.4g}" for k, v in got.items()))
+        agree &= (got["diverged"] == ref["diverged"] and got["falls"] == ref["falls"]
+                  and all(abs(got[k] - ref[k]) <= STATISTICS_TOLERANCE * abs(ref[k]) + 0.02
+                          for k in ("tracking_error", "distance")))
+        agree &= bool((metrics["diverged"] == runs[reference]["diverged"]).all())
+    return bool(agree)
 
 
 if __name__ == "__main__":

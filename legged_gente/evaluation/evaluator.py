@@ -1,26 +1,31 @@
 """Roll a policy out on benchmark terrains laid out as tiles of one terrain and measure every robot.
 
 The task's env is built in terrain mode "generated" with one spec per tile (all tiles of equal size),
-``robots_per_terrain`` robots assigned to each tile, noise, pushes and domain randomisation off. A thin
-subclass of the task's env class adds two hooks: after the termination check (state fresh, before the
-masked reset) it records each robot's metrics and advances the task; command resampling asks the task.
-Every robot is measured over its first episode only: ``max_episode_length`` policy steps, or fewer if it
-terminates. All accumulation stays on the device; nothing syncs with the host inside the loop.
+``robots_per_terrain`` robots assigned to each tile, noise, pushes and domain randomisation off. The env is the
+task's own class and steps as in training (on a GPU: the whole step as one CUDA graph, its torch logic compiled):
+the evaluation only reads what a step leaves (its outputs and the state after it) and commands the robots between
+steps through :meth:`LeggedRobot.set_commands`. The env's episode is set longer than the evaluated one, so no robot
+times out inside it. Every robot is measured over its first episode only: ``num_steps`` policy steps, or until
+its world is reset (a fall) or diverges. The step that ends a robot's episode is not measured: after it the env has
+already reset that world. All accumulation stays on the device.
 
 Metric definitions (per robot; docs/evaluation.md repeats them):
 
-* ``fell``: the episode ended by a termination (terminating contact, tilt, height, non-finite state), not by
-  the time-out.
+* ``diverged``: the simulation of the robot's world broke down: the env flagged it (non-finite state, a joint or
+  base moving faster than ``sim.max_qvel``, constraint rows overflowing) or its base moved faster than
+  ``MAX_BASE_SPEED``. Such a robot is a failure and enters no other metric's mean (its numbers are the
+  simulator's, not the policy's); it is counted on its own.
+* ``fell``: the episode ended by a termination (terminating contact, tilt, height), not by divergence.
 * ``tracking_error`` (m/s): mean over the robot's steps after ``settle_s`` of |v_cmd_xy - v_xy|, the
   horizontal base velocity in the base frame against the commanded (vx, vy).
 * ``progress``: velocity task: the distance covered along the command over the commanded distance, both after
   ``settle_s``: sum over steps of (v_xy . c_xy / |c_xy|) dt divided by the sum of |c_xy| dt (base frame). A
   robot that stands scores 0, one that follows the command 1; undefined (NaN) for a stand-still command.
 * ``standing``: the robot was commanded to stand still (velocity task).
-* ``success``: velocity task, moving command (|c_xy| >= 0.3 m/s): not fell, tracking_error <
-  ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still command (its own
-  category): not fell and tracking_error < ``tracking_threshold``; waypoint task: the last waypoint was reached
-  before any termination.
+* ``success``: never for a diverged robot; velocity task, moving command (|c_xy| >= 0.3 m/s): not fell,
+  tracking_error < ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still
+  command (its own category): not fell and tracking_error < ``tracking_threshold``; waypoint task: the last
+  waypoint was reached before any termination.
 * ``distance`` (m): xy path length of the base, summed over policy steps; ``displacement`` (m): straight
   xy distance from the spawn to the last position.
 * ``collisions``: onsets of contact (|F| > 1 N) on any penalised body (thighs, shanks: the task's
@@ -40,9 +45,14 @@ import torch
 
 from legged_gente.evaluation.benchmark import Item, tile_geometry
 from legged_gente.evaluation.tasks import VelocityTask, WaypointTask, zigzag_waypoints
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT
 
 CONTACT_THRESHOLD = 1.0
 """N; a penalised body with a larger contact force is touching something."""
+MAX_BASE_SPEED = math.sqrt(2.0 * 9.81 * 2.0 * MAX_ABS_HEIGHT) + 5.0
+"""m/s (24.8): no robot base moves this fast on a benchmark terrain. A free fall through the terrain library's
+whole height range (2 x MAX_ABS_HEIGHT = 20 m) reaches sqrt(2 g h) = 19.8 m/s (energy conservation); 5 m/s more
+cover running and river currents. A faster base is a simulation that blew up (a launched robot)."""
 
 
 def grid_shape(n: int) -> tuple[int, int]:
@@ -51,41 +61,15 @@ def grid_shape(n: int) -> tuple[int, int]:
     return rows, n // rows
 
 
-def _eval_env_class(base: type) -> type:
-    class EvaluationEnv(base):
-        """``base`` with the evaluation's hooks (see the module docstring)."""
-
-        eval_task = None
-        eval_recorder = None
-
-        def _resample_commands(self, mask):
-            if self.eval_task is None:
-                return super()._resample_commands(mask)
-            # called after the masked reset: robots just reset already stand at their spawn
-            new = self.eval_task.commands(self.base_pos[:, :2], self.commands)
-            self.commands = torch.where(mask[:, None], new, self.commands)
-
-        def _check_termination(self, nonfinite):
-            super()._check_termination(nonfinite)
-            if self.eval_recorder is not None:
-                active = self.eval_recorder.active.clone()
-                self.eval_recorder.record(self)
-                self.eval_task.update(self.base_pos[:, :2], active & self.eval_recorder.active)
-                self.commands = self.eval_task.commands(self.base_pos[:, :2], self.commands)
-
-    EvaluationEnv.__name__ = f"Evaluation{base.__name__}"
-    return EvaluationEnv
-
-
 class Recorder:
-    """Per-robot accumulators on the env's device, updated once per policy step."""
+    """Per-robot accumulators on the env's device, updated after every policy step from what the step left."""
 
     def __init__(self, env, settle_s: float, trace_robots: torch.Tensor):
         n, dev = env.num_envs, env.device
         z = lambda dtype=torch.float32: torch.zeros(n, dtype=dtype, device=dev)  # noqa: E731
         self.dt, self.settle_steps = env.dt, int(round(settle_s / env.dt))
         self.active = torch.ones(n, dtype=torch.bool, device=dev)
-        self.fell = z(torch.bool)
+        self.fell, self.diverged = z(torch.bool), z(torch.bool)
         self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
         self.along_cmd, self.cmd_distance = z(), z()
         self.collisions = z()
@@ -96,22 +80,32 @@ class Recorder:
         self.trace_robots = trace_robots
         self.trace: dict[str, list[torch.Tensor]] = {"cmd": [], "vel": [], "pos": [], "active": [], "qpos": []}
 
-    def record(self, env) -> None:
+    def record(self, env, dones: torch.Tensor) -> None:
+        """One policy step: ``dones`` is the step's output, everything else the env's state after the step.
+        A world the step reset already holds its next episode: its robot's episode ended (a fall, or a
+        divergence the env flagged) and this step is not measured."""
         a = self.active
-        af = a.float()
         self.step += 1
+        speed = torch.linalg.norm(env.sim.qvel[:, 0:3], dim=1)  # world-frame base velocity
+        launched = ~dones & ~(speed <= MAX_BASE_SPEED)  # "not <=": NaN too
+        diverged = a & (env.diverged_buf | launched)
+        alive = a & ~dones & ~diverged
+        self.fell |= a & dones & ~env.time_out_buf & ~diverged
+        self.diverged |= diverged
+        af = alive.float()
         xy = env.base_pos[:, :2]
         err = torch.norm(env.commands[:, :2] - env.base_lin_vel[:, :2], dim=1)
         counted = af * float(self.step > self.settle_steps)
-        self.err_sum += err * counted
+        self.err_sum += torch.where(alive, err, 0.0) * counted
         self.err_steps += counted
         cmd_speed = torch.norm(env.commands[:, :2], dim=1)
         along = torch.sum(env.base_lin_vel[:, :2] * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
-        self.along_cmd += along * self.dt * counted
+        self.along_cmd += torch.where(alive, along, 0.0) * self.dt * counted
         self.cmd_distance += cmd_speed * self.dt * counted
-        self.distance += torch.norm(xy - self.last_xy, dim=1) * af
-        self.last_xy = torch.where(a[:, None], xy, self.last_xy)
-        self.energy += torch.sum(torch.abs(env.torques * env.dof_vel), dim=1) * self.dt * af
+        self.distance += torch.where(alive, torch.norm(xy - self.last_xy, dim=1), 0.0)
+        self.last_xy = torch.where(alive[:, None], xy, self.last_xy)
+        power = torch.sum(torch.abs(env.torques * env.dof_vel), dim=1)
+        self.energy += torch.where(alive, power, 0.0) * self.dt
         if env.penalized_bodies.numel():
             contact = torch.norm(env.contact_forces[:, env.penalized_bodies], dim=-1).gt(CONTACT_THRESHOLD).any(1)
         else:
@@ -119,13 +113,12 @@ class Recorder:
         self.collisions += (contact & ~self.in_contact).float() * af
         self.in_contact = contact
         self.alive_steps += af
-        self.fell |= a & env.reset_buf & ~env.time_out_buf
-        self.active = a & ~env.reset_buf
+        self.active = alive
         r = self.trace_robots
         self.trace["cmd"].append(env.commands[r, :3].clone())
         self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
         self.trace["pos"].append(xy[r].clone())
-        self.trace["active"].append(a[r].clone())
+        self.trace["active"].append(alive[r].clone())
         self.trace["qpos"].append(env.sim.qpos[r].clone())  # gente-view replays the robot from it
 
 
@@ -162,17 +155,18 @@ class Evaluation:
         t.num_rows, t.num_cols = rows, cols
         t.terrain_length, t.terrain_width, t.resolution = size_x, size_y, resolution
         env_cfg.env.num_envs = len(self.items) * robots_per_terrain
-        env_cfg.env.episode_length_s = episode_length_s
+        self.dt = env_cfg.sim.dt * env_cfg.control.decimation
+        self.num_steps = int(math.ceil(episode_length_s / self.dt))
+        """Policy steps of the evaluated episode."""
+        env_cfg.env.episode_length_s = episode_length_s + 1.0  # the env times no robot out inside it
         env_cfg.noise.add_noise = False
-        env_cfg.sim.cuda_graph = "physics"  # the recorder's hooks branch on host values every step
-        env_cfg.sim.torch_compile = False  # and would be traced by torch.compile with the step's logic
         rand = env_cfg.domain_rand
         rand.push_robots = rand.randomize_friction = rand.randomize_base_mass = False
-        env_cfg.commands.resampling_time = episode_length_s + 1.0  # one command (or task) per episode
+        env_cfg.commands.resampling_time = episode_length_s + 1.0  # the task commands, set between steps
         if mode == "waypoints":
             env_cfg.commands.heading_command = True  # waypoints steer through the heading
         self.env_cfg = env_cfg
-        env_class = _eval_env_class(task_registry.tasks[task][0])
+        env_class = task_registry.tasks[task][0]
         self.env = env_class(env_cfg, device=device, train_cfg_steps_per_env=self.train_cfg.runner.num_steps_per_env)
         self.task_name = task
         self.robots_per_terrain = robots_per_terrain
@@ -197,20 +191,22 @@ class Evaluation:
 
         env = self.env
         task = task or self.make_task()
-        env.eval_task, env.eval_recorder = task, None
         torch.manual_seed(self.seed)
         first = torch.arange(0, env.num_envs, self.robots_per_terrain, device=env.device)
-        try:
-            # the reset too: buffers made inside an earlier run are inference tensors
-            with torch.inference_mode():
-                obs = env.reset()  # every robot to its tile's spawn, commands from the task
-                recorder = Recorder(env, settle_s, first)
-                env.eval_recorder = recorder
-                for _ in tqdm(range(env.max_episode_length), desc=f"{self.mode} rollout", disable=not progress,
-                              unit="step"):
-                    obs, _, _, _ = env.step(policy(obs))
-        finally:
-            env.eval_recorder = None
+
+        def command():
+            return env.set_commands(task.commands(env.base_pos[:, :2], env.commands), task.still())
+
+        # the reset too: buffers made inside an earlier run are inference tensors
+        with torch.inference_mode():
+            env.reset()  # every robot to its tile's spawn
+            obs = command()
+            recorder = Recorder(env, settle_s, first)
+            for _ in tqdm(range(self.num_steps), desc=f"{self.mode} rollout", disable=not progress, unit="step"):
+                _, _, dones, _ = env.step(policy(obs))
+                recorder.record(env, dones)
+                task.update(env.base_pos[:, :2], recorder.active)
+                obs = command()
         r = recorder
         steps = r.err_steps.clamp(min=1.0)
         tracking = torch.where(r.err_steps > 0, r.err_sum / steps, torch.full_like(steps, float("nan")))
@@ -221,13 +217,14 @@ class Evaluation:
             "fell": r.fell, "tracking_error": tracking, "distance": r.distance,
             "displacement": torch.norm(r.last_xy - r.start_xy, dim=1), "collisions": r.collisions,
             "energy": r.energy, "time_s": r.alive_steps * env.dt, "finished": task.finished,
-            "progress": progress, "standing": standing,
+            "progress": progress, "standing": standing, "diverged": r.diverged,
         }
         out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
         traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}
         traces["spawn"] = env.env_origins[first].cpu().numpy()
         traces["dt"] = np.array(env.dt)
-        params = {"settle_s": settle_s, "dt": env.dt, "episode_length_s": env.max_episode_length * env.dt}
+        params = {"settle_s": settle_s, "dt": env.dt, "episode_length_s": self.num_steps * env.dt,
+                  "max_base_speed": MAX_BASE_SPEED}
         if isinstance(task, WaypointTask):
             traces["waypoints"] = task.waypoints[first].cpu().numpy()
             params |= {"reach_distance": task.reach_distance, "speed": task.speed}

@@ -30,7 +30,7 @@ BASE_GROUND = ("flat", "natural_ground", "random_uniform", "waves")
 CATEGORIES = ("water", "soil", "obstacles", "slopes_and_stairs")
 
 METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "progress", "distance", "displacement", "collisions",
-                  "falls", "fall_rate", "energy_per_m")
+                  "falls", "fall_rate", "diverged", "energy_per_m")
 
 
 def categories_of(spec) -> list[str]:
@@ -57,34 +57,45 @@ STAND_GROUP = "stand_still"
 
 def success(metrics: dict[str, np.ndarray], task: str, tracking_threshold: float = TRACKING_THRESHOLD,
             min_progress: float = MIN_PROGRESS) -> np.ndarray:
-    """Per-robot success (see the evaluator's docstring for the definitions)."""
+    """Per-robot success (see the evaluator's docstring for the definitions); a diverged robot never succeeds."""
+    healthy = ~_diverged(metrics)
     if task == "waypoints":
-        return metrics["finished"].astype(bool)
+        return metrics["finished"].astype(bool) & healthy
     standing = metrics["standing"].astype(bool)
     with np.errstate(invalid="ignore"):
         tracked = ~metrics["fell"].astype(bool) & (metrics["tracking_error"] < tracking_threshold)
         progressed = metrics["progress"] >= min_progress
-    return tracked & (standing | progressed)
+    return tracked & (standing | progressed) & healthy
+
+
+def _diverged(metrics: dict[str, np.ndarray]) -> np.ndarray:
+    return metrics.get("diverged", np.zeros(len(metrics["fell"]), bool)).astype(bool)
 
 
 def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str, float]:
-    """Aggregate a group of robots: rates and means over robots; energy per metre as total energy / total distance."""
+    """Aggregate a group of robots: success and fall rates over all of them (a diverged robot is a failure),
+    means over the robots whose simulation did not diverge (a diverged robot's numbers are the simulator's, not
+    the policy's), the diverged ones counted apart; energy per metre as total energy / total distance."""
     n = int(ok.size)
-    distance = float(metrics["distance"].sum())
+    diverged = _diverged(metrics)
+    kept = {k: v[~diverged] for k, v in metrics.items()}
+    m = int((~diverged).sum())
+    distance = float(kept["distance"].sum())
     falls = int(metrics["fell"].sum())
-    finite = np.isfinite(metrics["tracking_error"])
-    progress = metrics["progress"][np.isfinite(metrics["progress"])] if "progress" in metrics else np.zeros(0)
+    finite = np.isfinite(kept["tracking_error"])
+    progress = kept["progress"][np.isfinite(kept["progress"])] if "progress" in kept else np.zeros(0)
     return {
         "robots": n,
         "success_rate": float(ok.mean()) if n else math.nan,
-        "tracking_error": float(metrics["tracking_error"][finite].mean()) if finite.any() else math.nan,
+        "tracking_error": float(kept["tracking_error"][finite].mean()) if finite.any() else math.nan,
         "progress": float(progress.mean()) if progress.size else math.nan,
-        "distance": float(metrics["distance"].mean()) if n else math.nan,
-        "displacement": float(metrics["displacement"].mean()) if n else math.nan,
-        "collisions": float(metrics["collisions"].mean()) if n else math.nan,
+        "distance": float(kept["distance"].mean()) if m else math.nan,
+        "displacement": float(kept["displacement"].mean()) if m else math.nan,
+        "collisions": float(kept["collisions"].mean()) if m else math.nan,
         "falls": falls,
         "fall_rate": falls / n if n else math.nan,
-        "energy_per_m": float(metrics["energy"].sum()) / distance if distance > 0 else math.nan,
+        "diverged": int(diverged.sum()),
+        "energy_per_m": float(kept["energy"].sum()) / distance if distance > 0 else math.nan,
     }
 
 

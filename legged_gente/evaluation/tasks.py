@@ -51,6 +51,10 @@ class VelocityTask:
     def update(self, pos_xy: torch.Tensor, active: torch.Tensor) -> None:
         """Nothing to advance: the command is fixed for the episode."""
 
+    def still(self) -> torch.Tensor:
+        """Per robot: told to stand still now (in heading mode such a robot does not turn either)."""
+        return self.standing
+
 
 def _moving_commands(ranges, n: int, min_speed: float, generator: torch.Generator, rounds: int = 16) -> torch.Tensor:
     """(n, 2) (vx, vy) uniform in the command ranges, restricted to speeds >= ``min_speed`` (rejection sampling,
@@ -103,6 +107,10 @@ class WaypointTask:
             reached = active & ~self.finished & (torch.norm(self.target() - pos_xy, dim=1) < self.reach_distance)
             self.index += reached.long()
             self.finished |= self.index >= self.waypoints.shape[1]
+
+    def still(self) -> torch.Tensor:
+        """Per robot: told to stand still now (after the last waypoint)."""
+        return self.finished
 
     def commands(self, pos_xy: torch.Tensor, current: torch.Tensor) -> torch.Tensor:
         """Forward speed towards the current waypoint, heading = its bearing; once finished: stand, keep the heading."""

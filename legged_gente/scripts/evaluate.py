@@ -82,7 +82,7 @@ def evaluate(args) -> dict:
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
     print(f"success {100 * o['success_rate']:.1f}% over {o['robots']} robots on {o['terrains']} terrains; "
-          f"tracking error {o['tracking_error']:.3f} m/s; falls {o['falls']}")
+          f"tracking error {o['tracking_error']:.3f} m/s; falls {o['falls']}; diverged {o['diverged']}")
     for name, g in report["groups"].items():
         print(f"  {name:18s} success {100 * g['success_rate']:5.1f}%  ({g['terrains']} terrains)")
     print(f"wrote {json_path}, {csv_path}")

@@ -68,11 +68,14 @@ class Simulation:
             self.m.opt.warn_overflow &= ~(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
             self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
             self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
-            self._fresh_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
         self.after_substep: list[Callable[[], None]] = []
         self.after_reset: list[Callable[[torch.Tensor], None]] = []  # called with the reset mask (torch bool)
         self._graph = None
         self._make_views()
+        # what :meth:`forward` refreshes for the worlds it is given (each (num_worlds, ...)), and what the
+        # callbacks and after_substep hooks integrate from one substep to the next, which it leaves as it was
+        self.observed: list[torch.Tensor] = [self.body_contact_force]
+        self.substep_state: list[torch.Tensor] = []
 
     def _make_views(self) -> None:
         t = wp.to_torch
@@ -82,7 +85,6 @@ class Simulation:
         self.subtree_com, self.actuator_force = t(d.subtree_com), t(d.actuator_force)
         self.nefc, self.time = t(d.nefc), t(d.time)
         self.body_contact_force = t(self.body_contact_force_wp)
-        self._fresh_contact_force = t(self._fresh_contact_force_wp)
         self.geom_friction = t(m.geom_friction)
         self.body_mass, self.body_inertia = t(m.body_mass), t(m.body_inertia)
 
@@ -94,10 +96,9 @@ class Simulation:
                 hook()
         self._contact_forces()
 
-    def _contact_forces(self, out: wp.array | None = None) -> None:
-        """Per-body contact forces (``body_contact_force``, or ``out``) from the contacts and constraint forces
-        now in ``d``."""
-        out = self.body_contact_force_wp if out is None else out
+    def _contact_forces(self) -> None:
+        """Per-body contact forces (``body_contact_force``) from the contacts and constraint forces now in ``d``."""
+        out = self.body_contact_force_wp
         out.zero_()
         wp.launch(_body_contact_forces, dim=self.d.naconmax, inputs=[
             self.m.opt.cone, self.m.geom_bodyid, self.d.contact.frame, self.d.contact.friction,
@@ -142,27 +143,30 @@ class Simulation:
 
     @torch.compiler.disable
     def forward(self, mask: torch.Tensor) -> None:
-        """Recompute what derives from qpos/qvel/ctrl (bodies, contacts, constraint forces) without advancing
-        time, and the per-body contact forces of the worlds in ``mask`` (the others keep their last substep's).
+        """Recompute what derives from qpos/qvel/ctrl without advancing time, as a substep sees it: bodies,
+        contacts (the force fields' contact filter included: ground friction, soil, analytic sole contacts),
+        passive forces, constraint forces; then the ``after_substep`` hooks (the force fields' observation) and
+        the per-body contact forces. The worlds in ``mask`` take the new values of every ``observed`` tensor; the
+        others keep their last substep's.
 
-        Physics-neutral: ``mjw.forward`` leaves the solver's warm start alone, and the force fields' callbacks
-        (which integrate state once per substep, e.g. soil ruts) are left out; the next substep runs them. So
-        between policy steps ``d.contact`` holds these unfiltered contacts. It costs about a third of a policy
-        step's physics (4 substeps); on the CPU it is skipped when no world is masked (a host read, free there;
-        on a GPU it always runs, as the step must not wait for the device)."""
+        Physics-neutral: ``mjw.forward`` leaves the solver's warm start alone, and everything in
+        ``substep_state`` (what the callbacks and hooks integrate once per substep, e.g. soil ruts, slip) is put
+        back as it was, in every world. It costs about a third of a policy step's physics (4 substeps); on the
+        CPU it is skipped when no world is masked (a host read, free there; on a GPU it always runs, as the step
+        must not wait for the device)."""
         if not self.wp_device.is_cuda and not bool(mask.any()):
             return
-        callbacks = self.m.callback
-        saved = callbacks.contactfilter, callbacks.passive
-        callbacks.contactfilter = callbacks.passive = None
-        try:
-            with wp.ScopedDevice(self.wp_device):
-                mjw.forward(self.m, self.d)
-                self._contact_forces(self._fresh_contact_force_wp)
-        finally:
-            callbacks.contactfilter, callbacks.passive = saved
-        self.body_contact_force[:] = torch.where(mask[:, None, None], self._fresh_contact_force,
-                                                 self.body_contact_force)
+        kept = [t.clone() for t in self.substep_state]
+        last = [t.clone() for t in self.observed]
+        with wp.ScopedDevice(self.wp_device):
+            mjw.forward(self.m, self.d)
+            for hook in self.after_substep:
+                hook()
+            self._contact_forces()
+        for t, old in zip(self.substep_state, kept):
+            t.copy_(old)
+        for t, old in zip(self.observed, last):
+            t.copy_(torch.where(mask.view(-1, *[1] * (t.dim() - 1)), t, old))
 
     @torch.compiler.disable
     def set_const(self) -> None:

@@ -14,7 +14,9 @@ the tensors that existed at capture, so at the end of the capture ``StepGraph`` 
 tensor into the tensor the attribute held before, and binds the attribute back to it. State carried from one
 step to the next thus stays in one tensor whatever the body does, at the cost of one device copy per rebound
 tensor (none where the body works in place). Rebound non-tensor attributes (e.g. a dict of tensors) are bound to
-the objects the capture made after every replay.
+the objects the capture made after every replay. Every attribute the capture rebound is bound back after each
+replay, so code run eagerly between replays (a reset, refreshed observations) may rebind them too: the next
+replay's results are where the attributes point afterwards.
 """
 
 from __future__ import annotations
@@ -88,9 +90,14 @@ class StepGraph:
                 self.body()
             rebound = rebound_attributes(self.owner, before)
             kept = self._copy_back(rebound, before)
-        vars(self.owner).update(kept)
-        self.bindings = {name: value for name, value in rebound.items() if name not in kept}
+        self._bind(rebound, kept)
         self.graph = graph
+
+    def _bind(self, rebound: dict, kept: dict) -> None:
+        """The owner's attributes as every replay leaves them: the rebound tensors' old tensors (``kept``), the
+        other rebound objects as the capture made them."""
+        self.bindings = rebound | kept
+        vars(self.owner).update(self.bindings)
 
     def _copy_back(self, rebound: dict, before: dict) -> dict:
         """Record (into the graph) a copy of each rebound tensor into the one its attribute held before the

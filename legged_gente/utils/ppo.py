@@ -16,6 +16,13 @@ forward passes, sampling) is one more graph. The loss is PPO's clipped surrogate
 and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to rsl-rl's for what it does
 not cover (recurrent models, RND, symmetry, optimizers other than Adam).
 
+What rsl-rl factors out is shared: the models' log-probabilities, entropy and KL divergence
+(``get_output_log_prob``, ``output_entropy``, ``get_kl_divergence``), the storage's mini-batches, ``act`` and
+the fallback update. rsl-rl-lib 5.5 computes the loss terms, the KL test and the learning-rate rule inline in
+``PPO.update``, between host reads (``kl_mean > ...`` in Python, ``.item()``), so there is no smaller piece of
+it to subclass; those few lines are written here on device tensors, and ``tests/test_ppo.py`` pins them to
+rsl-rl's: the same mini-batches give the same losses, clipped gradients and learning rate.
+
 ``SyncFreeGaussianDistribution`` is rsl-rl's Gaussian policy distribution sampled as mean + std * N(0, 1):
 ``torch.normal(mean, std)``, which rsl-rl's ``sample`` calls, checks ``std >= 0`` on the host, a sync at
 every action sampled in the rollout and in every mini-batch.

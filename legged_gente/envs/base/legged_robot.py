@@ -12,6 +12,7 @@ and ``self.reward_scale_vec``, changed with :meth:`set_param`; everything else i
 
 from __future__ import annotations
 
+import copy
 import math
 from types import SimpleNamespace
 
@@ -125,10 +126,9 @@ class LeggedRobot(VecEnv):
         for name in COMMAND_RANGES:
             low, high = getattr(cfg.commands.ranges, name)
             checks.append((low <= high, f"cfg.commands.ranges.{name}=[{low}, {high}]; use [low, high], low <= high"))
-        checks.append((cfg.terrain.mesh_type == "plane" or not cfg.forces.enabled
-                       or cfg.forces.friction_reference == cfg.terrain.static_friction,
-                       f"cfg.forces.friction_reference={cfg.forces.friction_reference} differs from "
-                       f"cfg.terrain.static_friction={cfg.terrain.static_friction}; set them equal"))
+        checks.append((cfg.forces.friction_reference is None,
+                       f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
+                       f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
         for ok, message in checks:
             if not ok:
                 raise ValueError(message + ".")
@@ -158,13 +158,21 @@ class LeggedRobot(VecEnv):
             return None
         from legged_gente.external_forces.field import TerrainForces
 
+        forces_cfg = copy.copy(self.cfg.forces)
+        forces_cfg.friction_reference = float(self.cfg.terrain.static_friction)  # the ground geom's friction
         forces = TerrainForces(self.mjm, self.sim.m, self.sim.d, self.terrain.height_field, self.terrain.origin_xy,
-                               self.terrain.resolution, material, self.cfg.forces,
+                               self.terrain.resolution, material, forces_cfg,
                                seed=int(torch.randint(0, 2**31 - 1, ()).item()))  # follows torch's (per-rank) seed
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
         self.sim.after_reset.append(self._reset_forces)
         self._force_obs = forces.privileged_obs()
+        # the post-reset forward runs the fields' callbacks and hooks: their observation is refreshed for the
+        # reset worlds, and every other per-world array of the fields (ruts, slip, loads, ...) is put back
+        obs_ptr = forces.obs.ptr
+        self.sim.observed.append(self._force_obs)
+        self.sim.substep_state.extend(wp.to_torch(a) for a in vars(forces).values() if isinstance(a, wp.array)
+                                      and a.shape[0] == self.num_envs and a.ptr != obs_ptr)
         return forces
 
     def _reset_forces(self, mask: torch.Tensor) -> None:
@@ -445,7 +453,7 @@ class LeggedRobot(VecEnv):
         # new commands for the robots just reset and for those whose resampling time came (episode length 0
         # after a reset, so both are caught by the same test)
         self._resample_commands(self.episode_length_buf % self._resample_steps == 0)
-        self.sim.forward(self.reset_buf)  # bodies, contacts and contact forces of the reset worlds are fresh
+        self.sim.forward(self.reset_buf)  # the reset worlds' bodies, contacts, contact forces, force-field obs
         self._update_state()
         self._update_heading_commands()
         self._compute_observations()
@@ -623,6 +631,21 @@ class LeggedRobot(VecEnv):
         heading_error = wrap_to_pi(self.commands[:, 3] - yaw_of(self.base_quat))
         yaw_rate = torch.clamp(c.heading_stiffness * heading_error, c.ang_vel_yaw[0], c.ang_vel_yaw[1])
         self.commands[:, 2] = torch.where(self.standing_still, 0.0, yaw_rate)
+
+    def set_commands(self, commands: torch.Tensor, still: torch.Tensor | None = None) -> TensorDict:
+        """Command the robots from outside the step (a joystick, an evaluation task): ``commands`` (num_envs, 4) =
+        vx, vy (m/s), yaw rate (rad/s), heading (rad); ``still``: the robots told to stand still (in heading mode
+        they do not turn). Written in place, headings turned into yaw rates and the observations refreshed, so
+        the policy's next action sees them; returns those observations. The step still resamples commands (at
+        resets and every ``commands.resampling_time``): call this again after each step to keep yours."""
+        if commands.shape != self.commands.shape:
+            raise ValueError(f"commands of shape {tuple(commands.shape)}; this env takes (num_envs, 4) = "
+                             f"{tuple(self.commands.shape)}: vx, vy, yaw rate, heading")
+        self.commands.copy_(commands)
+        self.standing_still.copy_(torch.zeros_like(self.standing_still) if still is None else still)
+        self._update_heading_commands()
+        self._compute_observations()
+        return self.obs_buf.clone()
 
     def _push_robots(self) -> None:
         v = self.max_push_vel_xy

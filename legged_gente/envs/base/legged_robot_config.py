@@ -180,12 +180,13 @@ class LeggedRobotCfg(BaseConfig):
         max_qvel = 1000.0
 
     class forces(ForcesConfig):
-        """Terrain force fields (water, soil, ground friction) where the material map has them.
-
-        ``friction_reference`` must equal ``terrain.static_friction`` (the ground geom's friction); leg and foot
-        geoms are named by the robot's config."""
+        """Terrain force fields (water, soil, ground friction) where the material map has them. Leg and foot geoms
+        are named by the robot's config."""
 
         enabled = True  # off: no force kernels are installed at all
+        # the fields scale contact friction by cell friction / the ground geom's friction, which in an env is
+        # terrain.static_friction: one setting, so this one stays None (the env passes static_friction)
+        friction_reference = None
 
 
 class LeggedRobotCfgPPO(BaseConfig):

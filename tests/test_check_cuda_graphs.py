@@ -1,0 +1,85 @@
+"""tools/check_cuda_graphs.py's verdicts, on the CPU: any mismatch of the env, the evaluation or PPO (a NaN
+difference included) is a mismatch, and a mismatch exits with 1."""
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+TOOL = Path(__file__).resolve().parents[1] / "tools" / "check_cuda_graphs.py"
+
+
+@pytest.fixture(scope="module")
+def tool():
+    spec = importlib.util.spec_from_file_location("check_cuda_graphs", TOOL)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def env_run(reward=1.0, critic_nan=False):
+    first = []
+    for step in range(3):
+        critic = torch.zeros(4, 6)
+        if critic_nan and step == 2:
+            critic[1, 5] = math.nan  # the last element: Python's max() over [0, 0, nan] would skip it
+        first.append((torch.zeros(4, 5), critic, torch.zeros(4)))
+    return {"first": first, "reward": torch.full((10,), reward), "resets": torch.zeros(10),
+            "level": torch.zeros(10), "episode_length": 10.0, "time": 0.2}
+
+
+def test_env_runs_agree_only_when_equal(tool):
+    assert tool.compare_env_runs({"env_step": env_run(), "physics": env_run()})
+    assert not tool.compare_env_runs({"env_step": env_run(critic_nan=True), "physics": env_run()})
+    assert not tool.compare_env_runs({"env_step": env_run(reward=1.2), "physics": env_run()})  # 20 % > 10 %
+    assert not tool.compare_env_runs({"env_step": env_run(reward=math.nan), "physics": env_run()})
+    short = env_run()
+    short["first"] = short["first"][:1]
+    assert not tool.compare_env_runs({"env_step": short, "physics": env_run()})
+
+
+def test_largest_counts_nan_as_infinite(tool):
+    assert max([0.0, math.nan]) == 0.0  # why the tool does not use max()
+    assert tool.largest([0.0, math.nan]) == math.inf and tool.largest([1e-4, 2e-4]) == 2e-4
+
+
+def evaluation_metrics(diverged=(False, False, False, True), tracking=0.2, distance=1.0):
+    n = len(diverged)
+    return {"diverged": np.array(diverged), "fell": np.zeros(n, bool),
+            "tracking_error": np.full(n, tracking), "distance": np.full(n, distance)}
+
+
+def test_evaluations_agree_only_with_the_same_diverged_robots_and_close_means(tool):
+    ref = evaluation_metrics()
+    assert tool.compare_evaluations({"graph": evaluation_metrics(tracking=0.21), "plain": ref}, "plain")
+    assert not tool.compare_evaluations({"graph": evaluation_metrics(diverged=(True, False, False, False)),
+                                         "plain": ref}, "plain")
+    assert not tool.compare_evaluations({"graph": evaluation_metrics(distance=1.5), "plain": ref}, "plain")
+    assert not tool.compare_evaluations({"graph": evaluation_metrics(tracking=math.nan), "plain": ref}, "plain")
+
+
+@pytest.mark.parametrize("failing", ["check_ppo", "env_steps", "evaluation_agrees"])
+def test_any_mismatch_exits_with_1(tool, monkeypatch, failing):
+    for name in ("check_ppo", "env_steps", "evaluation_agrees"):
+        monkeypatch.setattr(tool, name, lambda *args, verdict=(name != failing), **kwargs: verdict)
+    monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--device", "cpu"])
+    with pytest.raises(SystemExit) as exit_info:
+        tool.main()
+    assert exit_info.value.code == 1
+
+
+def test_all_agreeing_exits_with_0(tool, monkeypatch, capsys):
+    for name in ("check_ppo", "env_steps", "evaluation_agrees"):
+        monkeypatch.setattr(tool, name, lambda *args, **kwargs: True)
+    monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--device", "cpu"])
+    tool.main()
+    assert "all checks agree" in capsys.readouterr().out
+
+
+def test_the_evaluation_check_runs(tool):
+    """The GPU check's evaluation part end to end on the CPU (where every run steps plainly, so they agree)."""
+    assert tool.evaluation_agrees("gente_biped", robots_per_terrain=2, episode_s=0.2, device="cpu")
