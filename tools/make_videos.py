@@ -1,4 +1,4 @@
-"""The README's gait videos: the shipped gente_biped policy on six terrains, rendered on the CPU.
+"""The README's gait videos: the shipped gente_biped policy on six terrains (two rivers), rendered on the CPU.
 
     MUJOCO_GL=egl python tools/make_videos.py docs/videos            # every clip, then the GIF
     MUJOCO_GL=egl python tools/make_videos.py /tmp/v --clips river   # one clip
@@ -8,7 +8,8 @@ settings (no observation noise, no pushes) and a fixed command — walk straight
 heading 0, spawned at the tile's centre with yaw 0 — on one tile of the terrain named below (seeded), with a
 2 m border. Frames come from :class:`legged_gente.viewer.video.VideoRenderer` (material colours, 1 m checker,
 water surface and flow arrows, a sun with shadows, a camera following the base), every ``--every``-th policy
-step, encoded with ffmpeg (libx264, CRF ``--crf``); the GIF is the river clip, smaller and slower-framed.
+step, encoded with ffmpeg (libx264, CRF ``--crf``); the GIF is part of the river clip, smaller and slower-framed.
+``clips.json`` lists per clip: falls, distance walked along x, rise of the base, mean forward velocity.
 """
 
 from __future__ import annotations
@@ -34,9 +35,13 @@ class Clip:
 
 
 CLIPS = [
-    # the channel runs along y, 2.5 m ahead of the spawn (offset: -x is the left of the +y axis), 0.45 m deep, water 0.35 m deep flowing at 0.5 m/s
-    Clip("river", "river:width=2.5,depth=0.45,bank_width=0.5,direction=1.571,offset=-2.5"
-                  "+water:depth=0.35,flow=current,speed=0.5,direction=1.571", 8.0),
+    # a channel along y whose near bank starts 1 m ahead of the spawn (offset: -x is the left of the +y axis),
+    # 0.3 m deep with 1 m banks, water 0.25 m deep flowing at 0.5 m/s across the robot's path
+    Clip("river", "river:width=2.5,depth=0.3,bank_width=1.0,direction=1.571,offset=-2.0"
+                  "+water:depth=0.25,flow=current,speed=0.5,direction=1.571", 8.0),
+    # a steeper one: 0.45 m deep, 0.5 m banks (42 degrees), water 0.35 m deep
+    Clip("river_steep", "river:width=2.5,depth=0.45,bank_width=0.5,direction=1.571,offset=-1.8"
+                        "+water:depth=0.35,flow=current,speed=0.5,direction=1.571", 11.0),
     Clip("dry_sand", "soil:preset=dry_sand", 5.0),
     Clip("snow", "soil:preset=snow", 5.0),
     Clip("mud", "soil:preset=mud", 5.0),
@@ -45,6 +50,8 @@ CLIPS = [
 ]
 TASK = "gente_biped"
 GIF_CLIP = "river"
+GIF_SECONDS = (1.5, 5.0)
+"""start and length (s) of the GIF's part of its clip: the robot stepping into the current and wading."""
 
 
 def clip_settings(clip: Clip) -> list[str]:
@@ -96,13 +103,10 @@ def record_clip(clip: Clip, out: Path, every: int, size: tuple[int, int], crf: i
     renderer.close()
     path = out / f"{clip.name}.mp4"
     encode_mp4(renderer.frames, path, fps=1.0 / (env.dt * every), crf=crf)
-    frame = out / f"{clip.name}.png"
-    from PIL import Image
-
-    Image.fromarray(renderer.frames[len(renderer.frames) * 2 // 3]).save(frame)
     return {"clip": clip.name, "terrain": clip.terrain, "seed": clip.seed, "command_vx": clip.speed,
             "seconds": clip.seconds, "falls": falls, "resets": resets,
             "distance_x_m": round(float(end[0] - start[0]), 2) if not resets else None,
+            "base_rise_m": round(float(end[2] - start[2]), 2) if not resets else None,
             "mean_vx": round(float(np.mean(vx)), 3), "cpu_s": round(time.perf_counter() - t0, 1),
             "file": path.name, "bytes": path.stat().st_size, "frames": len(renderer.frames)}
 
@@ -121,11 +125,12 @@ def encode_mp4(frames: list[np.ndarray], path: Path, fps: float, crf: int) -> No
     subprocess.run(cmd, input=np.stack(frames).tobytes(), check=True)
 
 
-def encode_gif(mp4: Path, path: Path, width: int, fps: int) -> None:
-    """A palette GIF of ``mp4`` (ffmpeg's palettegen/paletteuse: one 128-colour palette for the clip)."""
-    graph = (f"fps={fps},scale={width}:-1:flags=lanczos,split[a][b];[a]palettegen=max_colors=128:stats_mode=diff[p];"
-             f"[b][p]paletteuse=dither=bayer:bayer_scale=4")
-    subprocess.run([ffmpeg(), "-y", "-loglevel", "error", "-i", str(mp4), "-vf", graph, str(path)], check=True)
+def encode_gif(mp4: Path, path: Path, width: int, fps: int, colours: int) -> None:
+    """A palette GIF of ``GIF_SECONDS`` of ``mp4`` (ffmpeg's palettegen/paletteuse: one palette for the clip)."""
+    graph = (f"fps={fps},scale={width}:-1:flags=lanczos,split[a][b];"
+             f"[a]palettegen=max_colors={colours}:stats_mode=diff[p];[b][p]paletteuse=dither=bayer:bayer_scale=3")
+    subprocess.run([ffmpeg(), "-y", "-loglevel", "error", "-ss", f"{GIF_SECONDS[0]:g}", "-t", f"{GIF_SECONDS[1]:g}",
+                    "-i", str(mp4), "-vf", graph, str(path)], check=True)
 
 
 def main() -> None:
@@ -133,10 +138,11 @@ def main() -> None:
     parser.add_argument("out", type=Path)
     parser.add_argument("--clips", nargs="+", choices=[c.name for c in CLIPS], default=[c.name for c in CLIPS])
     parser.add_argument("--every", type=int, default=2, help="render every n-th policy step (2: 25 fps)")
-    parser.add_argument("--size", type=int, nargs=2, default=(480, 360), metavar=("W", "H"))
-    parser.add_argument("--crf", type=int, default=30, help="x264 quality (larger: smaller files)")
+    parser.add_argument("--size", type=int, nargs=2, default=(640, 480), metavar=("W", "H"))
+    parser.add_argument("--crf", type=int, default=28, help="x264 quality (larger: smaller files)")
     parser.add_argument("--gif_width", type=int, default=320)
-    parser.add_argument("--gif_fps", type=int, default=12)
+    parser.add_argument("--gif_fps", type=int, default=10)
+    parser.add_argument("--gif_colours", type=int, default=64)
     parser.add_argument("--seconds", type=float, help="every clip this long (a quick look); default: each clip's own")
     args = parser.parse_args()
     os.environ.setdefault("MUJOCO_GL", "egl")
@@ -149,9 +155,12 @@ def main() -> None:
         print(json.dumps(report[-1]), flush=True)
     if GIF_CLIP in args.clips:
         gif = args.out / f"{GIF_CLIP}.gif"
-        encode_gif(args.out / f"{GIF_CLIP}.mp4", gif, args.gif_width, args.gif_fps)
+        encode_gif(args.out / f"{GIF_CLIP}.mp4", gif, args.gif_width, args.gif_fps, args.gif_colours)
         print(f"wrote {gif} ({gif.stat().st_size} bytes)")
-    (args.out / "clips.json").write_text(json.dumps(report, indent=1) + "\n")
+    listed = args.out / "clips.json"  # the clips made now replace their entries; the others stay
+    kept = [c for c in json.loads(listed.read_text()) if c["clip"] not in args.clips] if listed.exists() else []
+    order = [c.name for c in CLIPS]
+    listed.write_text(json.dumps(sorted(kept + report, key=lambda c: order.index(c["clip"])), indent=1) + "\n")
 
 
 if __name__ == "__main__":
