@@ -112,3 +112,18 @@ def test_a_frame_shows_the_sand_and_the_robot(tmp_path):
     # the tracked base is in the middle: the robot's grey (r = g = b) body there, far more than in a sandy corner
     grey = (np.abs(r - b) < 12) & (np.abs(g - b) < 12) & (r > 90)
     assert grey[30:90, 60:100].mean() > 0.1 and grey[30:90, 60:100].mean() > 2.5 * grey[90:, :40].mean()
+
+
+def test_gente_play_video_on_a_plane(tmp_path):
+    """gente-play --video films robot 0 with the same renderer; the flat task's plane is the checker ground."""
+    import imageio.v3 as iio
+
+    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    subprocess.run([sys.executable, "-m", "legged_gente.scripts.play", "--task", "gente_biped_flat", "--pretrained",
+                    "--video", "--headless", "--steps", "10", "--num_envs", "1", "--device", "cpu",
+                    "--log_root", str(tmp_path)], check=True, env=env, timeout=600, stdout=subprocess.DEVNULL)
+    video = tmp_path / "gente_biped_flat" / "pretrained" / "exported" / "rollout.mp4"
+    frames = iio.imread(video)
+    assert frames.shape[0] == 10 and frames.shape[1:] == (480, 640, 3)
+    last = frames[-1].astype(int)
+    assert last.std() > 10 and (np.abs(last[..., 0] - last[..., 2]) < 40).mean() > 0.5  # grey checker, robot
