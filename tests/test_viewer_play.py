@@ -52,7 +52,7 @@ def test_view_cli_plays_pretrained_and_records(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["--task", "gente_biped", "--pretrained"], "add --play"),
     (["--task", "gente_biped", "--play", "--pretrained", "--policy", "zero"], "leave out --policy zero"),
-    (["--task", "gente_biped", "--play", "--pretrained", "--checkpoint", "3"], "leave out --policy zero"),
+    (["--task", "gente_biped", "--play", "--pretrained", "--checkpoint", "3"], "--load_run and --checkpoint"),
     (["--task", "gente_quadruped_flat", "--play", "--pretrained"], "no policy is shipped for task 'gente_quadruped_flat'"),
 ])
 def test_pretrained_errors(argv, message, capsys):
