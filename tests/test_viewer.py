@@ -216,3 +216,30 @@ def test_a_large_grid_labels_columns_and_rows():
     assert len(labels) == 20 + 9  # a label per column on row 0, one per further row on column 0
     assert labels["/terrain/tiles/label_0_17"].text == f"col 17: {terrain.tile_names[0, 17]}"
     assert labels["/terrain/tiles/label_9_0"].text == "row 9"
+
+
+def test_vertex_colours_reach_the_browser_linear(grid):
+    """glTF vertex colours are linear (glTF 2.0, 3.7.2.1); the ground mesh sent to viser holds the sRGB material
+    colours decoded by the sRGB formula (IEC 61966-2-1), or the browser shows them washed out."""
+    import io
+
+    import trimesh
+
+    from legged_gente.viewer.server import TerrainItem, Viewer, gltf_vertex_colours
+
+    def decoded(c: int) -> int:  # sRGB 8-bit -> linear 8-bit, by hand
+        x = c / 255
+        return round(255 * (x / 12.92 if x <= 0.04045 else ((x + 0.055) / 1.055) ** 2.4))
+
+    assert decoded(128) == 55 and decoded(255) == 255 and decoded(10) == 1
+    np.testing.assert_array_equal(gltf_vertex_colours(np.array([0, 10, 128, 255])), [0, 1, 55, 255])
+    viewer = Viewer([TerrainItem("grid", lambda: grid)], port=free_port(), shadows=False)
+    try:
+        sent = trimesh.load(io.BytesIO(viewer.handles["/terrain/ground"].glb_data), file_type="glb", force="mesh")
+        colours = np.asarray(sent.visual.vertex_colors)[:, :3].astype(int)
+        sand = np.array(rgb255(SOIL_COLOURS["dry_sand"]))
+        expected = [decoded(int(c)) for c in sand]
+        assert (np.abs(colours - expected).max(axis=1) <= 1).any()  # the sand, linear
+        assert not (np.abs(colours - sand).max(axis=1) <= 1).any()  # never the sRGB values themselves
+    finally:
+        viewer.stop()

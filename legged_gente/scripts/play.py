@@ -49,36 +49,24 @@ def plot_tracking(log: dict[str, np.ndarray], dt: float, path: Path) -> None:
 
 
 class VideoRecorder:
-    """Offscreen frames of world 0 through mujoco.Renderer (MUJOCO_GL=egl on GPU machines, osmesa on CPU)."""
+    """Offscreen frames of robot 0 on its terrain in the material colours, with a following camera
+    (:class:`legged_gente.viewer.video.VideoRenderer`; MUJOCO_GL=egl, or osmesa)."""
 
     def __init__(self, env, width: int = 640, height: int = 480):
-        import mujoco
+        from legged_gente.sim.assembly import resolve_path
+        from legged_gente.viewer.video import VideoRenderer
 
-        os.environ.setdefault("MUJOCO_GL", "egl" if torch.cuda.is_available() else "osmesa")
-        self.mujoco, self.env = mujoco, env
-        self.data = mujoco.MjData(env.mjm)
-        try:
-            self.renderer = mujoco.Renderer(env.mjm, height=height, width=width)
-        except Exception as error:  # no GL context: say how to get one
-            raise RuntimeError(f"offscreen rendering failed ({error}); on a CPU machine install OSMesa "
-                               "(apt-get install libosmesa6) and set MUJOCO_GL=osmesa, on a GPU set MUJOCO_GL=egl") from error
-        self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = True  # the model's sun casts shadows
-        self.camera = mujoco.MjvCamera()  # follows robot 0's base (a tracking camera keeps its offset)
-        self.camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        self.camera.trackbodyid = int(env.base)
-        self.camera.distance, self.camera.elevation, self.camera.azimuth = 3.0, -20.0, 135.0
-        self.frames: list[np.ndarray] = []
+        self.env = env
+        self.renderer = VideoRenderer(resolve_path(env.cfg.asset.file), env.terrain, width=width, height=height)
 
     def capture(self) -> None:
-        self.data.qpos[:] = self.env.sim.qpos[0].cpu().numpy()
-        self.mujoco.mj_forward(self.env.mjm, self.data)
-        self.renderer.update_scene(self.data, self.camera)
-        self.frames.append(self.renderer.render().copy())
+        self.renderer.capture(self.env.sim.qpos[0].cpu().numpy())
 
     def save(self, path: Path, fps: float) -> None:
         import imageio
 
-        imageio.mimsave(path, self.frames, fps=fps)
+        imageio.mimsave(path, self.renderer.frames, fps=fps)
+        self.renderer.close()
 
 
 def play(args) -> dict:

@@ -4,6 +4,7 @@
     gente-view --task gente_biped                        # the task's curriculum grid
     gente-view gente100                                # a benchmark folder: one item at a time
     gente-view --task gente_biped --play --num_envs 4    # play the latest checkpoint live on the CPU
+    gente-view --task gente_biped --play --pretrained    # play the policy shipped with the package
     gente-view rollout.npz                               # replay a recorded rollout
     gente-view gente100 --traces eval/traces.npz --item text_00_sandy_beach_where_gentle
 
@@ -35,6 +36,8 @@ def build_arg_parser():
     p.add_argument("--play", action="store_true", help="roll the task's policy out live (CPU by default)")
     p.add_argument("--policy", choices=("checkpoint", "zero"), default="checkpoint",
                    help="--play: the run's checkpoint (--load_run/--checkpoint, default the latest) or zero actions")
+    p.add_argument("--pretrained", action="store_true",
+                   help="--play: the policy shipped with the package for --task (resources/policies/<task>/)")
     p.add_argument("--steps", type=int, default=500, help="--play: policy steps")
     p.add_argument("--robots", type=int, default=4, help="--play: robots drawn and recorded")
     p.add_argument("--record", help="--play: also write the rollout to this .npz")
@@ -123,6 +126,10 @@ def _make_play(args):
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
     if args.policy == "zero":
         policy = lambda obs: torch.zeros(env.num_envs, env.num_actions, device=env.device)  # noqa: E731
+    elif args.pretrained:
+        runner, checkpoint = task_registry.make_pretrained_runner(env, args.task, train_cfg)
+        print(f"gente-view: playing the policy shipped for {args.task}: {checkpoint}", flush=True)
+        policy = runner.get_inference_policy(device=env.device)
     else:
         train_cfg.runner.resume = True
         log_root = args.log_root or default_log_root()
@@ -158,8 +165,16 @@ def main(argv=None) -> None:
     source = Path(args.source) if args.source else None
     if source is not None and not source.suffix:
         source = benchmark_root(source)  # a folder, or a shipped benchmark by name (gente100)
+    if args.pretrained and not args.play:
+        parser.error("--pretrained plays the shipped policy: add --play")
+    if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):
+        parser.error("--pretrained plays the shipped policy; leave out --policy zero, --load_run and --checkpoint")
     rollout, mjm, play = None, None, None
     try:
+        if args.pretrained:
+            from legged_gente.utils.checkpoints import pretrained_policy
+
+            pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
         if args.play:
             if source is not None:
                 parser.error("--play rolls out on the task's terrain: give --terrain, not a source file")

@@ -42,7 +42,7 @@ FLOW_ARROW_SECONDS = 1.0
 FLOW_ARROW_SPACING = 1.0
 """Distance between flow arrows (m)."""
 GROUND_COLOUR = (0.62, 0.62, 0.58)
-WATER_OPACITY = 0.45
+WATER_OPACITY = 0.75
 COLOUR_MODES = ("materials", "heights")
 
 

@@ -30,6 +30,15 @@ class TerrainItem:
     offset: tuple[float, float] = (0.0, 0.0)
 
 
+def gltf_vertex_colours(srgb: np.ndarray) -> np.ndarray:
+    """sRGB colours (uint8) as the linear values a glTF COLOR_0 attribute holds (glTF 2.0, 3.7.2.1: vertex
+    colours are linear; the browser encodes them back to sRGB on screen, so sRGB sent as is looks pale).
+    sRGB decoding of IEC 61966-2-1: c / 12.92 up to 0.04045, else ((c + 0.055) / 1.055) ** 2.4."""
+    c = np.asarray(srgb, np.float64) / 255.0
+    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.round(255.0 * linear).astype(np.uint8)
+
+
 def push_scene(server, scene: Scene) -> dict[str, object]:
     """Add every node of ``scene`` to the viser ``server``; returns the handles by name."""
     import trimesh
@@ -37,7 +46,8 @@ def push_scene(server, scene: Scene) -> dict[str, object]:
     handles = {}
     for name, node in scene.nodes.items():
         if isinstance(node, Mesh) and node.vertex_colors is not None:
-            mesh = trimesh.Trimesh(node.vertices, node.faces, vertex_colors=node.vertex_colors, process=False)
+            mesh = trimesh.Trimesh(node.vertices, node.faces, vertex_colors=gltf_vertex_colours(node.vertex_colors),
+                                   process=False)
             handles[name] = server.scene.add_mesh_trimesh(name, mesh, cast_shadow=False)
         elif isinstance(node, Mesh):
             handles[name] = server.scene.add_mesh_simple(name, node.vertices, node.faces, color=node.color,

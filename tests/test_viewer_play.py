@@ -1,0 +1,99 @@
+"""gente-view --play: the shipped policies played live on the CPU, and the live recorder followed by the viewer
+while it fills (no browser)."""
+
+from __future__ import annotations
+
+import socket
+import threading
+
+import numpy as np
+import pytest
+import torch
+
+from legged_gente.scripts import view as view_script
+from legged_gente.utils.args import parse_args
+from legged_gente.utils.checkpoints import load_checkpoint, policies_root
+from legged_gente.viewer.rollout import Rollout
+
+SMALL = ["--set", "terrain.num_rows=1", "--set", "terrain.num_cols=2"]  # two tiles: a quick terrain
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("task", ["gente_biped", "gente_quadruped"])
+def test_play_pretrained_uses_the_shipped_actor(task):
+    args = parse_args(view_script.build_arg_parser(),
+                      ["--task", task, "--device", "cpu", "--play", "--pretrained", "--robots", "2", *SMALL])
+    env, policy, recorder = view_script._make_play(args)
+    shipped = load_checkpoint(policies_root() / task / "model.pt")["actor_state_dict"]
+    state = policy.state_dict()
+    assert state and all(torch.equal(value, shipped[key]) for key, value in state.items())
+    view_script._run_play(env, policy, recorder, 5, None)
+    rollout = recorder.rollout()
+    assert (rollout.num_steps, rollout.num_robots, rollout.task) == (5, 2, task)
+    # the policy acts: the joints leave the pose they started in, and nothing blows up
+    assert np.isfinite(rollout.qpos).all() and np.abs(rollout.qpos[-1, :, 7:] - rollout.qpos[0, :, 7:]).max() > 1e-3
+
+
+def test_view_cli_plays_pretrained_and_records(tmp_path, capsys):
+    out = tmp_path / "rollout.npz"
+    view_script.main(["--task", "gente_biped", "--play", "--pretrained", "--robots", "2", "--steps", "4",
+                      "--seconds", "0", "--headless", "--port", str(free_port()), "--record", str(out), *SMALL])
+    printed = capsys.readouterr().out
+    assert "policy shipped for gente_biped" in printed and f"wrote {out}" in printed
+    rollout = Rollout.load(out)
+    assert (rollout.num_steps, rollout.num_robots) == (4, 2)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--task", "gente_biped", "--pretrained"], "add --play"),
+    (["--task", "gente_biped", "--play", "--pretrained", "--policy", "zero"], "leave out --policy zero"),
+    (["--task", "gente_biped", "--play", "--pretrained", "--checkpoint", "3"], "--load_run and --checkpoint"),
+    (["--task", "gente_quadruped_flat", "--play", "--pretrained"], "no policy is shipped for task 'gente_quadruped_flat'"),
+])
+def test_pretrained_errors(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        view_script.main([*argv, "--headless", "--seconds", "0", "--port", str(free_port())])
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_the_viewer_follows_the_live_recorder():
+    """The recorder fills while the policy plays; the player's slider grows with it and, playing, shows the
+    newest step: robot r drawn where its newest qpos puts it."""
+    from legged_gente.viewer.server import TerrainItem, Viewer
+
+    args = parse_args(view_script.build_arg_parser(), ["--task", "gente_biped", "--device", "cpu", "--play",
+                                                       "--policy", "zero", "--robots", "2", *SMALL])
+    env, policy, recorder = view_script._make_play(args)
+    viewer = Viewer([TerrainItem("play", lambda: env.terrain)], port=free_port(), shadows=False)
+    try:
+        player = viewer.attach_rollout(recorder, env.mjm, play=True)
+        assert player.num_robots == 2
+        steps = 6
+        play = threading.Thread(target=view_script._run_play, args=(env, policy, recorder, steps, None))
+        play.start()
+        play.join(timeout=300)
+        assert not play.is_alive()
+        deadline = threading.Event()
+        for _ in range(100):  # the player's loop wakes every dt (0.02 s) to pick up new steps
+            if int(player.step_gui.value) == steps - 1 and player.step_gui.max == steps - 1:
+                break
+            deadline.wait(0.05)
+        assert player.step_gui.max == steps - 1 and int(player.step_gui.value) == steps - 1
+        player.play_gui.value = False
+        player.draw(steps - 1)
+        base = int(env.mjm.jnt_bodyid[0])
+        newest = np.stack(recorder.frames["qpos"])[-1]
+        for r in range(2):
+            np.testing.assert_allclose(player.bodies[r, base].position, newest[r, :3], atol=1e-5)
+        np.testing.assert_allclose(newest, env.sim.qpos[:2].numpy(), atol=1e-6)  # the last step is the env's now
+        assert player.plot_gui is not None and len(player.plot_gui.data[0]) == steps  # the velocity plot grew too
+        rollout = recorder.rollout()
+        assert rollout.num_steps == steps and rollout.forces.shape[:2] == (steps, 2)
+    finally:
+        viewer.stop()
