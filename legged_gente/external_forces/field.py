@@ -318,7 +318,7 @@ class TerrainForces:
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
                         m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
                         self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
-                        self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
+                        float(cfg.sole_contact_max_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
                         d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
