@@ -35,8 +35,11 @@ def test_soils():
                          bulldoze_c=0.0, bulldoze_g=0.0)
     register_custom_soil("t_sand_bull", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
                          bulldoze_c=1.4e4, bulldoze_g=2.6e5)
+    # closely packed poppy seeds under resistive force theory (Li et al. 2013): zeta = 0.464 N/cm^3
+    register_custom_soil("t_rft", kc=0.0, kphi=4.64e5, n=1.0, c=0.0, mu=tan(28.0), K=0.025, bulldoze_c=0.0,
+                         bulldoze_g=0.0, zeta=4.64e5, model="rft")
     yield
-    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull"):
+    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull", "t_rft"):
         SOIL_PRESETS.pop(name)
 
 
@@ -264,3 +267,44 @@ def test_soil_forces_act_at_the_contact_plane():
     com = d.xipos.numpy()[0, 1]
     torque_y = d.xfrc_applied.numpy()[0, 1, 4]
     assert torque_y == pytest.approx((contact_z - com[2]) * fx, rel=1e-4)
+
+
+def test_rft_sole_sinks_to_zeta_and_drags_with_alpha_x():
+    """A 20 kg foot on an RFT medium sinks until zeta |z| A carries its weight, and dragged sideways in its rut
+    the medium resists with RFT's horizontal stress on its sole plate: alpha_x(0, 0) |z| A = 0.136 zeta z A =
+    0.136 m g (z = m g / (zeta A)), applied element by element at the contact plane."""
+    wp.set_device(DEV)
+    mass, zeta, area = 20.0, 4.64e5, 0.22 * 0.09
+    z_rft = mass * G / area / zeta  # 9909 Pa / 4.64e5 N/m^3 = 0.0214 m
+    drag = (-0.124 + 0.253 + 0.007) * zeta * z_rft * area  # C11 + C01 + C-11 = 0.136: 26.7 N
+    m, d, f = make(foot_world(mass, z0=0.02), soil_map("t_rft"), sinkage_rate=0.25, sinkage_load_tau=0.2)
+    run(m, d, f, 200)
+    assert -d.qpos.numpy()[0, 1] == pytest.approx(z_rft, rel=0.08)
+    # dragged along +x at 0.3 m/s (above the 0.05 m/s fade): the RFT force is -0.136 m g along x
+    for _ in range(5):
+        q = d.qvel.numpy()
+        q[0, 0] = 0.3
+        d.qvel.assign(q)
+        mjw.step(m, d)
+        f.after_substep()
+    fx = f.foot_force.numpy()[0, 0]
+    assert fx[0] == pytest.approx(-drag, rel=0.1) and abs(fx[1]) < 1e-3 and fx[2] == 0.0
+    # its moment: every element at the contact plane, 2 cm (the spheres' radius) below the body origin
+    contact_z = d.xpos.numpy()[0, 1, 2] - 0.02
+    com = d.xipos.numpy()[0, 1]
+    assert d.xfrc_applied.numpy()[0, 1, 4] == pytest.approx((contact_z - com[2]) * fx[0], rel=1e-4)
+
+
+def test_rft_preset_is_an_option_and_bekker_stays_the_default():
+    for name in ("dry_sand", "wet_sand", "snow", "mud", "clay_loam"):
+        assert SOIL_PRESETS[name].model == "bekker"
+    p = SOIL_PRESETS["poppy_seeds_rft"]
+    assert p.model == "rft" and p.zeta[0] == pytest.approx(0.094e6 + 0.092e6 + 0.092e6 + 0.151e6 + 0.035e6)
+    # RFT's vertical law p = zeta z is Bekker's with kc = 0, kphi = zeta, n = 1
+    assert (p.kc[0], p.kphi[0], p.n[0]) == (0.0, p.zeta[0], 1.0)
+    with pytest.raises(ValueError, match="zeta > 0"):
+        register_custom_soil("t_bad", kc=0.0, kphi=1e5, n=1.0, c=0.0, mu=0.5, K=0.02, bulldoze_c=0.0,
+                             bulldoze_g=0.0, model="rft")
+    with pytest.raises(ValueError, match="model"):
+        register_custom_soil("t_bad", kc=0.0, kphi=1e5, n=1.0, c=0.0, mu=0.5, K=0.02, bulldoze_c=0.0,
+                             bulldoze_g=0.0, model="dem")

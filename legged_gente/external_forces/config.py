@@ -50,7 +50,7 @@ class ForcesConfig:
                           (only the feet touch the terrain), and MuJoCo's soft contact would push it out at up
                           to depth / (2 dmax timeconst): 26 m/s from 1 m inside a pillar. Capped, at most
                           0.03 / (2 * 0.95 * 0.02 s) = 0.8 m/s
-    bulldozing_speed_reg: float  speed (m/s) below which the bulldozing direction fades out linearly
+    bulldozing_speed_reg: float  speed (m/s) below which the bulldozing (and RFT) force fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
     max_rut_depth: float  deepest a MuJoCo-collided foot (box soles, or sole_contact off) is shown lowered into its
