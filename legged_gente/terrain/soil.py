@@ -130,17 +130,21 @@ SOIL_PRESETS: dict[str, SoilPreset] = {
     # c=1.72 kPa, phi=29 deg. K = 1 cm for firm sandy terrain (Wong); gamma ~ 18 kN/m^3.
     "wet_sand": _bekker(5.27e3, 1515.04e3, 0.7, 1.72e3, 29.0, 18.0e3, 0.010,
                         "Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 15% moisture, LLL)"),
-    # Snow (U.S., Harrison), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, c=1.03 kPa, phi=19.7 deg.
+    # Snow (U.S.), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, c=1.03 kPa, phi=19.7 deg (the table's
+    # "U.S., Harrison" row is another snow: n=1.6, kc=2.49e3, kphi=245.90e3, c=0.62 kPa, phi=23.2 deg).
     # K = 4 cm for undisturbed fresh snow (Wong, snow shear tests); gamma ~ 3 kN/m^3 (settled snow).
     # A 41.5 kg biped on one 0.22 x 0.096 m sole (19.3 kPa) sinks ~21 cm.
     "snow": _bekker(4.37e3, 196.72e3, 1.6, 1.03e3, 19.7, 3.0e3, 0.040,
-                    "Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S., Harrison)"),
-    # Mud: lean clay at 32 % moisture (Waterways Experiment Station), Wong Table 2.3: n=0.5, kc=5.16e3,
-    # kphi=119.61e3, c=13.79 kPa, phi=11 deg: a soft, wet, sticky soil. Sinks ~1.2 cm under a 41.5 kg biped's
-    # single support (19.3 kPa; the former preset, Wong's firm clayey soil of Thailand, 0.1-0.5 mm). K ~ 5 cm
-    # for saturated, remoulded fine-grained soil (Wong reports several cm for soft wet soils); gamma ~ 17 kN/m^3.
-    "mud": _bekker(5.16e3, 119.61e3, 0.5, 13.79e3, 11.0, 17.0e3, 0.050,
-                   "Wong, Theory of Ground Vehicles, Table 2.3 (lean clay 32% moisture, WES)"),
+                    "Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S.)"),
+    # Mud: sandy loam at 32 % moisture (Hanamoto), Wong Table 2.3: n=0.5, kc=0.77e3, kphi=51.91e3, c=5.17 kPa,
+    # phi=11 deg: a saturated, soft soil. Checked against the table as reproduced in a public SCM terramechanics
+    # parameter set (Wong 2008 rows; its lean clay at 32 % is n=0.15, kc=1.52e3, kphi=119.61e3, c=13.79 kPa,
+    # phi=11 deg, which this preset once mixed up with the sandy loam's n and c). Sinks (19.3e3 / (0.77e3/0.096 +
+    # 51.91e3))^2 = 10.4 cm under a 41.5 kg biped's single support (19.3 kPa); Wong's wet clays of the table
+    # (n = 0.11-0.15) sink micrometres at that pressure, his firm clayey soil of Thailand 0.5 mm. K ~ 5 cm for
+    # a saturated soft soil (Wong reports several cm for soft wet soils; not in Table 2.3); gamma ~ 17 kN/m^3.
+    "mud": _bekker(0.77e3, 51.91e3, 0.5, 5.17e3, 11.0, 17.0e3, 0.050,
+                   "Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 32% moisture, Hanamoto)"),
     # Clay loam: North Gower clayey loam at 46 % moisture, Wong Table 2.3: n=0.73, kc=41.6e3, kphi=2471e3,
     # c=6.1 kPa, phi=26.6 deg. K = 0.6 cm for clay at maximum compaction; ~1 cm here (Wong); gamma ~ 18 kN/m^3.
     "clay_loam": _bekker(41.6e3, 2471e3, 0.73, 6.1e3, 26.6, 18.0e3, 0.010,
