@@ -217,7 +217,7 @@ def test_mud_sinks_centimetres_under_a_biped_foot():
     assert (mud.kc[0], mud.kphi[0], mud.n[0], mud.c[0]) == (0.77e3, 51.91e3, 0.5, 5.17e3)
     # the 41.5 kg biped on one foot: its soles span 0.22 m x 0.096 m (spheres r 2 cm at x 0.14 / -0.04,
     # y +-0.028): p = 41.5 * 9.81 / 0.02112 = 19.3 kPa -> z = (19.3e3 / (0.77e3 / 0.096 + 51.91e3))^2
-    z_bekker = (41.5 * G / (0.22 * 0.096) / (0.77e3 / 0.096 + 51.91e3)) ** (1 / 0.5)  # 0.104 m
+    z_bekker = (41.5 * G / (0.22 * 0.096) / (0.77e3 / 0.096 + 51.91e3)) ** (1 / 0.5)  # 0.103 m
     sole = [(0.14, 0.028), (0.14, -0.028), (-0.04, 0.028), (-0.04, -0.028)]
     m, d, f = make(foot_world(41.5, sole_xy=sole, z0=0.02), soil_map("t_mud"), sinkage_rate=0.1, sinkage_load_tau=0.2)
     run(m, d, f, 300)  # 1.5 s: the rut deepens at most 0.1 m/s

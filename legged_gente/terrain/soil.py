@@ -140,7 +140,7 @@ SOIL_PRESETS: dict[str, SoilPreset] = {
     # phi=11 deg: a saturated, soft soil. Checked against the table as reproduced in a public SCM terramechanics
     # parameter set (Wong 2008 rows; its lean clay at 32 % is n=0.15, kc=1.52e3, kphi=119.61e3, c=13.79 kPa,
     # phi=11 deg, which this preset once mixed up with the sandy loam's n and c). Sinks (19.3e3 / (0.77e3/0.096 +
-    # 51.91e3))^2 = 10.4 cm under a 41.5 kg biped's single support (19.3 kPa); Wong's wet clays of the table
+    # 51.91e3))^2 = 10.3 cm under a 41.5 kg biped's single support (19.3 kPa); Wong's wet clays of the table
     # (n = 0.11-0.15) sink micrometres at that pressure, his firm clayey soil of Thailand 0.5 mm. K ~ 5 cm for
     # a saturated soft soil (Wong reports several cm for soft wet soils; not in Table 2.3); gamma ~ 17 kN/m^3.
     "mud": _bekker(0.77e3, 51.91e3, 0.5, 5.17e3, 11.0, 17.0e3, 0.050,
