@@ -9,6 +9,9 @@ collision) against the same surface MuJoCo draws and collides: the heightfield's
 diagonal from vertex (i, j) to (i + 1, j + 1) as MuJoCo does. The contact is the nearest point of the
 triangles around the sphere centre, so flat ground gives exactly vertical normals at any depth, and stair
 risers, pillar sides and gap walls (steep triangles of the same surface) give the normals of those walls.
+A sphere pushed into a wall (its centre inside the terrain) is pushed out of the wall's nearest face too, never
+towards a top far above it, and the solver sees at most ``sole_contact_max_depth`` of penetration: measured
+vertically, a quadruped foot inside a 1.5 m pillar was launched at ~10 m/s.
 
 A foot's soil rut lowers the surface under it: the sphere is tested ``rut`` higher than it is (the surface
 vertically lowered by the rut), so the foot sits in its full Bekker rut with the contact's usual stiffness.
