@@ -9,7 +9,8 @@ before each block of substeps), the minimum over interleaved repetitions of:
   ... no terrain:    the same on a copy of the model whose terrain geom collides with nothing (contype =
                      conaffinity = 0 before mjw.put_model, which filters the geom pairs), the analytic sole
                      contacts still made by the contact filter
-The heightfield collision (MuJoCo's, of every other geom) is the difference of the last two. Minima, not means: the machine may be shared.
+The heightfield collision (MuJoCo's, of every other geom) is the difference of the last two. Minima, not means:
+the machine may be shared.
 
     PYTHONPATH=$PWD python tools/forces_cpu_timing.py --task gente_biped --num_envs 4
 """
@@ -44,7 +45,8 @@ def main(argv=None):
     qpos, qvel = wp.clone(d.qpos), wp.clone(d.qvel)
     callbacks = (m.callback.passive, m.callback.contactfilter)
     mjm = copy.copy(env.mjm)
-    terrain = [g for g in range(mjm.ngeom) if mjm.geom_bodyid[g] == 0 and (mjm.geom_contype[g] or mjm.geom_conaffinity[g])]
+    terrain = [g for g in range(mjm.ngeom)
+               if mjm.geom_bodyid[g] == 0 and (mjm.geom_contype[g] or mjm.geom_conaffinity[g])]
     mjm.geom_contype[terrain] = mjm.geom_conaffinity[terrain] = 0
     with wp.ScopedDevice(sim.wp_device):
         m_off = mjw.put_model(mjm)

@@ -107,7 +107,8 @@ def main(argv=None):
         ax1.plot(push / t_max, 100 * slide, color=colour, label=name)
         ax1.axvline((t_max + bulldozing) / t_max, color=colour, ls=":", lw=1)
         at = [100 * slide[np.searchsorted(push, x * t_max)] for x in (0.9, 1.1)]
-        print(f"{name}: shown {100 * depth[-1]:.1f} cm, Bekker {100 * z_bekker:.1f} cm; Mohr-Coulomb T = {t_max:.0f} N, "
+        print(f"{name}: shown {100 * depth[-1]:.1f} cm, Bekker {100 * z_bekker:.1f} cm; "
+              f"Mohr-Coulomb T = {t_max:.0f} N, "
               f"bulldozing at z {bulldozing:.0f} N; slid {at[0]:.1f} cm at 0.9 T, {at[1]:.1f} cm at 1.1 T")
     ax0.set(xlabel="time in stance (s)", ylabel="foot depth (cm)", title="sinkage: sim (solid), Bekker (dotted)")
     ax0.invert_yaxis()

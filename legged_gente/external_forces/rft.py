@@ -79,8 +79,9 @@ def rft_force_kernel(
     foot_force: wp.array2d[wp.vec3],
     xfrc: wp.array2d[wp.spatial_vector],
 ):
-    """RFT forces of each foot on an RFT soil, element by element (in the medium, loaded or not): an element at (x, y) of the sole
-    plate (body frame, the sole's contact plane ``foot_drop`` below its centre, normal the body's z axis) at
+    """RFT forces of each foot on an RFT soil, element by element (in the medium, loaded or not): an element at
+    (x, y) of the sole plate (body frame: sole_length along the foot body's x axis, sole_width along its y axis,
+    the sole's contact plane ``foot_drop`` below its centre, normal the body's z axis) at
     depth |z| below the terrain surface (the unlowered one: the rut is the medium it was pushed into) gets
     ``rft_element_force_fn``, applied at its point."""
     w, f = wp.tid()
