@@ -320,7 +320,7 @@ def test_rft_spinning_sole_gets_the_moment_of_its_elements():
     mass, zeta, area = 20.0, 4.64e5, 0.22 * 0.09
     z_rft = mass * G / area / zeta
     radii = [math.hypot(x, y) for x in (-0.0825, -0.0275, 0.0275, 0.0825) for y in (-0.0225, 0.0225)]
-    couple = -0.136 * zeta * z_rft * (area / 8) * sum(radii)  # -2.64 N m
+    couple = -0.136 * zeta * z_rft * (area / 8) * sum(radii)  # -1.61 N m
     soles = "".join(f'<geom name="sole{k}" type="sphere" size="0.02" pos="{x} {y} 0" contype="0" conaffinity="0"/>'
                     for k, (x, y) in enumerate(SOLE_XY))
     mjm = mujoco.MjModel.from_xml_string(f"""<mujoco><option timestep="0.005"/>
