@@ -28,7 +28,7 @@ def terrain():
 def _contacts(heights: wp.array2d[float], origin: wp.vec2, res: float, centres: wp.array[wp.vec3],
               radius: float, rut: float, out: wp.array[wp.vec4]):
     i = wp.tid()
-    out[i] = C.sphere_contact_fn(heights, origin, res, centres[i], radius, rut, radius)
+    out[i] = C.sphere_contact_fn(heights, origin, res, centres[i], radius, rut, radius, 1.0e10)
 
 
 def kernel_contacts(h, centres, radius, rut):
@@ -156,3 +156,101 @@ def test_matches_mujoco_heightfield_collision_where_it_is_right():
         assert ours == pytest.approx(-0.005, abs=1e-5) and dist[deepest] == pytest.approx(ours, abs=5e-4)
         np.testing.assert_allclose(our_normal, normal, atol=1e-6)
         np.testing.assert_allclose(frame[deepest, 0], normal, atol=2e-3)
+
+
+# --------------------------------------------------------------------------------------------------------
+# A sphere inside a tall step (a foot pushed into a pillar or a wall): the nearest surface, never the top far
+# above it, and a bounded push out
+
+
+def tall_step(height=1.0):
+    """21 x 21 cells, flat at 0 for x < 0, a ``height`` m step from x = 0 to 0.1 (the riser is the triangulated
+    ramp of one cell, as a 1.5 m pillar's side in a 0.1 m heightfield)."""
+    h = np.zeros((21, 21), np.float32)
+    h[11:, :] = height
+    return h
+
+
+def test_sphere_inside_a_tall_step_is_pushed_out_of_its_nearest_face():
+    h = tall_step(1.0)
+    # Centre at x = 0.13, z = 0.9: 3 cm past the riser's top edge, 10 cm below the top. The riser is the plane
+    # z = 10 x (x in [0, 0.1]), outward normal (-10, 0, 1)/sqrt(101); the centre lies |10 * 0.13 - 0.9| /
+    # sqrt(101) = 0.0398 m behind it, its foot (0.13 - 0.0396, 0.9 + 0.0040) = (0.0904, 0.904) on the riser. The
+    # top (z = 1) is 0.1 m above it, the edge (0.1, 1) sqrt(0.03^2 + 0.1^2) = 0.104 m away: the riser is nearest.
+    n = np.array([-10.0, 0.0, 1.0]) / math.sqrt(101.0)
+    depth = abs(10 * 0.13 - 0.9) / math.sqrt(101.0)
+    centre = (0.13, -0.75, 0.9)
+    dist, normal, _ = C.sphere_contact(h, ORIGIN, RES, centre, 0.02)
+    assert dist == pytest.approx(-depth - 0.02, abs=1e-6)
+    np.testing.assert_allclose(normal, n, atol=1e-6)
+    g = kernel_contacts(h, [centre], 0.02, 0.0)[0]
+    np.testing.assert_allclose(g, [*n, -depth - 0.02], atol=2e-5)
+    # 2 cm under the top, 5 cm past the edge: the top is nearest (the riser is (1.5 - 0.98)/sqrt(101) = 5.2 cm away)
+    dist, normal, _ = C.sphere_contact(h, ORIGIN, RES, (0.15, -0.75, 0.98), 0.02)
+    assert dist == pytest.approx(-0.02 - 0.02, abs=1e-6)
+    np.testing.assert_array_equal(normal, [0.0, 0.0, 1.0])
+
+
+def test_contact_depth_is_continuous_through_a_tall_step():
+    """The signed distance to a surface is 1-Lipschitz: a sphere moved by dx changes its contact distance by at
+    most dx. Measuring the depth vertically jumps by ~0.9 m where the centre passes under the step's top."""
+    h = tall_step(1.0)
+    xs = np.linspace(-0.05, 0.25, 301)  # 1 mm apart, through the riser and under the top at z = 0.9 and 0.5
+    for z in (0.9, 0.5):
+        dists = [C.sphere_contact(h, ORIGIN, RES, (x, -0.75, z), 0.02, reach=1.0)[0] for x in xs]
+        assert np.all(np.isfinite(dists))
+        assert np.max(np.abs(np.diff(dists))) <= 1e-3 + 1e-9
+        got = kernel_contacts(h, [(x, -0.75, z) for x in xs], 0.02, 0.0)[:, 3]
+        near = np.asarray(dists) < 0.0  # within the kernel's reach (the radius)
+        np.testing.assert_allclose(got[near], np.asarray(dists)[near], atol=2e-5)
+
+
+def test_sphere_released_inside_a_pillar_is_not_launched():
+    """A sole sphere released at rest with its centre 0.5 m inside a 1.5 m step (where a quadruped's foot ends
+    up when its body, which does not collide, walks into a pillar) must come out, not fly.
+
+    The most a contact may push it out at: MuJoCo's soft contact is a damped spring on the penetration r,
+    a_ref = -b v - k r with b = 2 / (dmax tc), k = 1 / (dmax^2 tc^2 dr^2) (MuJoCo docs, "Solver parameters";
+    defaults tc = 0.02 s, dr = 1, dmax = 0.95), so pushed out from depth D it moves at most at the speed where
+    the spring and the damper balance: v = k D / b = D / (2 dmax tc dr^2). The sole contact reports at most
+    sole_contact_max_depth D = 3 cm (the test's setting): v <= 0.03 / (2 * 0.95 * 0.02) = 0.79 m/s. Over T = 0.5 s
+    the contact can raise the body at most T v and leave it at most that speed: its energy per unit mass,
+    v^2 / 2 + g z, grows by at most g T v + v^2 / 2 (once out of the step, it falls: gravity keeps it)."""
+    import mujoco
+    import mujoco_warp as mjw
+
+    from legged_gente.external_forces.field import ForcesConfig, TerrainForces
+    from legged_gente.terrain.materials import MaterialMap
+
+    tc, dmax, depth_cap, g = 0.02, 0.95, 0.03, 9.81
+    v_max = depth_cap / (2 * dmax * tc)  # 0.79 m/s
+    h = tall_step(1.5)
+    xml = f"""<mujoco><option timestep="0.005"/>
+      <asset><hfield name="hf" nrow="21" ncol="21" size="1 1 1.5 0.1"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+        <body name="foot"><joint type="slide" axis="1 0 0"/><joint type="slide" axis="0 0 1"/>
+          <geom name="sole" type="sphere" size="0.02" mass="2" contype="0" conaffinity="0"/></body>
+      </worldbody></mujoco>"""
+    mjm = mujoco.MjModel.from_xml_string(xml)
+    mjm.hfield_data[:] = (h.T / 1.5).ravel()
+
+    class Cfg(ForcesConfig):
+        noise_std, wading, foot_geom_names, sole_contact_max_depth = 0.0, False, ["sole"], depth_cap
+
+    # centres 2, 10 and 30 cm past the riser's top edge, 0.5 m below the top
+    starts = [(0.12, 1.0), (0.2, 1.0), (0.4, 1.0)]
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=len(starts), nconmax=8, njmax=32)
+    forces = TerrainForces(mjm, m, d, h, ORIGIN, RES, MaterialMap.rigid(h.shape), Cfg(), seed=0)
+    forces.install()
+    d.qpos.assign(np.asarray(starts, np.float32))
+    steps, dt = 100, 0.005
+    gained = np.full(len(starts), -np.inf)
+    for _ in range(steps):
+        mjw.step(m, d)
+        forces.after_substep()
+        energy = 0.5 * np.sum(d.qvel.numpy() ** 2, axis=1) + g * d.qpos.numpy()[:, 1]
+        gained = np.maximum(gained, energy - g * 1.0)
+    bound = g * steps * dt * v_max + 0.5 * v_max**2  # 3.9 + 0.3 J/kg
+    assert np.all(gained <= bound), (gained, bound)
+    assert np.all(d.qpos.numpy()[:, 1] < 1.0 + steps * dt * v_max)  # not above the step's top (1.5 m)

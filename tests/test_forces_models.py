@@ -109,7 +109,7 @@ def test_sinkage_grows_with_load_as_bekker():
 def test_soil_presets_and_custom():
     for name in ("dry_sand", "wet_sand", "snow", "mud", "clay_loam"):
         assert name in SOIL_PRESETS and SOIL_PRESETS[name].source
-    assert preset_table(["mud", "snow"]).shape == (2, 8, 2)
+    assert preset_table(["mud", "snow"]).shape == (2, 10, 2)  # 9 parameters and the model
     with pytest.raises(KeyError, match="register_custom_soil"):
         preset_table(["lava"])
     with pytest.raises(ValueError, match="built-in"):
@@ -130,3 +130,75 @@ def test_bulldozing_coefficients_by_hand():
     bc, bg = bulldozing_coefficients(1.04e3, 28.0, 15.7e3)
     assert bc == pytest.approx(0.67 * 1.04e3 * 19.70, rel=0.01)
     assert bg == pytest.approx(0.5 * 15.7e3 * 33.6, rel=0.01)
+
+
+# --------------------------------------------------------------------------------------------------------
+# Resistive force theory (Li, Zhang & Goldman, Science 2013)
+
+
+def test_rft_plate_pushed_straight_down_by_hand():
+    # Li et al.'s generic fit at beta = 0 (horizontal plate), gamma = pi/2 (moving straight down): every sine term
+    # is sin(pi/2) = 1 and cos(2 beta) = 1, every C term a cosine of pi/2 = 0 and D10 sin(0) = 0:
+    # alpha_z = A00 + A10 + B11 + B01 + B-11 = 0.206 + 0.169 + 0.212 + 0.358 + 0.055 = 1.000 zeta, alpha_x = 0
+    zeta = 4.64e5
+    ax, az = models.rft_alpha(0.0, np.pi / 2, zeta)
+    assert az == pytest.approx(1.000 * zeta, rel=1e-9) and ax == pytest.approx(0.0, abs=1e-9 * zeta)
+
+
+def test_rft_other_orientations_by_hand():
+    zeta = 1.0
+    # a vertical plate (beta = pi/2) moved horizontally (gamma = 0): cos(2 beta) = -1, sin(2 beta) = 0
+    # alpha_x = C11 cos(pi) + C01 cos(0) + C-11 cos(-pi) + D10 sin(pi) = 0.124 + 0.253 - 0.007 + 0 = 0.370
+    # alpha_z = A00 - A10 + B11 sin(pi) + B01 sin(0) + B-11 sin(-pi) = 0.206 - 0.169 = 0.037
+    np.testing.assert_allclose(models.rft_alpha(np.pi / 2, 0.0, zeta), (0.370, 0.037), atol=1e-12)
+    # a plate tilted 45 deg (beta = pi/4) pushed straight down (gamma = pi/2): 2 beta + gamma = pi, -2 beta + gamma = 0
+    # alpha_x = C11 cos(pi) + C01 cos(pi/2) + C-11 cos(0) + D10 sin(pi/2) = 0.124 + 0 + 0.007 + 0.088 = 0.219
+    # alpha_z = A00 + A10 cos(pi/2) + B11 sin(pi) + B01 sin(pi/2) + B-11 sin(0) = 0.206 + 0.358 = 0.564
+    np.testing.assert_allclose(models.rft_alpha(np.pi / 4, np.pi / 2, zeta), (0.219, 0.564), atol=1e-12)
+    # a horizontal plate dragged horizontally: alpha_x = C11 + C01 + C-11 = 0.136, alpha_z = A00 + A10 = 0.375
+    np.testing.assert_allclose(models.rft_alpha(0.0, 0.0, zeta), (0.136, 0.375), atol=1e-12)
+
+
+def test_rft_element_force_directions_by_hand():
+    zeta, depth, area, reg = 4.64e5, 0.02, 1e-3, 0.05
+    # the tilted sole's face, normal (sin 45, 0, -cos 45) (down and towards +x), pushed straight down: beta = 45 deg,
+    # the medium pushes it back towards -x with alpha_x = 0.219 zeta
+    n = np.array([np.sqrt(0.5), 0.0, -np.sqrt(0.5)])
+    f = models.rft_element_force(n, [0.0, 0.0, -0.2], depth, area, zeta, reg)
+    np.testing.assert_allclose(f, [-0.219 * zeta * depth * area, 0.0, 0.0], rtol=1e-9, atol=1e-12)
+    # either face of the plate gives the same force (the fit is pi-periodic in beta)
+    np.testing.assert_allclose(models.rft_element_force(-n, [0.0, 0.0, -0.2], depth, area, zeta, reg), f, atol=1e-12)
+    # a flat sole dragged along -y at 0.3 m/s: 0.136 zeta |z| A along +y; slower than reg, faded linearly
+    f = models.rft_element_force([0, 0, -1.0], [0.0, -0.3, 0.0], depth, area, zeta, reg)
+    np.testing.assert_allclose(f, [0.0, 0.136 * zeta * depth * area, 0.0], rtol=1e-9, atol=1e-12)
+    f = models.rft_element_force([0, 0, -1.0], [0.0, -0.01, 0.0], depth, area, zeta, reg)
+    np.testing.assert_allclose(f, [0.0, 0.136 * zeta * depth * area * 0.01 / reg, 0.0], rtol=1e-9, atol=1e-12)
+    assert not models.rft_element_force([0, 0, -1.0], [0.3, 0.0, 0.0], -0.01, area, zeta, reg).any()  # in the air
+
+
+def test_rft_kernel_matches_reference():
+    from legged_gente.external_forces import rft as R
+
+    @wp.kernel
+    def rft_eval(normals: wp.array[wp.vec3], vels: wp.array[wp.vec3], depths: wp.array[float],
+                 angles: wp.array[wp.vec2], out: wp.array[wp.vec3], alphas: wp.array[wp.vec2]):
+        i = wp.tid()
+        out[i] = R.rft_element_force_fn(normals[i], vels[i], depths[i], 1.0e-3, 4.64e5, 0.05)
+        alphas[i] = R.rft_alpha_fn(angles[i][0], angles[i][1], 4.64e5)
+
+    rng = np.random.default_rng(1)
+    k = 300
+    normals = rng.normal(size=(k, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    vels = rng.normal(0, 0.2, (k, 3))
+    vels[:20, :2] = 0.0  # straight up or down
+    depths = rng.uniform(-0.01, 0.05, k)
+    angles = rng.uniform(-np.pi / 2, np.pi / 2, (k, 2))
+    arrays = [wp.array(a.astype(np.float32), dtype=t, device="cpu")
+              for a, t in ((normals, wp.vec3), (vels, wp.vec3), (depths, float), (angles, wp.vec2))]
+    out, alphas = wp.zeros(k, dtype=wp.vec3, device="cpu"), wp.zeros(k, dtype=wp.vec2, device="cpu")
+    wp.launch(rft_eval, dim=k, device="cpu", inputs=[*arrays, out, alphas])
+    for i in range(k):
+        ref = models.rft_element_force(normals[i], vels[i], depths[i], 1e-3, 4.64e5, 0.05)
+        np.testing.assert_allclose(out.numpy()[i], ref, rtol=1e-4, atol=1e-3)
+        np.testing.assert_allclose(alphas.numpy()[i], models.rft_alpha(*angles[i], 4.64e5), rtol=1e-5, atol=0.5)

@@ -23,20 +23,23 @@ SOLE_AREA = 0.22 * 0.09
 
 @pytest.fixture(scope="module", autouse=True)
 def test_soils():
-    """Wong, Theory of Ground Vehicles, Table 2.3: dry sand (LLL), snow (U.S.) and lean clay at 32 % moisture
-    (WES, the "mud" preset's means), with no bulldozing and no scatter so the tests see the traction limit and
+    """Wong, Theory of Ground Vehicles, Table 2.3: dry sand (LLL), snow (U.S.) and sandy loam at 32 % moisture
+    (Hanamoto, the "mud" preset's means), with no bulldozing and no scatter so the tests see the traction limit and
     the sinkage alone; and dry sand with bulldozing. Removed again after this module's tests."""
     tan = lambda deg: math.tan(math.radians(deg))  # noqa: E731
     register_custom_soil("t_sand", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
                          bulldoze_c=0.0, bulldoze_g=0.0)
     register_custom_soil("t_snow", kc=4.37e3, kphi=196.72e3, n=1.6, c=1.03e3, mu=tan(19.7), K=0.04,
                          bulldoze_c=0.0, bulldoze_g=0.0)
-    register_custom_soil("t_mud", kc=5.16e3, kphi=119.61e3, n=0.5, c=13.79e3, mu=tan(11.0), K=0.05,
+    register_custom_soil("t_mud", kc=0.77e3, kphi=51.91e3, n=0.5, c=5.17e3, mu=tan(11.0), K=0.05,
                          bulldoze_c=0.0, bulldoze_g=0.0)
     register_custom_soil("t_sand_bull", kc=0.99e3, kphi=1528.43e3, n=1.1, c=1.04e3, mu=tan(28.0), K=0.025,
                          bulldoze_c=1.4e4, bulldoze_g=2.6e5)
+    # closely packed poppy seeds under resistive force theory (Li et al. 2013): zeta = 0.464 N/cm^3
+    register_custom_soil("t_rft", kc=0.0, kphi=4.64e5, n=1.0, c=0.0, mu=tan(28.0), K=0.025, bulldoze_c=0.0,
+                         bulldoze_g=0.0, zeta=4.64e5, model="rft")
     yield
-    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull"):
+    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull", "t_rft"):
         SOIL_PRESETS.pop(name)
 
 
@@ -208,15 +211,16 @@ def test_snow_foot_shown_at_full_bekker_sinkage_with_vertical_normals():
 
 def test_mud_sinks_centimetres_under_a_biped_foot():
     wp.set_device(DEV)
-    # the mud preset is Wong's lean clay at 32 % moisture: n = 0.5, kc = 5.16 kN/m^1.5, kphi = 119.61 kN/m^2.5
+    # the mud preset is Wong's sandy loam at 32 % moisture (Hanamoto): n = 0.5, kc = 0.77 kN/m^1.5,
+    # kphi = 51.91 kN/m^2.5, c = 5.17 kPa (Table 2.3)
     mud = SOIL_PRESETS["mud"]
-    assert (mud.kc[0], mud.kphi[0], mud.n[0], mud.c[0]) == (5.16e3, 119.61e3, 0.5, 13.79e3)
+    assert (mud.kc[0], mud.kphi[0], mud.n[0], mud.c[0]) == (0.77e3, 51.91e3, 0.5, 5.17e3)
     # the 41.5 kg biped on one foot: its soles span 0.22 m x 0.096 m (spheres r 2 cm at x 0.14 / -0.04,
-    # y +-0.028): p = 41.5 * 9.81 / 0.02112 = 19.3 kPa -> z = (19.3e3 / (5.16e3 / 0.096 + 119.61e3))^2
-    z_bekker = (41.5 * G / (0.22 * 0.096) / (5.16e3 / 0.096 + 119.61e3)) ** (1 / 0.5)  # 0.0124 m
+    # y +-0.028): p = 41.5 * 9.81 / 0.02112 = 19.3 kPa -> z = (19.3e3 / (0.77e3 / 0.096 + 51.91e3))^2
+    z_bekker = (41.5 * G / (0.22 * 0.096) / (0.77e3 / 0.096 + 51.91e3)) ** (1 / 0.5)  # 0.103 m
     sole = [(0.14, 0.028), (0.14, -0.028), (-0.04, 0.028), (-0.04, -0.028)]
     m, d, f = make(foot_world(41.5, sole_xy=sole, z0=0.02), soil_map("t_mud"), sinkage_rate=0.1, sinkage_load_tau=0.2)
-    run(m, d, f, 120)
+    run(m, d, f, 300)  # 1.5 s: the rut deepens at most 0.1 m/s
     shown = -d.qpos.numpy()[0, 1]
     assert shown > 0.01 and shown == pytest.approx(z_bekker, rel=0.15), (shown, z_bekker)
 
@@ -264,3 +268,75 @@ def test_soil_forces_act_at_the_contact_plane():
     com = d.xipos.numpy()[0, 1]
     torque_y = d.xfrc_applied.numpy()[0, 1, 4]
     assert torque_y == pytest.approx((contact_z - com[2]) * fx, rel=1e-4)
+
+
+def test_rft_sole_sinks_to_zeta_and_drags_with_alpha_x():
+    """A 20 kg foot on an RFT medium sinks until zeta |z| A carries its weight, and dragged sideways in its rut
+    the medium resists with RFT's horizontal stress on its sole plate: alpha_x(0, 0) |z| A = 0.136 zeta z A =
+    0.136 m g (z = m g / (zeta A)), applied element by element at the contact plane."""
+    wp.set_device(DEV)
+    mass, zeta, area = 20.0, 4.64e5, 0.22 * 0.09
+    z_rft = mass * G / area / zeta  # 9909 Pa / 4.64e5 N/m^3 = 0.0214 m
+    drag = (-0.124 + 0.253 + 0.007) * zeta * z_rft * area  # C11 + C01 + C-11 = 0.136: 26.7 N
+    m, d, f = make(foot_world(mass, z0=0.02), soil_map("t_rft"), sinkage_rate=0.25, sinkage_load_tau=0.2)
+    run(m, d, f, 200)
+    assert -d.qpos.numpy()[0, 1] == pytest.approx(z_rft, rel=0.08)
+    # dragged along +x at 0.3 m/s (above the 0.05 m/s fade): the RFT force is -0.136 m g along x
+    for _ in range(5):
+        q = d.qvel.numpy()
+        q[0, 0] = 0.3
+        d.qvel.assign(q)
+        mjw.step(m, d)
+        f.after_substep()
+    fx = f.foot_force.numpy()[0, 0]
+    assert fx[0] == pytest.approx(-drag, rel=0.1) and abs(fx[1]) < 1e-3 and fx[2] == 0.0
+    # its moment: every element at the contact plane, 2 cm (the spheres' radius) below the body origin
+    contact_z = d.xpos.numpy()[0, 1, 2] - 0.02
+    com = d.xipos.numpy()[0, 1]
+    assert d.xfrc_applied.numpy()[0, 1, 4] == pytest.approx((contact_z - com[2]) * fx[0], rel=1e-4)
+
+
+def test_rft_preset_is_an_option_and_bekker_stays_the_default():
+    for name in ("dry_sand", "wet_sand", "snow", "mud", "clay_loam"):
+        assert SOIL_PRESETS[name].model == "bekker"
+    p = SOIL_PRESETS["poppy_seeds_rft"]
+    assert p.model == "rft" and p.zeta[0] == pytest.approx(0.094e6 + 0.092e6 + 0.092e6 + 0.151e6 + 0.035e6)
+    # RFT's vertical law p = zeta z is Bekker's with kc = 0, kphi = zeta, n = 1
+    assert (p.kc[0], p.kphi[0], p.n[0]) == (0.0, p.zeta[0], 1.0)
+    with pytest.raises(ValueError, match="zeta > 0"):
+        register_custom_soil("t_bad", kc=0.0, kphi=1e5, n=1.0, c=0.0, mu=0.5, K=0.02, bulldoze_c=0.0,
+                             bulldoze_g=0.0, model="rft")
+    with pytest.raises(ValueError, match="model"):
+        register_custom_soil("t_bad", kc=0.0, kphi=1e5, n=1.0, c=0.0, mu=0.5, K=0.02, bulldoze_c=0.0,
+                             bulldoze_g=0.0, model="dem")
+
+
+def test_rft_spinning_sole_gets_the_moment_of_its_elements():
+    """A sole spun about its vertical axis in an RFT medium: each of its 4 x 2 elements is dragged along its own
+    circle, so the forces cancel and leave a couple, -0.136 zeta z dA sum(r_i) (alpha_x of a flat element moved
+    horizontally, every element faster than the 5 cm/s fade). Element centres of the 0.22 m x 0.09 m sole at
+    x = +-0.0275, +-0.0825 m, y = +-0.0225 m: r = 0.0355 m (4) and 0.0855 m (4), sum 0.4842 m; dA = A / 8."""
+    wp.set_device(DEV)
+    mass, zeta, area = 20.0, 4.64e5, 0.22 * 0.09
+    z_rft = mass * G / area / zeta
+    radii = [math.hypot(x, y) for x in (-0.0825, -0.0275, 0.0275, 0.0825) for y in (-0.0225, 0.0225)]
+    couple = -0.136 * zeta * z_rft * (area / 8) * sum(radii)  # -1.61 N m
+    soles = "".join(f'<geom name="sole{k}" type="sphere" size="0.02" pos="{x} {y} 0" contype="0" conaffinity="0"/>'
+                    for k, (x, y) in enumerate(SOLE_XY))
+    mjm = mujoco.MjModel.from_xml_string(f"""<mujoco><option timestep="0.005"/>
+      <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+        <body name="foot" pos="0 0 0.02"><joint type="slide" axis="0 0 1"/><joint name="yaw" type="hinge" axis="0 0 1"/>
+          <geom type="box" size="0.1 0.04 0.01" pos="0 0 0.03" mass="{mass}" contype="0" conaffinity="0"/>{soles}
+        </body></worldbody></mujoco>""")
+    m, d, f = make(mjm, soil_map("t_rft"), sinkage_rate=0.25, sinkage_load_tau=0.2)
+    run(m, d, f, 200)
+    for _ in range(3):  # spun at 5 rad/s: the slowest elements move at 0.18 m/s
+        q = d.qvel.numpy()
+        q[0, 1] = 5.0
+        d.qvel.assign(q)
+        mjw.step(m, d)
+        f.after_substep()
+    force, torque = d.xfrc_applied.numpy()[0, 1, :3], d.xfrc_applied.numpy()[0, 1, 3:]
+    assert torque[2] == pytest.approx(couple, rel=0.1), (torque, couple)
+    assert np.linalg.norm(force[:2]) < 1e-3 * abs(couple) / 0.05

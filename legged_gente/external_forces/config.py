@@ -44,7 +44,13 @@ class ForcesConfig:
                           (``contact.py``: the triangulated heightfield, the rut shown in full) instead of
                           MuJoCo's heightfield collision; the model must not collide them with the terrain
                           (``contact.exclude_sole_collisions``)
-    bulldozing_speed_reg: float  speed (m/s) below which the bulldozing direction fades out linearly
+    sole_contact_max_depth: float  deepest penetration (m) an analytic sole contact gives the solver. Walking
+                          loads press a sole a few mm in (its rut is shown by lowering the surface, not by
+                          penetration); deeper, the sphere has been pushed through a wall or into a pillar
+                          (only the feet touch the terrain), and MuJoCo's soft contact would push it out at up
+                          to depth / (2 dmax timeconst): 26 m/s from 1 m inside a pillar. Capped, at most
+                          0.03 / (2 * 0.95 * 0.02 s) = 0.8 m/s
+    bulldozing_speed_reg: float  speed (m/s) below which the bulldozing (and RFT) force fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
     max_rut_depth: float  deepest a MuJoCo-collided foot (box soles, or sole_contact off) is shown lowered into its
@@ -76,6 +82,7 @@ class ForcesConfig:
     soil_friction_cap = 2.0
     min_friction = 0.01
     sole_contact = True
+    sole_contact_max_depth = 0.03
     bulldozing_speed_reg = 0.05
     sinkage_rate = 0.5
     max_rut_depth = 0.01

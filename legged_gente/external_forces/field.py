@@ -27,6 +27,7 @@ import warp as wp
 
 from legged_gente.external_forces import contact as C
 from legged_gente.external_forces import kernels as K
+from legged_gente.external_forces import rft as R
 from legged_gente.external_forces import water as W
 from legged_gente.external_forces.config import ForcesConfig
 from legged_gente.terrain.soil import preset_table
@@ -121,7 +122,9 @@ class TerrainForces:
         if material.has_soil().any() and int(material.soil.max()) >= len(material.soil_presets):
             raise ValueError(f"material.soil indexes preset {int(material.soil.max())} but soil_presets has "
                              f"{len(material.soil_presets)} names; list every soil used in soil_presets.")
-        self.soil_table = arr(preset_table(list(material.soil_presets)), float)
+        table = preset_table(list(material.soil_presets))
+        self.soil_table = arr(table, float)
+        self.has_rft = bool((table[:, K.MODEL, 0] > 0.5).any())
         npreset = self.soil_table.shape[0]
 
         # legs
@@ -318,7 +321,7 @@ class TerrainForces:
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
                         m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
                         self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
-                        self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
+                        float(cfg.sole_contact_max_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
                         d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
@@ -359,6 +362,14 @@ class TerrainForces:
                         d.cvel, d.subtree_com, self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params,
                         self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_vel, self.foot_force,
                         d.xfrc_applied],
+            )
+        if cfg.soil and self.nfoot and self.has_rft:
+            wp.launch(
+                R.rft_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
+                inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
+                        d.cvel, d.subtree_com, self.hf_heights, self.hf_origin, self.hf_res, self.sole_length,
+                        self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params, self.foot_soil,
+                        self.foot_force, d.xfrc_applied],
             )
 
     # ------------------------------------------------------------------ env calls

@@ -17,9 +17,10 @@ import warp as wp
 from mujoco_warp._src.support import contact_force_fn
 from mujoco_warp._src.types import vec5
 
-# Soil parameter columns (same order as soil.PARAM_NAMES).
-KC, KPHI, N, COH, MU, K, BULL_C, BULL_G = 0, 1, 2, 3, 4, 5, 6, 7
-NSOILPARAM = 8
+# Soil parameter columns (same order as soil.PARAM_NAMES, then the model).
+KC, KPHI, N, COH, MU, K, BULL_C, BULL_G, ZETA, MODEL = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
+NSOILPARAM = 10
+"""The columns of ``soil.preset_table``: its PARAM_NAMES, then the model (1: RFT)."""
 OBS_PER_FOOT = 12
 """Privileged observation values per foot, see :meth:`field.TerrainForces.privileged_obs`."""
 

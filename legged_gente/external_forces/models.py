@@ -122,3 +122,70 @@ def soil_friction(c, mu, area, normal_force, slip, K, cap):
     """
     fn = np.maximum(np.asarray(normal_force, dtype=float), 1e-6)
     return np.minimum(soil_traction(c, mu, area, fn, slip, K) / fn, cap)
+
+
+# Resistive force theory (Li, Zhang & Goldman, "A terradynamics of legged locomotion on granular media",
+# Science 339, 2013, and its supplementary Table S2): the generic Fourier coefficients of the stresses per unit
+# depth on a plate element, in units of the medium constant zeta (alpha_z of a horizontal plate pushed straight
+# down: A00 + A10 + B11 + B01 + B-11 = 1.000). The same nine values appear in the public implementations that
+# cite the paper (e.g. Treers et al., RA-L 2021); the C terms multiply cosines (a Fourier series' cosine part),
+# which gives alpha_x = 0 for a horizontal plate pushed straight down, as symmetry requires.
+RFT_GENERIC = {"A00": 0.206, "A10": 0.169, "B11": 0.212, "B01": 0.358, "B-11": 0.055,
+               "C11": -0.124, "C01": 0.253, "C-11": 0.007, "D10": 0.088}
+
+
+def rft_alpha(beta, gamma, zeta):
+    """Stresses per unit depth (N/m^3) on a plate element in granular media: (alpha_x, alpha_z).
+
+    Li et al. 2013's discrete Fourier fit, sum over m = -1..1, n = 0..1 of
+    A_mn cos(2 m beta + n gamma) + B_mn sin(...) (alpha_z) and C_mn cos(...) + D_mn sin(...) (alpha_x), with the
+    generic coefficients (``RFT_GENERIC``) times ``zeta`` (N/m^3). ``beta``: the plate's angle of attack (its
+    surface against the horizontal), ``gamma``: the angle of its velocity below the horizontal (pi/2: moving
+    straight down), both in the vertical plane of the motion. alpha_z pushes up, alpha_x against the horizontal
+    direction of motion; the stress on an element at depth |z| is alpha |z|.
+    """
+    k = RFT_GENERIC
+    beta, gamma = np.asarray(beta, float), np.asarray(gamma, float)
+    az = (k["A00"] + k["A10"] * np.cos(2 * beta) + k["B11"] * np.sin(2 * beta + gamma) + k["B01"] * np.sin(gamma)
+          + k["B-11"] * np.sin(-2 * beta + gamma))
+    ax = (k["C11"] * np.cos(2 * beta + gamma) + k["C01"] * np.cos(gamma) + k["C-11"] * np.cos(-2 * beta + gamma)
+          + k["D10"] * np.sin(2 * beta))
+    return np.asarray(zeta) * ax, np.asarray(zeta) * az
+
+
+def rft_plane(normal, velocity):
+    """(beta, gamma, e) of a plate element with unit ``normal`` moving at ``velocity``: RFT's angles in the
+    vertical plane of the motion and that plane's horizontal unit vector ``e`` (along the horizontal velocity;
+    for a vertical motion, along the normal's horizontal part, else x).
+
+    beta = atan2(n_z, n_e) + pi/2 (the plate's tangent against the horizontal; the fit is pi-periodic in beta,
+    so either face's normal gives the same stresses), gamma = atan2(-v_z, v_e), in [-pi/2, pi/2].
+    """
+    n, v = np.asarray(normal, float), np.asarray(velocity, float)
+    vh = np.array([v[0], v[1], 0.0])
+    nh = np.array([n[0], n[1], 0.0])
+    if np.linalg.norm(vh) > 1e-9:
+        e = vh / np.linalg.norm(vh)
+    elif np.linalg.norm(nh) > 1e-9:
+        e = nh / np.linalg.norm(nh)
+    else:
+        e = np.array([1.0, 0.0, 0.0])
+    beta = np.arctan2(n[2], n @ e) + np.pi / 2
+    gamma = np.arctan2(-v[2], v @ e)
+    return beta, gamma, e
+
+
+def rft_element_force(normal, velocity, depth, area, zeta, speed_reg):
+    """Horizontal RFT force (N, 3-vector) on a sole element of ``area`` at ``depth`` below the surface:
+    -alpha_x(beta, gamma) |z| A e, faded in linearly below ``speed_reg`` (m/s) like the bulldozing direction.
+
+    The vertical stress of a sole pushed down, alpha_z(0, pi/2) |z| = zeta |z|, is the sinkage law the contact
+    holds the foot with (``soil.rft_preset``); the lift of other motions is left out (docs/forces.md).
+    """
+    v = np.asarray(velocity, float)
+    if depth <= 0.0 or np.linalg.norm(v) <= 0.0:
+        return np.zeros(3)
+    beta, gamma, e = rft_plane(normal, v)
+    ax, _ = rft_alpha(beta, gamma, zeta)
+    fade = min(np.linalg.norm(v) / speed_reg, 1.0)
+    return -ax * depth * area * fade * e

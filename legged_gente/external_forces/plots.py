@@ -1,9 +1,8 @@
-"""Figures of docs/forces.md, drawn from the numpy references along kinematic trajectories.
+"""The water figure of docs/forces.md, drawn from the numpy references along a kinematic trajectory.
 
 ``python -m legged_gente.external_forces.plots docs/img`` writes ``forces_gait.png`` (strip-theory forces on one
-swinging shin over two gait cycles in still water, a current and a tide) and ``forces_soil.png`` (sinkage,
-bulldozing and traction limit of one biped foot on dry sand, snow and mud). The trajectories are scripted, not
-simulated.
+swinging shin over two gait cycles in still water, a current and a tide); the trajectory is scripted, not
+simulated. The soil figure is simulated: ``tools/plot_forces_soil.py``.
 """
 
 from __future__ import annotations
@@ -19,7 +18,6 @@ import numpy as np  # noqa: E402
 
 from legged_gente.external_forces import models  # noqa: E402
 from legged_gente.external_forces import water_models as WM  # noqa: E402
-from legged_gente.terrain.soil import SOIL_PRESETS  # noqa: E402
 
 RHO, G, CD, CM = 1000.0, 9.81, 1.1, 1.0
 
@@ -78,48 +76,10 @@ def gait_figure(path: Path):
     plt.close(fig)
 
 
-def soil_figure(path: Path):
-    """One biped foot (sole 0.22 m x 0.096 m, 41.5 kg) over a 0.5 s stance: half-sine load peaking at 1.2 m g,
-    ploughing forward at 0.1 m/s; and the traction each soil gives that foot under its weight against the
-    distance it has slid (Janosi-Hanamoto), with its Mohr-Coulomb limit."""
-    mass, length, width = 41.5, 0.22, 0.096
-    area = length * width
-    t = np.linspace(0.0, 0.5, 401)
-    load = 1.2 * mass * G * np.sin(np.pi * t / 0.5)
-    j = np.linspace(0.0, 0.15, 301)
-    fig, axes = plt.subplots(3, 1, figsize=(7, 7.5))
-    for name, color in (("dry_sand", "C1"), ("snow", "C0"), ("mud", "C5")):
-        s = SOIL_PRESETS[name]
-        z = np.maximum.accumulate(models.bekker_sinkage(load / area, s.kc[0], s.kphi[0], s.n[0], width))
-        bull = models.bulldozing_force(s.bulldoze_c[0], s.bulldoze_g[0], width, z)
-        traction = models.soil_traction(s.c[0], s.mu[0], area, mass * G, j, s.K[0])
-        axes[0].plot(t, 100 * z, color=color, label=f"{name} (the foot is shown this deep)")
-        axes[1].plot(t, bull, color=color, label=name)
-        axes[2].plot(100 * j, traction, color=color, label=f"{name}: T(j)")
-        axes[2].axhline(models.shear_strength(s.c[0], s.mu[0], area, mass * G), color=color, ls=":", lw=1)
-    axes[2].axhline(mass * G, color="k", ls="--", lw=1, label="rigid ground, mu = 1")
-    axes[0].set_ylabel("sinkage (cm)")
-    axes[0].set_yscale("log")
-    axes[0].set_ylim(0.05, 50.0)
-    axes[1].set_ylabel("bulldozing at 0.1 m/s (N)")
-    axes[0].set_xlabel("time in stance (s)")
-    axes[1].set_xlabel("time in stance (s)")
-    axes[2].set_ylabel("traction limit (N)")
-    axes[2].set_xlabel("slid since touchdown j (cm); dotted: Mohr-Coulomb c A + W tan(phi)")
-    for ax in axes:
-        ax.legend(fontsize=7)
-        ax.grid(alpha=0.3)
-    fig.suptitle("Biped foot 0.22 x 0.096 m, 41.5 kg: stance (plastic rut) and traction vs slip", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
-
-
 def main(argv=None):
     out = Path((argv or sys.argv[1:] or ["docs/img"])[0])
     out.mkdir(parents=True, exist_ok=True)
     gait_figure(out / "forces_gait.png")
-    soil_figure(out / "forces_soil.png")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,13 @@ Units (SI):
     K:    Janosi-Hanamoto shear deformation modulus, m
     bulldoze_c: Bekker bulldozing coefficient of z, N/m^2 per metre of foot width (0.67 c K_pc)
     bulldoze_g: Bekker bulldozing coefficient of z^2, N/m^3 per metre of foot width (0.5 gamma K_pgamma)
+    zeta: resistive force theory's medium constant, N/m^3: the vertical stress per unit depth on a horizontal
+          plate pushed straight down (Li, Zhang & Goldman, Science 2013); 0 for Bekker soils
+
+Each preset names its granular ``model``: "bekker" (Bekker sinkage and bulldozing, the default of every
+natural soil here; the shipped policies were trained with it) or "rft" (resistive force theory: the sinkage of
+a sole pushed down is zeta |z|, Bekker's law with n = 1, kc = 0, kphi = zeta, and its resistance to moving
+through the medium is the RFT stresses of its elements in place of bulldozing; see :func:`rft_preset`).
 
 The traction a foot can get from a soil is its shear strength (Mohr-Coulomb: c A + F_N tan phi, A the sole
 area), mobilised with the foot's slip j as Janosi and Hanamoto measured: (c A + F_N tan phi)(1 - exp(-j/K)).
@@ -32,8 +39,10 @@ import math
 
 import numpy as np
 
-PARAM_NAMES = ("kc", "kphi", "n", "c", "mu", "K", "bulldoze_c", "bulldoze_g")
-"""Order of the parameters in :func:`preset_table` (the force kernels index columns by this order)."""
+PARAM_NAMES = ("kc", "kphi", "n", "c", "mu", "K", "bulldoze_c", "bulldoze_g", "zeta")
+"""Order of the parameters in :func:`preset_table` (the force kernels index columns by this order); the table
+has one more column, the model (0 Bekker, 1 RFT)."""
+MODELS = ("bekker", "rft")
 
 
 def bulldozing_coefficients(c: float, phi_deg: float, gamma: float) -> tuple[float, float]:
@@ -64,9 +73,15 @@ class SoilPreset:
     K: tuple[float, float]
     bulldoze_c: tuple[float, float]
     bulldoze_g: tuple[float, float]
+    zeta: tuple[float, float] = (0.0, 0.0)
+    model: str = "bekker"
     source: str = ""
 
     def __post_init__(self):
+        if self.model not in MODELS:
+            raise ValueError(f"SoilPreset.model={self.model!r}: must be one of {MODELS}.")
+        if self.model == "rft" and not self.zeta[0] > 0:
+            raise ValueError(f"SoilPreset.zeta={self.zeta}: an 'rft' soil needs zeta > 0 N/m^3 (Li et al. 2013).")
         for name in PARAM_NAMES:
             value = getattr(self, name)
             if not (isinstance(value, tuple) and len(value) == 2):
@@ -77,7 +92,7 @@ class SoilPreset:
             if name in ("kphi", "n", "K") and mean <= 0:
                 # kc may be ~0 (Grenville loam) or slightly negative in Wong's fits; c, bulldozing terms may be 0
                 raise ValueError(f"SoilPreset.{name} mean must be > 0, got {mean}.")
-            if name in ("c", "mu", "bulldoze_c", "bulldoze_g") and mean < 0:
+            if name in ("c", "mu", "bulldoze_c", "bulldoze_g", "zeta") and mean < 0:
                 raise ValueError(f"SoilPreset.{name} mean must be >= 0, got {mean}.")
 
 
@@ -94,6 +109,18 @@ def _bekker(kc, kphi, n, c, phi_deg, gamma, K, source) -> SoilPreset:
                       bulldoze_g=_pct(bg, 0.2), source=source)
 
 
+def rft_preset(zeta, c, phi_deg, K, source) -> SoilPreset:
+    """A granular medium under resistive force theory: its constant zeta (N/m^3) and, for the contact's traction
+    limit, its cohesion c (Pa), friction angle phi (degrees) and shear modulus K (m).
+
+    RFT's stress on a horizontal sole pushed straight down is alpha_z(0, pi/2) |z| = zeta |z|: the sinkage law
+    p = zeta z, which is Bekker's with kc = 0, kphi = zeta, n = 1, so the rut and the contact that holds the foot
+    in it are Bekker's machinery with these values. No bulldozing: the RFT element stresses replace it."""
+    return SoilPreset(kc=(0.0, 0.0), kphi=_pct(zeta, 0.15), n=(1.0, 0.0), c=_pct(c, 0.15),
+                      mu=_pct(math.tan(math.radians(phi_deg)), 0.1), K=_pct(K, 0.2), bulldoze_c=(0.0, 0.0),
+                      bulldoze_g=(0.0, 0.0), zeta=_pct(zeta, 0.15), model="rft", source=source)
+
+
 SOIL_PRESETS: dict[str, SoilPreset] = {
     # Dry sand, Land Locomotion Lab. (LLL), Wong Table 2.3: n=1.1, kc=0.99 kN/m^(n+1), kphi=1528.43 kN/m^(n+2),
     # c=1.04 kPa, phi=28 deg. K = 2.5 cm for loose sand (Wong, Janosi-Hanamoto K values); gamma ~ 15.7 kN/m^3.
@@ -103,21 +130,33 @@ SOIL_PRESETS: dict[str, SoilPreset] = {
     # c=1.72 kPa, phi=29 deg. K = 1 cm for firm sandy terrain (Wong); gamma ~ 18 kN/m^3.
     "wet_sand": _bekker(5.27e3, 1515.04e3, 0.7, 1.72e3, 29.0, 18.0e3, 0.010,
                         "Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 15% moisture, LLL)"),
-    # Snow (U.S., Harrison), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, c=1.03 kPa, phi=19.7 deg.
+    # Snow (U.S.), Wong Table 2.3: n=1.6, kc=4.37e3, kphi=196.72e3, c=1.03 kPa, phi=19.7 deg (the table's
+    # "U.S., Harrison" row is another snow: n=1.6, kc=2.49e3, kphi=245.90e3, c=0.62 kPa, phi=23.2 deg).
     # K = 4 cm for undisturbed fresh snow (Wong, snow shear tests); gamma ~ 3 kN/m^3 (settled snow).
     # A 41.5 kg biped on one 0.22 x 0.096 m sole (19.3 kPa) sinks ~21 cm.
     "snow": _bekker(4.37e3, 196.72e3, 1.6, 1.03e3, 19.7, 3.0e3, 0.040,
-                    "Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S., Harrison)"),
-    # Mud: lean clay at 32 % moisture (Waterways Experiment Station), Wong Table 2.3: n=0.5, kc=5.16e3,
-    # kphi=119.61e3, c=13.79 kPa, phi=11 deg: a soft, wet, sticky soil. Sinks ~1.2 cm under a 41.5 kg biped's
-    # single support (19.3 kPa; the former preset, Wong's firm clayey soil of Thailand, 0.1-0.5 mm). K ~ 5 cm
-    # for saturated, remoulded fine-grained soil (Wong reports several cm for soft wet soils); gamma ~ 17 kN/m^3.
-    "mud": _bekker(5.16e3, 119.61e3, 0.5, 13.79e3, 11.0, 17.0e3, 0.050,
-                   "Wong, Theory of Ground Vehicles, Table 2.3 (lean clay 32% moisture, WES)"),
+                    "Wong, Theory of Ground Vehicles, Table 2.3 (snow, U.S.)"),
+    # Mud: sandy loam at 32 % moisture (Hanamoto), Wong Table 2.3: n=0.5, kc=0.77e3, kphi=51.91e3, c=5.17 kPa,
+    # phi=11 deg: a saturated, soft soil. Checked against the table as reproduced in a public SCM terramechanics
+    # parameter set (Wong 2008 rows; its lean clay at 32 % is n=0.15, kc=1.52e3, kphi=119.61e3, c=13.79 kPa,
+    # phi=11 deg, which this preset once mixed up with the sandy loam's n and c). Sinks (19.3e3 / (0.77e3/0.096 +
+    # 51.91e3))^2 = 10.3 cm under a 41.5 kg biped's single support (19.3 kPa); Wong's wet clays of the table
+    # (n = 0.11-0.15) sink micrometres at that pressure, his firm clayey soil of Thailand 0.5 mm. K ~ 5 cm for
+    # a saturated soft soil (Wong reports several cm for soft wet soils; not in Table 2.3); gamma ~ 17 kN/m^3.
+    "mud": _bekker(0.77e3, 51.91e3, 0.5, 5.17e3, 11.0, 17.0e3, 0.050,
+                   "Wong, Theory of Ground Vehicles, Table 2.3 (sandy loam 32% moisture, Hanamoto)"),
     # Clay loam: North Gower clayey loam at 46 % moisture, Wong Table 2.3: n=0.73, kc=41.6e3, kphi=2471e3,
     # c=6.1 kPa, phi=26.6 deg. K = 0.6 cm for clay at maximum compaction; ~1 cm here (Wong); gamma ~ 18 kN/m^3.
     "clay_loam": _bekker(41.6e3, 2471e3, 0.73, 6.1e3, 26.6, 18.0e3, 0.010,
                          "Wong, Theory of Ground Vehicles, Table 2.3 (North Gower clayey loam)"),
+    # Poppy seeds, closely packed, under RFT: Li, Zhang & Goldman 2013 (Table S2) fit this medium with
+    # A00 + A10 + B11 + B01 + B-11 = 0.094 + 0.092 + 0.092 + 0.151 + 0.035 = 0.464 N/cm^3: zeta = 4.64e5 N/m^3
+    # (0.25 N/cm^3 loosely packed). A 20 kg load on a 0.22 m x 0.09 m sole (9.9 kPa) sinks 2.1 cm. Li et al. give
+    # no Mohr-Coulomb values for the seeds: the traction limit borrows dry sand's (c = 0, phi = 28 deg, Wong
+    # Table 2.3, cohesion dropped: dry grains) and its K = 2.5 cm.
+    "poppy_seeds_rft": rft_preset(4.64e5, 0.0, 28.0, 0.025,
+                                  "Li, Zhang & Goldman, Science 2013 (closely packed poppy seeds); traction: Wong "
+                                  "Table 2.3 dry sand"),
 }
 
 
@@ -125,31 +164,34 @@ def register_custom_soil(name: str, **params) -> SoilPreset:
     """Add a soil to :data:`SOIL_PRESETS` under ``name``.
 
     Each of ``PARAM_NAMES`` is a ``(mean, std)`` pair (a bare number means std 0; see
-    :func:`bulldozing_coefficients` for the bulldozing pair); ``source`` (str) is optional. Re-registering a built-in name raises; re-registering a custom
-    name replaces it.
+    :func:`bulldozing_coefficients` for the bulldozing pair); ``zeta`` (default 0), ``model`` ("bekker" or "rft",
+    default "bekker"; an RFT soil is best made with :func:`rft_preset`'s values) and ``source`` (str) are
+    optional. Re-registering a built-in name raises; re-registering a custom name replaces it.
     """
     if not isinstance(name, str) or not name.isidentifier():
         raise ValueError(f"Soil name must be a python identifier like 'peat', got {name!r}.")
     if name in _BUILTIN:
         raise ValueError(f"{name!r} is a built-in soil preset; register yours under another name.")
-    missing = [p for p in PARAM_NAMES if p not in params]
-    unknown = sorted(set(params) - set(PARAM_NAMES) - {"source"})
+    missing = [p for p in PARAM_NAMES if p not in params and p != "zeta"]
+    unknown = sorted(set(params) - set(PARAM_NAMES) - {"source", "model"})
     if missing or unknown:
         raise ValueError(
             f"register_custom_soil({name!r}): missing {missing}, unknown {unknown}; give exactly "
-            f"{list(PARAM_NAMES)} as (mean, std) pairs (and optionally source=...)."
+            f"{list(PARAM_NAMES[:-1])} as (mean, std) pairs (and optionally zeta=..., model=..., source=...)."
         )
+    params = {"zeta": 0.0, **params}
     fields = {
         p: tuple(float(x) for x in params[p]) if np.ndim(params[p]) else (float(params[p]), 0.0)
         for p in PARAM_NAMES
     }
-    preset = SoilPreset(**fields, source=str(params.get("source", "custom")))
+    preset = SoilPreset(**fields, model=str(params.get("model", "bekker")), source=str(params.get("source", "custom")))
     SOIL_PRESETS[name] = preset
     return preset
 
 
 def preset_table(names: list[str]) -> np.ndarray:
-    """``(max(len(names), 1), len(PARAM_NAMES), 2)`` float32 (mean, std) of the named presets, in order.
+    """``(max(len(names), 1), len(PARAM_NAMES) + 1, 2)`` float32 (mean, std) of the named presets, in order; the
+    last column is the model (1 for "rft", 0 for "bekker", std 0).
 
     This is what the force kernels read: ``MaterialMap.soil`` indexes its first axis. With no names one
     all-zero row is returned so device arrays are never empty (no cell indexes it).
@@ -160,9 +202,10 @@ def preset_table(names: list[str]) -> np.ndarray:
             f"Unknown soil preset(s) {unknown}; known: {sorted(SOIL_PRESETS)}. Register custom soils with "
             f"register_custom_soil(name, ...)."
         )
-    table = np.zeros((max(len(names), 1), len(PARAM_NAMES), 2), np.float32)
+    table = np.zeros((max(len(names), 1), len(PARAM_NAMES) + 1, 2), np.float32)
     for i, name in enumerate(names):
-        table[i] = [getattr(SOIL_PRESETS[name], p) for p in PARAM_NAMES]
+        preset = SOIL_PRESETS[name]
+        table[i] = [getattr(preset, p) for p in PARAM_NAMES] + [(float(preset.model == "rft"), 0.0)]
     return table
 
 
