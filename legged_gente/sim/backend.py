@@ -116,12 +116,14 @@ class Simulation:
                 self._sim_stream = wp.Stream(self.wp_device)
                 self._sim_stream.wait_stream(torch_stream)
                 with wp.ScopedStream(self._sim_stream):
-                    self._substeps(decimation)  # warm-up: loads every kernel module before capture
-                    with wp.ScopedCapture() as capture:
+                    self._substeps(decimation)  # this step, run eagerly: loads every kernel module before capture
+                    with wp.ScopedCapture() as capture:  # records the substeps without running them
                         self._substeps(decimation)
                 self._graph = capture.graph
                 self._graph_decimation = decimation
                 wp.synchronize_device(self.wp_device)
+                torch_stream.wait_stream(self._sim_stream)
+                return  # launching the graph now would advance this first step by 2 x decimation substeps
             if decimation != self._graph_decimation:
                 raise ValueError(f"the captured graph runs {self._graph_decimation} substeps, not {decimation}")
             self._sim_stream.wait_stream(torch_stream)
