@@ -1,8 +1,10 @@
 """The viewer in a real browser: headless Chromium loads the page, the terrain appears, a screenshot is saved.
 
-Not part of the CI run (software WebGL needs a minute or more for the first frame on a busy CPU):
-``GENTE_BROWSER_SHOT=docs/img/viewer_browser_test.png python -m pytest -m browser tests/test_viewer_browser.py``. The setup installs Debian's ``chromium`` and
-``chromium-driver`` with apt-get when they are missing (as root) and needs Selenium (``pip install -e .[browser]``).
+Deselected from the plain ``pytest`` run (software WebGL needs up to a minute for the first frame on a busy
+CPU); ``.ci/run`` runs it as its own step:
+``GENTE_BROWSER_SHOT=docs/img/viewer_browser_test.png python -m pytest -m browser tests/test_viewer_browser.py``.
+The setup installs Debian's ``chromium`` and ``chromium-driver`` with apt-get when they are missing (as root) and
+needs Selenium (``pip install -e .[browser]``).
 """
 
 from __future__ import annotations
