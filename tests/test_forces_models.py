@@ -176,6 +176,64 @@ def test_rft_element_force_directions_by_hand():
     assert not models.rft_element_force([0, 0, -1.0], [0.3, 0.0, 0.0], -0.01, area, zeta, reg).any()  # in the air
 
 
+def test_rft_support_by_hand():
+    """The vertical stress under a sole in units of zeta, alpha_z(beta, gamma) / zeta, from the Fourier series by
+    hand (beta = 0 for a level sole: cos(2 beta) = 1, the B terms sum to (0.212 + 0.358 + 0.055) sin(gamma))."""
+    up, reg = [0.0, 0.0, 1.0], 0.05
+    assert models.rft_support(up, [0.0, 0.0, -0.3], reg) == pytest.approx(1.000, abs=1e-12)  # pushed straight down
+    assert models.rft_support(up, [0.0, 0.0, 0.0], reg) == pytest.approx(1.000, abs=1e-12)  # at rest
+    # dragged level sideways: gamma = 0, A00 + A10 = 0.206 + 0.169 = 0.375
+    assert models.rft_support(up, [0.3, 0.0, 0.0], reg) == pytest.approx(0.375, abs=1e-12)
+    assert models.rft_support(up, [0.0, -0.3, 0.0], reg) == pytest.approx(0.375, abs=1e-12)
+    # dragged at half the fade speed: 1 + 0.5 (0.375 - 1) = 0.6875
+    assert models.rft_support(up, [0.025, 0.0, 0.0], reg) == pytest.approx(0.6875, abs=1e-12)
+    # sinking at 45 deg while dragged: 0.375 + 0.625 sin(pi/4) = 0.8169
+    assert models.rft_support(up, [0.2, 0.0, -0.2], reg) == pytest.approx(0.375 + 0.625 * np.sqrt(0.5), abs=1e-12)
+    # rising while dragged: gamma is taken as 0 (the sole's open rut has no grains above it)
+    assert models.rft_support(up, [0.2, 0.0, 0.2], reg) == pytest.approx(0.375, abs=1e-12)
+    # a sole tilted 30 deg, dragged level along +x: leading edge up (a ski; normal tilted against the motion)
+    # beta = +30 deg, leading edge down (normal tilted along the motion) beta = -30 deg; cos(2 beta) = 0.5,
+    # sin(2 beta) = +-sqrt(3)/2: A00 + A10 0.5 +- (B11 - B-11) sqrt(3)/2 = 0.2905 +- 0.157 * 0.8660
+    s30, c30 = np.sin(np.radians(30.0)), np.cos(np.radians(30.0))
+    for sign in (1.0, -1.0):
+        n = [-sign * s30, 0.0, c30]
+        assert models.rft_support(n, [0.3, 0.0, 0.0], reg) == pytest.approx(0.2905 + sign * 0.157 * c30, abs=1e-12)
+    # the sinkage whose stress carries the load: z = p / (support zeta); 9909 Pa on zeta = 4.64e5 N/m^3
+    assert models.rft_sinkage(9909.0, 4.64e5, 1.0) == pytest.approx(9909.0 / 4.64e5, rel=1e-12)  # 2.14 cm
+    assert models.rft_sinkage(9909.0, 4.64e5, 0.375) == pytest.approx(9909.0 / (0.375 * 4.64e5), rel=1e-12)
+    assert models.rft_sinkage(0.0, 4.64e5, 0.375) == 0.0
+    assert models.rft_sinkage(9909.0, 4.64e5, -0.02) == pytest.approx(9909.0 / (1e-6 * 4.64e5), rel=1e-12)
+
+
+def test_rft_support_and_sinkage_kernels_match_references():
+    from legged_gente.external_forces import rft as R
+
+    @wp.kernel
+    def support_eval(normals: wp.array[wp.vec3], vels: wp.array[wp.vec3], loads: wp.array[wp.vec2],
+                     out: wp.array[wp.vec2]):
+        i = wp.tid()
+        out[i] = wp.vec2(R.rft_support_fn(normals[i], vels[i], 0.05),
+                         K.rft_sinkage_fn(loads[i][0], 4.64e5, loads[i][1]))
+
+    rng = np.random.default_rng(2)
+    k = 300
+    normals = rng.normal(size=(k, 3))
+    normals[:100] = [0.0, 0.0, 1.0]  # level soles
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    vels = rng.normal(0, 0.1, (k, 3))
+    vels[:20, :2] = 0.0  # straight up or down
+    vels[20:40] *= 0.1  # below the fade speed
+    loads = np.stack([rng.uniform(-2e3, 2e4, k), rng.uniform(-0.1, 1.0, k)], axis=1)
+    arrays = [wp.array(a.astype(np.float32), dtype=t, device="cpu")
+              for a, t in ((normals, wp.vec3), (vels, wp.vec3), (loads, wp.vec2))]
+    out = wp.zeros(k, dtype=wp.vec2, device="cpu")
+    wp.launch(support_eval, dim=k, device="cpu", inputs=[*arrays, out])
+    got = out.numpy()
+    for i in range(k):
+        assert got[i, 0] == pytest.approx(models.rft_support(normals[i], vels[i], 0.05), abs=1e-5)
+        assert got[i, 1] == pytest.approx(float(models.rft_sinkage(loads[i, 0], 4.64e5, loads[i, 1])), rel=1e-5)
+
+
 def test_rft_kernel_matches_reference():
     from legged_gente.external_forces import rft as R
 

@@ -28,7 +28,7 @@ from mujoco_warp._src.collision_core import contact_material_params, write_conta
 from mujoco_warp._src.math import make_frame
 from mujoco_warp._src.types import vec5
 
-from legged_gente.external_forces.kernels import bekker_sinkage_fn, cell_of, ground_friction, KC, KPHI, N
+from legged_gente.external_forces.kernels import cell_of, ground_friction, rut_sinkage_fn
 
 SOLE_TYPES = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))
 
@@ -317,6 +317,7 @@ def sole_contact_kernel(
     max_depth: float,
     soil_params: wp.array3d[float],
     foot_load: wp.array2d[float],
+    foot_support: wp.array2d[float],
     foot_slip: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
@@ -345,9 +346,9 @@ def sole_contact_kernel(
     """One contact per sole point and world against the heightfield lowered by its foot's rut; the contact's
     material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``).
 
-    The rut deepens towards Bekker's z(F_N / sole area) but at most sink_step below the sphere's current
-    depth (the rules of ``kernels.contact_filter_kernel``). The solver sees at most ``max_depth`` of
-    penetration (``ForcesConfig.sole_contact_max_depth`` says why).
+    The rut deepens towards Bekker's z(F_N / sole area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at
+    most sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``). The
+    solver sees at most ``max_depth`` of penetration (``ForcesConfig.sole_contact_max_depth`` says why).
     """
     w, k = wp.tid()
     g = pt_geom[k]
@@ -375,8 +376,7 @@ def sole_contact_kernel(
         return
     normal = wp.vec3(res[0], res[1], res[2])
     if s_foot >= 0:
-        z = bekker_sinkage_fn(foot_load[w, f] / sole_area, soil_params[w, s_foot, KC], soil_params[w, s_foot, KPHI],
-                              soil_params[w, s_foot, N], sole_width)
+        z = rut_sinkage_fn(foot_load[w, f] / sole_area, soil_params, w, s_foot, sole_width, foot_support[w, f])
         # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
         wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + sink_step))
         foot_touch[w, f] = 1

@@ -182,6 +182,9 @@ class TerrainForces:
         self.foot_cand = z((n, nf), float)
         self.foot_inrut = z((n, nf), int)
         self.foot_load = z((n, nf), float)
+        # RFT's vertical stress under each sole's motion, in units of zeta (rft_force_kernel; 1: at rest)
+        self.foot_support = z((n, nf), float)
+        self.foot_support.fill_(1.0)
         self.foot_force = z((n, nf), wp.vec3)
         self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
@@ -309,7 +312,8 @@ class TerrainForces:
             K.contact_filter_kernel, dim=d.naconmax, device=dev,
             inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
                     self.friction, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
-                    float(cfg.max_rut_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage,
+                    float(cfg.max_rut_depth), self.soil_params, self.foot_load, self.foot_support, self.foot_slip,
+                    self.foot_sinkage,
                     self.foot_soil, c.pos, c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch,
                     self.foot_cand], record_cmd=True,
         ))
@@ -321,7 +325,8 @@ class TerrainForces:
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
                         m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
                         self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
-                        float(cfg.sole_contact_max_depth), self.soil_params, self.foot_load, self.foot_slip, self.foot_sinkage, self.foot_soil,
+                        float(cfg.sole_contact_max_depth), self.soil_params, self.foot_load, self.foot_support,
+                        self.foot_slip, self.foot_sinkage, self.foot_soil,
                         d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
@@ -369,7 +374,7 @@ class TerrainForces:
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
                         d.cvel, d.subtree_com, self.hf_heights, self.hf_origin, self.hf_res, self.sole_length,
                         self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params, self.foot_soil,
-                        self.foot_force, d.xfrc_applied],
+                        self.foot_support, self.foot_force, d.xfrc_applied],
             )
 
     # ------------------------------------------------------------------ env calls
@@ -400,7 +405,7 @@ class TerrainForces:
         wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
                   inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
                           self.soil_params, self.foot_slip, self.foot_air, self.foot_sinkage,
-                          self.foot_load])
+                          self.foot_load, self.foot_support])
         wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])
 
     def new_policy_step(self):

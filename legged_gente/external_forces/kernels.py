@@ -79,6 +79,24 @@ def bekker_sinkage_fn(pressure: float, kc: float, kphi: float, n: float, width: 
 
 
 @wp.func
+def rft_sinkage_fn(pressure: float, zeta: float, support: float) -> float:
+    """RFT sinkage z = p / (support zeta), the support at least 1e-6; 0 for p <= 0 (``models.rft_sinkage``)."""
+    if pressure <= 0.0:
+        return 0.0
+    return pressure / (zeta * wp.max(support, 1.0e-6))
+
+
+@wp.func
+def rut_sinkage_fn(pressure: float, soil_params: wp.array3d[float], w: int, s: int, width: float,
+                   support: float) -> float:
+    """The depth of the rut that carries ``pressure`` in soil s of world w: Bekker's sinkage, or on an RFT soil
+    the depth whose vertical RFT stress (``support`` zeta, the sole's current motion) carries it."""
+    if soil_params[w, s, MODEL] > 0.5:
+        return rft_sinkage_fn(pressure, soil_params[w, s, ZETA], support)
+    return bekker_sinkage_fn(pressure, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], width)
+
+
+@wp.func
 def bulldozing_force_fn(bulldoze_c: float, bulldoze_g: float, width: float, sinkage: float) -> float:
     """Bekker's bulldozing resistance b (0.67 c K_pc z + 0.5 gamma K_pgamma z^2)."""
     z = wp.max(sinkage, 0.0)
@@ -200,9 +218,10 @@ def reset_kernel(
     foot_air: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
     foot_load: wp.array2d[float],
+    foot_support: wp.array2d[float],
 ):
     """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset; the
-    feet's soil state (slip, rut, load) starts afresh.
+    feet's soil state (slip, rut, load, RFT support: the value of a sole at rest) starts afresh.
 
     Soil draws are truncated below at 10 % of the mean so kphi, n, K stay positive (documented in docs).
     """
@@ -224,6 +243,7 @@ def reset_kernel(
         foot_air[w, f] = 1.0e6
         foot_sinkage[w, f] = 0.0
         foot_load[w, f] = 0.0
+        foot_support[w, f] = 1.0
 
 
 @wp.kernel
@@ -322,6 +342,7 @@ def contact_filter_kernel(
     max_rut: float,
     soil_params: wp.array3d[float],
     foot_load: wp.array2d[float],
+    foot_support: wp.array2d[float],
     foot_slip: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
     foot_soil: wp.array2d[int],
@@ -343,11 +364,13 @@ def contact_filter_kernel(
     (contact dist += z, at most max_rut): the solver holds the foot that much deeper with the contact's
     usual stiffness, so the sinkage shows as a lowered foot. max_rut keeps geoms within the depth where
     heightfield contacts stay correct; the forces and observations use the full z. The rut deepens towards
-    Bekker's z(F_N / sole area) but never further than the foot's current penetration (counting the rut's
-    unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance: soil sinkage is plastic
-    (Wong: unloading recovers little). Without these two rules the loop F_N -> z -> contact chatters or
-    ratchets: a rut deeper than the foot releases the contact, the foot falls into it and the impact load
-    digs it deeper still. A contact whose friction is below min_friction becomes frictionless (condim 1).
+    Bekker's z(F_N / sole area) (on an RFT soil: the depth whose RFT stress under the sole's motion,
+    ``foot_support``, carries F_N / sole area) but never further than the foot's current penetration
+    (counting the rut's unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance:
+    soil sinkage is plastic (Wong: unloading recovers little). Without these two rules the loop
+    F_N -> z -> contact chatters or ratchets: a rut deeper than the foot releases the contact, the foot falls
+    into it and the impact load digs it deeper still. A contact whose friction is below min_friction becomes
+    frictionless (condim 1).
     """
     i = wp.tid()
     if i >= nacon[0]:
@@ -376,9 +399,7 @@ def contact_filter_kernel(
     s = foot_soil[w, f]
     if s < 0:
         return
-    z = bekker_sinkage_fn(
-        foot_load[w, f] / sole_area, soil_params[w, s, KC], soil_params[w, s, KPHI], soil_params[w, s, N], sole_width
-    )
+    z = rut_sinkage_fn(foot_load[w, f] / sole_area, soil_params, w, s, sole_width, foot_support[w, f])
     rut = foot_sinkage[w, f]
     shown = wp.min(rut, max_rut)
     # the foot's depth counting the rut's unshown part: the rut deepens at most sink_step below it

@@ -179,8 +179,8 @@ def rft_element_force(normal, velocity, depth, area, zeta, speed_reg):
     """Horizontal RFT force (N, 3-vector) on a sole element of ``area`` at ``depth`` below the surface:
     -alpha_x(beta, gamma) |z| A e, faded in linearly below ``speed_reg`` (m/s) like the bulldozing direction.
 
-    The vertical stress of a sole pushed down, alpha_z(0, pi/2) |z| = zeta |z|, is the sinkage law the contact
-    holds the foot with (``soil.rft_preset``); the lift of other motions is left out (docs/forces.md).
+    The vertical stress is the sinkage law the contact holds the foot with (``rft_support``, ``rft_sinkage``),
+    so it is not applied here as a force too.
     """
     v = np.asarray(velocity, float)
     if depth <= 0.0 or np.linalg.norm(v) <= 0.0:
@@ -189,3 +189,28 @@ def rft_element_force(normal, velocity, depth, area, zeta, speed_reg):
     ax, _ = rft_alpha(beta, gamma, zeta)
     fade = min(np.linalg.norm(v) / speed_reg, 1.0)
     return -ax * depth * area * fade * e
+
+
+def rft_support(normal, velocity, speed_reg):
+    """RFT's vertical stress per unit depth under a sole of unit ``normal`` moving at ``velocity``, in units of
+    zeta: alpha_z(beta, gamma) / zeta, faded linearly to 1 (a sole pushed straight down, alpha_z(0, pi/2) = zeta)
+    as the speed drops below ``speed_reg`` (m/s), as the horizontal stress fades (``rft_element_force``).
+
+    gamma is taken at least 0: the sole bears on the medium with its lower face only, and RFT's smaller (down to
+    negative) alpha_z of a plate rising through the medium comes from the grains above a buried plate, which a
+    sole in its open rut does not have; a rising sole unloads, and its rut (plastic) keeps its depth.
+    """
+    v = np.asarray(velocity, float)
+    beta, gamma, _ = rft_plane(normal, v)
+    _, az = rft_alpha(beta, max(gamma, 0.0), 1.0)
+    fade = min(np.linalg.norm(v) / speed_reg, 1.0)
+    return 1.0 + fade * (az - 1.0)
+
+
+def rft_sinkage(pressure, zeta, support):
+    """Sinkage (m) of a sole under ``pressure`` in an RFT medium whose vertical stress is ``support`` zeta |z|
+    (``rft_support``): z = p / (support zeta), the depth whose stress carries the load; 0 for p <= 0. Where RFT
+    gives the motion no upward stress (support <= 0, a steep sole dragged leading edge down) no depth carries
+    the load: the support is taken as 1e-6 (the rut then deepens at ``sinkage_rate``)."""
+    p = np.asarray(pressure, dtype=float)
+    return np.where(p > 0.0, np.maximum(p, 0.0) / (np.asarray(zeta) * np.maximum(support, 1e-6)), 0.0)

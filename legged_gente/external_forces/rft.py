@@ -1,12 +1,15 @@
 """Resistive force theory under the soles (Li, Zhang & Goldman, Science 2013): Warp twins of the numpy
-references in ``models.py`` (``rft_alpha``, ``rft_plane``, ``rft_element_force``) and the kernel that applies
-them per sole element.
+references in ``models.py`` (``rft_alpha``, ``rft_plane``, ``rft_element_force``, ``rft_support``) and the kernel
+that applies them per sole element.
 
-A foot on an "rft" soil (``soil.rft_preset``) sinks into its rut as a plate pushed down in RFT does
-(p = zeta |z|, through the same rut and contact as Bekker's soils); ``rft_force_kernel`` adds, for each element
-of the sole plate (``NX x NY`` elements of the sole's footprint at its contact plane), the horizontal RFT stress
--alpha_x(beta, gamma) |z| A against its motion, at the element's own point (so a turning or tilted sole gets
-the moment of its elements' forces), in place of Bekker's bulldozing.
+A foot on an "rft" soil (``soil.rft_preset``) sinks into its rut until RFT's vertical stress under its current
+motion carries its load (p = alpha_z(beta, gamma) |z|: zeta |z| pushed straight down or at rest, 0.375 zeta |z|
+dragged level sideways), through the same rut and contact as Bekker's soils: ``rft_force_kernel`` writes each
+sole's mean ``rft_support_fn`` over its elements for the next substep's rut (``kernels.rut_sinkage_fn``).
+It adds, for each element of the sole plate (``NX x NY`` elements of the sole's footprint at its contact
+plane), the horizontal RFT stress -alpha_x(beta, gamma) |z| A against its motion, at the element's own point
+(so a turning or tilted sole gets the moment of its elements' forces), in place of Bekker's bulldozing. The
+vertical stress is carried by the contact alone (the rut), never applied as a force too.
 """
 
 from __future__ import annotations
@@ -56,6 +59,23 @@ def rft_element_force_fn(normal: wp.vec3, velocity: wp.vec3, depth: float, area:
     return -(alpha[0] * depth * area * wp.min(speed / speed_reg, 1.0)) * e
 
 
+@wp.func
+def rft_support_fn(normal: wp.vec3, velocity: wp.vec3, speed_reg: float) -> float:
+    """alpha_z / zeta of a sole moving at ``velocity`` (gamma at least 0), faded to 1 below speed_reg (see
+    ``models.rft_support``)."""
+    vh = wp.vec3(velocity[0], velocity[1], 0.0)
+    nh = wp.vec3(normal[0], normal[1], 0.0)
+    e = wp.vec3(1.0, 0.0, 0.0)
+    if wp.length(vh) > 1.0e-9:
+        e = wp.normalize(vh)
+    elif wp.length(nh) > 1.0e-9:
+        e = wp.normalize(nh)
+    beta = wp.atan2(normal[2], wp.dot(normal, e)) + HALF_PI
+    gamma = wp.max(wp.atan2(-velocity[2], wp.dot(velocity, e)), 0.0)
+    alpha = rft_alpha_fn(beta, gamma, 1.0)
+    return 1.0 + wp.min(wp.length(velocity) / speed_reg, 1.0) * (alpha[1] - 1.0)
+
+
 @wp.kernel
 def rft_force_kernel(
     foot_body: wp.array[int],
@@ -76,6 +96,7 @@ def rft_force_kernel(
     soil_params: wp.array3d[float],
     foot_soil: wp.array2d[int],
     # out
+    foot_support: wp.array2d[float],
     foot_force: wp.array2d[wp.vec3],
     xfrc: wp.array2d[wp.spatial_vector],
 ):
@@ -83,27 +104,37 @@ def rft_force_kernel(
     (x, y) of the sole plate (body frame: sole_length along the foot body's x axis, sole_width along its y axis,
     the sole's contact plane ``foot_drop`` below its centre, normal the body's z axis) at
     depth |z| below the terrain surface (the unlowered one: the rut is the medium it was pushed into) gets
-    ``rft_element_force_fn``, applied at its point."""
+    ``rft_element_force_fn``, applied at its point.
+
+    Every foot's ``foot_support`` is written for the rut of the next substep, whose contacts are built before
+    the velocities are (the load the rut carries is the last substep's too): the mean of its elements'
+    ``rft_support_fn``, so that the sole's one rut depth z carries F_N where sum_i alpha_z,i z dA = F_N (a sole
+    spun in place gets its elements' sideways value, not the value of its resting centre)."""
     w, f = wp.tid()
-    s = foot_soil[w, f]
-    if s < 0:
-        return
-    if soil_params[w, s, MODEL] < 0.5:
-        return
     b = foot_body[f]
     xm = xmat[w, b]
     normal = wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    s = foot_soil[w, f]
+    rft = int(0)
+    if s >= 0:
+        if soil_params[w, s, MODEL] > 0.5:
+            rft = 1
     area = sole_length * sole_width / float(NX * NY)
     total = wp.vec3(0.0)
+    support = float(0.0)
     for i in range(NX):
         for j in range(NY):
             local = foot_offset[f] + wp.vec3((float(i) + 0.5) / float(NX) * sole_length - 0.5 * sole_length,
                                              (float(j) + 0.5) / float(NY) * sole_width - 0.5 * sole_width,
                                              -foot_drop[f])
             p = xpos[w, b] + xm @ local
-            depth = surface_height_fn(heights, hf_origin, hf_res, p[0], p[1])[3] - p[2]
             v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
-            force = rft_element_force_fn(normal, v, depth, area, soil_params[w, s, ZETA], speed_reg)
-            apply_force(xfrc, xipos, w, b, force, p)
-            total = total + force
-    foot_force[w, f] = foot_force[w, f] + total
+            support = support + rft_support_fn(normal, v, speed_reg)
+            if rft != 0:
+                depth = surface_height_fn(heights, hf_origin, hf_res, p[0], p[1])[3] - p[2]
+                force = rft_element_force_fn(normal, v, depth, area, soil_params[w, s, ZETA], speed_reg)
+                apply_force(xfrc, xipos, w, b, force, p)
+                total = total + force
+    foot_support[w, f] = support / float(NX * NY)
+    if rft != 0:
+        foot_force[w, f] = foot_force[w, f] + total
