@@ -191,6 +191,12 @@ class TerrainForces:
         self.reset(self._all)
         self.new_policy_step()
 
+    def per_world_state(self) -> list[wp.array]:
+        """Every per-world array of the fields but the observation: what the callbacks and hooks carry from one
+        substep to the next (ruts, slip, loads, forces, ...), which a physics-neutral forward puts back."""
+        return [a for a in vars(self).values()
+                if isinstance(a, wp.array) and a.shape[0] == self.nworld and a.ptr != self.obs.ptr]
+
     # ------------------------------------------------------------------ setup helpers
     def _check_diagonal_mass(self, mjm, seg):
         """MuJoCo stores only the diagonal of M for "simple" bodies (children of the world with a diagonal inertia,

@@ -40,12 +40,9 @@ def rft_alpha_fn(beta: float, gamma: float, zeta: float) -> wp.vec2:
 
 
 @wp.func
-def rft_element_force_fn(normal: wp.vec3, velocity: wp.vec3, depth: float, area: float, zeta: float,
-                         speed_reg: float) -> wp.vec3:
-    """Horizontal RFT force on a sole element (see ``models.rft_element_force`` and ``models.rft_plane``)."""
-    speed = wp.length(velocity)
-    if depth <= 0.0 or speed <= 0.0:
-        return wp.vec3(0.0)
+def rft_plane_fn(normal: wp.vec3, velocity: wp.vec3):
+    """(beta, gamma, e) of a plate element: RFT's angles in the vertical plane of its motion and that plane's
+    horizontal unit vector (see ``models.rft_plane``)."""
     vh = wp.vec3(velocity[0], velocity[1], 0.0)
     nh = wp.vec3(normal[0], normal[1], 0.0)
     e = wp.vec3(1.0, 0.0, 0.0)
@@ -55,6 +52,17 @@ def rft_element_force_fn(normal: wp.vec3, velocity: wp.vec3, depth: float, area:
         e = wp.normalize(nh)
     beta = wp.atan2(normal[2], wp.dot(normal, e)) + HALF_PI
     gamma = wp.atan2(-velocity[2], wp.dot(velocity, e))
+    return beta, gamma, e
+
+
+@wp.func
+def rft_element_force_fn(normal: wp.vec3, velocity: wp.vec3, depth: float, area: float, zeta: float,
+                         speed_reg: float) -> wp.vec3:
+    """Horizontal RFT force on a sole element (see ``models.rft_element_force`` and ``models.rft_plane``)."""
+    speed = wp.length(velocity)
+    if depth <= 0.0 or speed <= 0.0:
+        return wp.vec3(0.0)
+    beta, gamma, e = rft_plane_fn(normal, velocity)
     alpha = rft_alpha_fn(beta, gamma, zeta)
     return -(alpha[0] * depth * area * wp.min(speed / speed_reg, 1.0)) * e
 
@@ -63,16 +71,8 @@ def rft_element_force_fn(normal: wp.vec3, velocity: wp.vec3, depth: float, area:
 def rft_support_fn(normal: wp.vec3, velocity: wp.vec3, speed_reg: float) -> float:
     """alpha_z / zeta of a sole moving at ``velocity`` (gamma at least 0), faded to 1 below speed_reg (see
     ``models.rft_support``)."""
-    vh = wp.vec3(velocity[0], velocity[1], 0.0)
-    nh = wp.vec3(normal[0], normal[1], 0.0)
-    e = wp.vec3(1.0, 0.0, 0.0)
-    if wp.length(vh) > 1.0e-9:
-        e = wp.normalize(vh)
-    elif wp.length(nh) > 1.0e-9:
-        e = wp.normalize(nh)
-    beta = wp.atan2(normal[2], wp.dot(normal, e)) + HALF_PI
-    gamma = wp.max(wp.atan2(-velocity[2], wp.dot(velocity, e)), 0.0)
-    alpha = rft_alpha_fn(beta, gamma, 1.0)
+    beta, gamma, e = rft_plane_fn(normal, velocity)
+    alpha = rft_alpha_fn(beta, wp.max(gamma, 0.0), 1.0)
     return 1.0 + wp.min(wp.length(velocity) / speed_reg, 1.0) * (alpha[1] - 1.0)
 
 

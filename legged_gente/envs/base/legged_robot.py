@@ -168,11 +168,9 @@ class LeggedRobot(VecEnv):
         self.sim.after_reset.append(self._reset_forces)
         self._force_obs = forces.privileged_obs()
         # the post-reset forward runs the fields' callbacks and hooks: their observation is refreshed for the
-        # reset worlds, and every other per-world array of the fields (ruts, slip, loads, ...) is put back
-        obs_ptr = forces.obs.ptr
+        # reset worlds, and what they integrate (ruts, slip, loads, ...) is put back
         self.sim.observed.append(self._force_obs)
-        self.sim.substep_state.extend(wp.to_torch(a) for a in vars(forces).values() if isinstance(a, wp.array)
-                                      and a.shape[0] == self.num_envs and a.ptr != obs_ptr)
+        self.sim.substep_state.extend(wp.to_torch(a) for a in forces.per_world_state())
         return forces
 
     def _reset_forces(self, mask: torch.Tensor) -> None:
