@@ -40,6 +40,22 @@ def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):
     rows = benchmark.run("gente_biped", [3], "cpu", steps=2, iterations=0)
     assert 0.0 < rows[0]["forces_share"] < 1.0
     assert 0.0 <= rows[0]["forces_slowdown"] < 1.0
+    assert 0.0 < rows[0]["reset_forward_share"] < 1.0  # one forward costs less than a step of 4 substeps
+
+
+def test_the_reset_forward_timing_leaves_the_integrated_force_state_as_it_was():
+    import argparse
+
+    from legged_gente.envs.task_registry import task_registry
+
+    cfg, _ = task_registry.get_cfgs("gente_biped")
+    cfg.env.num_envs = 3
+    env, _ = task_registry.make_env("gente_biped", env_cfg=cfg, args=argparse.Namespace(device="cpu"))
+    benchmark.settle(env, 0.1)
+    assert env.sim.substep_state, "the curriculum's force fields integrate state (ruts, slip)"
+    before = [t.clone() for t in env.sim.substep_state]
+    assert benchmark.reset_forward_per_s(env, 2) > 0.0
+    assert all(torch.equal(t, old) for t, old in zip(env.sim.substep_state, before))
 
 
 def test_raw_physics_measures_from_and_returns_to_the_settled_state():

@@ -41,8 +41,10 @@ def env():
 
 def test_mujoco_hfield_matches_numpy_heights():
     cfg = SmallCurriculum()
+    cfg.terrain.hfield_piece_size = 10.0  # the 28 m x 44 m terrain in 3 x 5 pieces
     terrain = Terrain(cfg.terrain, 5)
-    mjm, _ = build_model(cfg, terrain)
+    mjm, layout = build_model(cfg, terrain)
+    assert len(layout.terrain_geoms) == 15 and mjm.nhfield == 15
     data = mujoco.MjData(mjm)
     mujoco.mj_forward(mjm, data)
     rng = np.random.default_rng(0)
@@ -54,12 +56,46 @@ def test_mujoco_hfield_matches_numpy_heights():
     j = rng.integers(0, ny, 400)
     geomid = np.zeros(1, np.int32)
     measured = []
+    centre = np.array([ox + (nx - 1) * terrain.resolution / 2, oy + (ny - 1) * terrain.resolution / 2])
     for a, b in zip(ox + i * terrain.resolution, oy + j * terrain.resolution):
-        dist = mujoco.mj_ray(mjm, data, np.array([a, b, 20.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
-        assert geomid[0] == mjm.geom("terrain").id
+        # a vertex on the seam of two pieces lies on both their borders, where a ray may miss: 10 um inwards
+        at = np.array([a, b]) + 1e-5 * np.sign(centre - np.array([a, b]))
+        dist = mujoco.mj_ray(mjm, data, np.array([*at, 20.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
+        assert geomid[0] in layout.terrain_geoms
         measured.append(20.0 - dist)
     assert np.ptp(terrain.height_field[i, j]) > 0.1  # the sample is not all flat ground
     np.testing.assert_allclose(measured, terrain.height_field[i, j], atol=1e-3)
+
+
+@pytest.mark.parametrize("piece_size, deep_everywhere", [(20.0, True), (1000.0, False)])
+def test_a_contact_far_from_the_terrain_centre_keeps_its_depth(piece_size, deep_everywhere):
+    """A capsule (r = 4 cm) lying 6 cm deep in flat ground has a contact 6 cm deep wherever it lies (by hand:
+    the axis is at z = r - 0.06). In one 100 m MuJoCo-Warp heightfield the depth comes out in metres 30 m from its
+    centre (the launch of the quadruped's diverged robots on GenTe's 200 x 400 m benchmark grid); laid down in
+    pieces of 20 m it is right everywhere."""
+    import mujoco_warp as mjw
+    from types import SimpleNamespace
+
+    from legged_gente.sim.assembly import _add_terrain
+
+    terrain = SimpleNamespace(height_field=np.zeros((1001, 1001)), resolution=0.1, origin_xy=(-50.0, -50.0))
+    spec = mujoco.MjSpec()
+    _add_terrain(spec, SimpleNamespace(static_friction=1.0, hfield_piece_size=piece_size), terrain)
+    body = spec.worldbody.add_body()
+    body.add_freejoint()
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[-0.15, 0, 0, 0.15, 0, 0], size=[0.04, 0, 0],
+                  contype=2, conaffinity=1)
+    mjm = spec.compile()
+    places = [(0.03, 0.0), (10.03, 5.0), (30.03, 30.0), (-45.03, 20.0), (40.03, -35.0), (-30.03, -47.0)]
+    with wp.ScopedDevice("cpu"):
+        m, d = mjw.put_model(mjm), mjw.make_data(mjm, nworld=len(places), nconmax=16, njmax=64)
+        d.qpos.assign(np.array([[x, y, 0.04 - 0.06, 1, 0, 0, 0] for x, y in places], dtype=np.float32))
+        mjw.kinematics(m, d)
+        mjw.collision(m, d)
+        n = int(d.nacon.numpy()[0])
+        world, dist = d.contact.worldid.numpy()[:n], d.contact.dist.numpy()[:n]
+    deepest = np.array([dist[world == w].min() for w in range(len(places))])
+    assert np.allclose(deepest, -0.06, atol=1e-3) == deep_everywhere, deepest
 
 
 def test_robots_start_on_their_tiles(env):

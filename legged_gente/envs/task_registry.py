@@ -41,7 +41,8 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
     checks = []
     if env_cfg is not None:
         checks += [("sim.dt", env_cfg.sim.dt, float, 0.0), ("env.episode_length_s", env_cfg.env.episode_length_s, float, 0.0),
-                   ("control.decimation", env_cfg.control.decimation, int, 1), ("env.num_envs", env_cfg.env.num_envs, int, 1)]
+                   ("control.decimation", env_cfg.control.decimation, int, 1), ("env.num_envs", env_cfg.env.num_envs, int, 1),
+                   ("terrain.hfield_piece_size", env_cfg.terrain.hfield_piece_size, float, 0.0)]
     if train_cfg is not None:
         r, a = train_cfg.runner, train_cfg.algorithm
         checks += [("runner.save_interval", r.save_interval, int, 1), ("runner.num_steps_per_env", r.num_steps_per_env, int, 1),

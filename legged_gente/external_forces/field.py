@@ -237,22 +237,23 @@ class TerrainForces:
 
     def _setup_sole_contacts(self, mjm, groups):
         """Sphere / capsule sole geoms get analytic terrain contacts (``contact.py``) when ``sole_contact`` is on;
-        MuJoCo must then not collide them with the terrain geom (the one geom on the world body that collides)."""
+        MuJoCo must then not collide them with the terrain (the geoms on the world body that collide: a heightfield's
+        pieces, which share their collision settings; the contacts made here name the first)."""
         self.npt = 0
         if not (self.cfg.sole_contact and groups):
             return
         geoms, ends, feet = C.sole_points(mjm, groups)
         ground = [g for g in range(mjm.ngeom) if mjm.geom_bodyid[g] == 0 and (mjm.geom_contype[g] or
                                                                             mjm.geom_conaffinity[g])]
-        if len(geoms) == 0 or len(ground) != 1:
-            if len(geoms) and len(ground) != 1:
-                raise ValueError(f"forces.sole_contact needs exactly one colliding terrain geom on the world body, "
-                                 f"found {len(ground)}; set forces.sole_contact=False for such scenes.")
+        if len(geoms) == 0:
             return
+        if not ground:
+            raise ValueError("forces.sole_contact needs a colliding terrain geom on the world body, found none; set "
+                             "forces.sole_contact=False for such scenes.")
         self.terrain_geom = ground[0]
         clash = sorted({mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, int(g)) for g in geoms
-                        if (mjm.geom_contype[g] & mjm.geom_conaffinity[ground[0]]) or
-                        (mjm.geom_conaffinity[g] & mjm.geom_contype[ground[0]])})
+                        for t in ground if (mjm.geom_contype[g] & mjm.geom_conaffinity[t]) or
+                        (mjm.geom_conaffinity[g] & mjm.geom_contype[t])})
         if clash:
             raise ValueError(f"forces.sole_contact: sole geoms {clash} still collide with the terrain in MuJoCo; "
                              f"build the model with external_forces.contact.exclude_sole_collisions(spec, names) "

@@ -117,6 +117,29 @@ def force_kernels_per_s(env, steps: int) -> float:
     return _timed_calls(env, kernels, steps) * env.num_envs
 
 
+def reset_forward_per_s(env, calls: int) -> float:
+    """Calls/s of the Warp work of the forward a step runs after its resets (``Simulation.forward``: MuJoCo's
+    forward with the force fields' callbacks, their after-substep hooks and the per-body contact forces), on the
+    current state. On a GPU the step runs it every time, whether a world reset or not (deciding would wait for
+    the device). What the hooks integrate is put back afterwards, as ``forward`` does."""
+    import mujoco_warp as mjw
+
+    sim = env.sim
+    kept = [t.clone() for t in sim.substep_state]
+
+    def forward():
+        mjw.forward(sim.m, sim.d)
+        for hook in sim.after_substep:
+            hook()
+        sim._contact_forces()
+
+    try:
+        return _timed_calls(env, forward, calls)
+    finally:
+        for t, old in zip(sim.substep_state, kept):
+            t.copy_(old)
+
+
 def env_steps(env, steps: int, check_sync: bool = False) -> float:
     """Policy steps/s (all worlds) of LeggedRobot.step with random actions. ``check_sync`` (CUDA only): torch
     raises on any operation that waits for the device inside the timed steps (the env must have none)."""
@@ -254,6 +277,7 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             with_forces = raw_physics(env, steps * env.cfg.control.decimation, with_forces=True)
             forces_slowdown = max(0.0, 1.0 - with_forces / raw)
             forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
+        forward_s = 1.0 / reset_forward_per_s(env, steps)
         stepped = env_steps(env, steps, check_sync)
         profiled = profile_out and num_envs == (profile_envs or sizes[-1])
         ppo = update_share = float("nan")
@@ -273,7 +297,8 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
                      "ppo_update_share": update_share, "forces_share": forces_share,
-                     "forces_slowdown": forces_slowdown, "gpu_memory_gib": memory})
+                     "forces_slowdown": forces_slowdown, "reset_forward_share": forward_s * stepped / num_envs,
+                     "gpu_memory_gib": memory})
         del env, runner  # the runner holds the env: free both before the next size is built
         if device.startswith("cuda"):
             torch.cuda.empty_cache()
@@ -284,18 +309,20 @@ def print_table(rows: list[dict], device: str) -> None:
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "CPU"
     print(f"\ndevice: {name}")
     header = (f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} "
-              f"{'PPO/raw':>8} {'update':>7} {'forces':>7} {'forces Δ':>8} {'GPU GiB':>8}")
+              f"{'PPO/raw':>8} {'update':>7} {'forces':>7} {'forces Δ':>8} {'forward':>8} {'GPU GiB':>8}")
     print(header)
     print("-" * len(header))
     for r in rows:
         print(f"{r['num_envs']:>9d} {r['raw_substeps_per_s']:>15,.0f} {r['env_steps_per_s']:>12,.0f} "
               f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f} "
               f"{r['ppo_update_share']:>7.1%} "
-              f"{r['forces_share']:>7.1%} {r['forces_slowdown']:>8.1%} {r['gpu_memory_gib']:>8.2f}")
+              f"{r['forces_share']:>7.1%} {r['forces_slowdown']:>8.1%} {r['reset_forward_share']:>8.1%} "
+              f"{r['gpu_memory_gib']:>8.2f}")
     print("raw: mjw.step substeps/s; raw ceiling in env steps/s = raw / decimation (the ratios' denominator);\n"
           "update: the PPO update's share of the PPO time (the rest is collection: policy + env steps);\n"
           "forces: the terrain force kernels' time as a share of a substep with them (nan: terrain has none);\n"
-          "forces Δ: how much slower the physics substep is with the force fields on (kernels + changed contacts)")
+          "forces Δ: how much slower the physics substep is with the force fields on (kernels + changed contacts);\n"
+          "forward: the post-reset forward's share of an env step (it runs every step on a GPU)")
 
 
 def main(argv=None) -> None:

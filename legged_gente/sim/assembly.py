@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 PACKAGE_ROOT = Path(str(importlib.resources.files("legged_gente")))  # shipped data: resources/robots/...
-TERRAIN_GEOM = "terrain"
+TERRAIN_GEOM = "terrain"  # the plane; a heightfield's pieces are terrain, terrain_1, terrain_2, ...
 ROBOT_CONTYPE, TERRAIN_CONTYPE, TERRAIN_CONAFFINITY = 2, 1, 2
 
 
@@ -73,7 +73,7 @@ class RobotLayout:
     default_joint_pos: np.ndarray
     joint_limits: np.ndarray  # (n, 2)
     torque_limits: np.ndarray  # (n,)
-    terrain_geom: int
+    terrain_geoms: np.ndarray  # the plane, or the heightfield's pieces
 
 
 def _body_names(spec_model: mujoco.MjModel) -> list[str]:
@@ -93,10 +93,9 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     # Robot geoms collide with the terrain only (contype 2 vs the terrain's conaffinity 2), never with each
     # other: the geoms the MJCF makes collide (feet) plus those of bodies whose contacts the task watches
     # but that have no colliding geom (a body with collision geoms keeps its visual meshes non-colliding).
-    has_collider = {g.parent.name for g in spec.geoms if g.name != TERRAIN_GEOM and (g.contype or g.conaffinity)}
-    for geom in spec.geoms:
-        if geom.name == TERRAIN_GEOM:
-            continue
+    robot_geoms = [g for g in spec.geoms if g.parent.name != spec.worldbody.name]
+    has_collider = {g.parent.name for g in robot_geoms if g.contype or g.conaffinity}
+    for geom in robot_geoms:
         collides = geom.contype or geom.conaffinity or (geom.parent.name in collide and
                                                         geom.parent.name not in has_collider)
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
@@ -110,9 +109,18 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     _configure_actuators(spec, robot, cfg.control)
     mjm = spec.compile()
     layout = _layout(mjm, cfg)
-    if mjm.geom_type[layout.terrain_geom] == mujoco.mjtGeom.mjGEOM_HFIELD:
+    if mjm.geom_type[layout.terrain_geoms[0]] == mujoco.mjtGeom.mjGEOM_HFIELD:
         _warn_flat_feet_on_heightfield(mjm, layout.foot_bodies)
     return mjm, layout
+
+
+def terrain_geom_ids(mjm: mujoco.MjModel) -> np.ndarray:
+    """The terrain's geoms: the plane, or the heightfield's pieces (``terrain``, ``terrain_1``, ...)."""
+    first = mjm.geom(TERRAIN_GEOM).id
+    count = 1
+    while first + count < mjm.ngeom and mjm.geom(first + count).name == f"{TERRAIN_GEOM}_{count}":
+        count += 1
+    return np.arange(first, first + count, dtype=np.int64)
 
 
 def owns_sole_contacts(cfg, terrain) -> bool:
@@ -195,18 +203,33 @@ def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
                                 material=material)
         return
     heights = np.asarray(terrain.height_field, dtype=np.float64)
-    nx, ny = heights.shape
-    h_min, h_max = float(heights.min()), float(heights.max())
-    span = max(h_max - h_min, 1e-3)
     res = terrain.resolution
-    half_x, half_y = (nx - 1) * res / 2, (ny - 1) * res / 2
-    # MuJoCo hfield rows run along y and columns along x; elevation data are normalised to [0, 1].
-    hfield = spec.add_hfield(name="terrain_hfield", nrow=ny, ncol=nx, size=[half_x, half_y, span, 1.0])
-    hfield.userdata = ((heights.T - h_min) / span).ravel().tolist()
     ox, oy = terrain.origin_xy
-    spec.worldbody.add_geom(name=TERRAIN_GEOM, type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="terrain_hfield",
-                            pos=[ox + half_x, oy + half_y, h_min], friction=friction, contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY,
-                            material=material)
+    # MuJoCo-Warp's heightfield collision loses float32 precision with the distance from the heightfield's
+    # centre: a capsule 6 cm into flat ground 30 m from it gets a contact 1.3 m deep, and the robot is launched
+    # (tests/test_env_terrain.py). The terrain is therefore laid down as pieces of at most hfield_piece_size,
+    # each a geom centred on its own patch; neighbours share their edge samples, so the surface is unchanged.
+    cells = max(1, int(cfg_terrain.hfield_piece_size / res))
+    pieces = [(i, j) for i in _piece_starts(heights.shape[0], cells) for j in _piece_starts(heights.shape[1], cells)]
+    for index, (i, j) in enumerate(pieces):
+        patch = heights[i:i + cells + 1, j:j + cells + 1]
+        nx, ny = patch.shape
+        h_min = float(patch.min())
+        span = max(float(patch.max()) - h_min, 1e-3)
+        half_x, half_y = (nx - 1) * res / 2, (ny - 1) * res / 2
+        name = TERRAIN_GEOM if index == 0 else f"{TERRAIN_GEOM}_{index}"
+        # MuJoCo hfield rows run along y and columns along x; elevation data are normalised to [0, 1].
+        hfield = spec.add_hfield(name=f"{name}_hfield", nrow=ny, ncol=nx, size=[half_x, half_y, span, 1.0])
+        hfield.userdata = ((patch.T - h_min) / span).ravel().tolist()
+        spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=f"{name}_hfield",
+                                pos=[ox + i * res + half_x, oy + j * res + half_y, h_min], friction=friction,
+                                contype=TERRAIN_CONTYPE, conaffinity=TERRAIN_CONAFFINITY, material=material)
+
+
+def _piece_starts(samples: int, cells: int) -> range:
+    """First sample of each piece along one axis: pieces of ``cells`` cells (the last one shorter) cover the
+    ``samples - 1`` cells of the axis."""
+    return range(0, max(samples - 1, 1), cells)
 
 
 def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) -> None:
@@ -268,5 +291,5 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
         joint_limits=np.array([mjm.jnt_range[j] if mjm.jnt_limited[j] else (-np.inf, np.inf) for j in joint_ids]),
         torque_limits=np.array([mjm.actuator_forcerange[a, 1] if mjm.actuator_forcelimited[a] else np.inf
                                 for a in range(mjm.nu)]),
-        terrain_geom=mjm.geom(TERRAIN_GEOM).id,
+        terrain_geoms=terrain_geom_ids(mjm),
     )

@@ -24,6 +24,9 @@ class LeggedRobotCfg(BaseConfig):
         mesh_type = "plane"  # "plane" | "heightfield"
         mode = "curriculum"  # "curriculum" | "random" | "selected" | "generated"
         resolution = 0.1  # m, horizontal size of a heightfield cell
+        # m, largest side of one MuJoCo heightfield geom: a larger terrain is laid down in pieces, as MuJoCo-Warp's
+        # heightfield collision goes wrong far from a heightfield's centre (sim/assembly.py)
+        hfield_piece_size = 20.0
         border_size = 5.0  # m, flat border around the tile grid
         terrain_length = 8.0  # m, tile size along x
         terrain_width = 8.0  # m, tile size along y
