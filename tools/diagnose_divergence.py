@@ -1,69 +1,48 @@
 """Why do robots diverge in an evaluation? Rolls the evaluation of ``gente-evaluate`` step by step and, for every
 robot the first time its world breaks down, records what the env saw: the reason (non-finite state, a joint or
-base faster than ``sim.max_qvel``, constraint rows over ``njmax``, a base faster than the evaluator's
-``MAX_BASE_SPEED``), MuJoCo-Warp's per-world overflow bits (``d.overflow``, sticky until the world resets), the
-step, the base height above the terrain and its tile. It also tracks the shared buffers over the run: the
-contacts of all worlds (``nacon``) against ``naconmax``, the broadphase pairs (``ncollision``), the largest
-``nefc``, and how many worlds ever raised each overflow bit (diverged or not).
+base faster than ``sim.max_qvel``, constraint rows over ``njmax``; or only a base faster than the evaluator's
+``MAX_BASE_SPEED``), the fastest dof, MuJoCo-Warp's per-world overflow bits (``d.overflow``, sticky until the world
+resets), the step and the terrain. It also tracks the buffers all worlds share: the contacts (``nacon``) against
+``naconmax``, the broadphase pairs (``ncollision``), the largest ``nefc``, and how many worlds ever raised each
+overflow bit (diverged or not).
 
-    python tools/diagnose_divergence.py --task gente_quadruped --pretrained --benchmark gente_original \
+    python tools/diagnose_divergence.py --task gente_quadruped --pretrained --benchmark gente_original \\
         --robots_per_terrain 16 --device cuda --csv diverged.csv
 
-``--items``/``--limit`` choose the terrains, as in gente-evaluate (running the worst terrains alone and within the
-whole benchmark tells a per-world cause from one of the buffers all worlds share).
+``--items``/``--limit`` choose the terrains, as in gente-evaluate: a cause that shows with the whole benchmark but
+not with its worst terrains alone lies in what the worlds share (buffers, or the terrain's size: that is how the
+heightfield precision loss of docs/terrain.md was found). ``--set`` overrides env config fields, e.g.
+``--set sim.cuda_graph=off sim.torch_compile=False`` to compare with plain launches.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+from collections import Counter
 
 import mujoco_warp as mjw
 import torch
 import warp as wp
 
 REASONS = {1: "non-finite", 2: "qvel>max_qvel", 4: "nefc>njmax"}
+OVERFLOWS = {int(b): b.name for b in mjw.OverflowType if b.name not in ("NONE", "ALL")}
 
 
-def main() -> None:
-    from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import MAX_BASE_SPEED, Evaluation, load_policy
+def _names(bits: int, table: dict[int, str]) -> str:
+    return "|".join(name for bit, name in table.items() if bits & bit)
 
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--task", default="gente_quadruped")
-    p.add_argument("--pretrained", action="store_true")
-    p.add_argument("--checkpoint")
-    p.add_argument("--benchmark", default="gente_original")
-    p.add_argument("--items", nargs="+")
-    p.add_argument("--limit", type=int)
-    p.add_argument("--robots_per_terrain", type=int, default=16)
-    p.add_argument("--episode_s", type=float, default=10.0)
-    p.add_argument("--device", default="cpu")
-    p.add_argument("--set", nargs="*", default=[], metavar="PATH=VALUE",
-                   help="env config overrides before the env is built, e.g. sim.nconmax=64")
-    p.add_argument("--csv", help="one row per diverged robot")
-    args = p.parse_args()
 
-    items = load_benchmark(args.benchmark, args.items)[: args.limit]
-    if args.set:
-        from legged_gente.envs.task_registry import task_registry
-        from legged_gente.utils.args import apply_overrides
+def diagnose(evaluation, policy) -> tuple[list[dict], dict]:
+    """Roll ``policy`` through ``evaluation`` (an ``Evaluation``); one row per robot whose world diverged (at its
+    first divergence), and a summary of the shared buffers."""
+    from legged_gente.evaluation.evaluator import MAX_BASE_SPEED
 
-        env_cfg, train_cfg = task_registry.get_cfgs(args.task)
-        apply_overrides(args.set, env_cfg, None)
-        original = task_registry.get_cfgs
-        task_registry.get_cfgs = lambda name: (env_cfg, train_cfg) if name == args.task else original(name)
-    ev = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", 0)
-    env, sim = ev.env, ev.env.sim
-    policy = load_policy(ev, checkpoint=args.checkpoint, pretrained=args.pretrained,
-                         baseline=None if (args.checkpoint or args.pretrained) else "zero")
-    task = ev.make_task()
-    overflow = wp.to_torch(sim.d.overflow)
-    nacon, ncollision = wp.to_torch(sim.d.nacon), wp.to_torch(sim.d.ncollision)
-    n = env.num_envs
-    dev = env.device
-    # the env's own test, seen from inside the step (before the step resets the world): which part fired, which
-    # dof was fastest, and the overflow bits the world had raised; in-place writes, so the step's graph keeps them
+    env, sim = evaluation.env, evaluation.env.sim
+    n, dev = env.num_envs, env.device
+    overflow, nacon, ncollision = wp.to_torch(sim.d.overflow), wp.to_torch(sim.d.nacon), wp.to_torch(sim.d.ncollision)
+    # the env's own test, seen from inside the step (before the step resets the world): which part fired, the
+    # fastest dof, the overflow bits; written in place, so the step's CUDA graph keeps writing them
     reason = torch.zeros(n, dtype=torch.int32, device=dev)
     fastest_dof = torch.zeros(n, dtype=torch.int64, device=dev)
     bits_in_step = torch.zeros(n, dtype=torch.int32, device=dev)
@@ -79,68 +58,98 @@ def main() -> None:
         return env_diverged()
 
     env._diverged = diverged_with_reasons
+    task = evaluation.make_task()
+    items = evaluation.items
     active = torch.ones(n, dtype=torch.bool, device=dev)
     ever_bits = torch.zeros(n, dtype=torch.int32, device=dev)
-    max_nacon = torch.zeros((), dtype=torch.int32, device=dev)
-    max_ncoll = torch.zeros((), dtype=torch.int32, device=dev)
-    max_nefc = torch.zeros((), dtype=torch.int32, device=dev)
+    peak = {"nacon": 0, "ncollision": 0, "nefc": 0}
     rows = []
-    names = {int(b): b.name for b in mjw.OverflowType if b.name not in ("NONE", "ALL")}
-    with torch.inference_mode():
-        env.reset()
-        obs = env.set_commands(task.commands(env.base_pos[:, :2], env.commands), task.still())
-        for step in range(ev.num_steps):
-            _, _, dones, _ = env.step(policy(obs))
-            # the reasons, as _diverged and the evaluator test them (on the state the step left, before a reset
-            # of the diverged world: the env resets it inside the step, so the flag is all that survives)
-            speed = torch.linalg.norm(sim.qvel[:, 0:3], dim=1)
-            launched = ~dones & ~(speed <= MAX_BASE_SPEED)
-            flagged = env.diverged_buf
-            new = active & (flagged | launched)
-            bits = overflow.to(torch.int32)
-            ever_bits |= bits
-            max_nacon = torch.maximum(max_nacon, nacon[0])
-            max_ncoll = torch.maximum(max_ncoll, ncollision[0])
-            max_nefc = torch.maximum(max_nefc, sim.nefc.amax())
-            if bool(new.any()):
-                for w in torch.nonzero(new).flatten().tolist():
-                    rows.append({"world": w, "tile": int(ev.tile[w]), "item": items[int(ev.tile[w])].id,
-                                 "step": step + 1, "flagged_by_env": bool(flagged[w]), "launched": bool(launched[w]),
-                                 "reason": "|".join(v for k, v in REASONS.items() if int(reason[w]) & k),
-                                 "fastest_dof": int(fastest_dof[w]), "base_speed": float(speed[w]),
-                                 "overflow_bits_before": "|".join(v for k, v in names.items()
-                                                                  if int(ever_bits[w] | bits_in_step[w]) & k),
-                                 "nacon_all_worlds": int(nacon[0])})
-            active &= ~dones & ~new
-            task.update(env.base_pos[:, :2], active)
+    try:
+        with torch.inference_mode():
+            env.reset()
             obs = env.set_commands(task.commands(env.base_pos[:, :2], env.commands), task.still())
-    naconmax, njmax = int(sim.d.naconmax), int(sim.d.njmax)
-    print(f"{len(items)} terrains x {args.robots_per_terrain} robots = {n} worlds, {ev.num_steps} steps")
-    print(f"diverged robots: {len(rows)} (env flag {sum(r['flagged_by_env'] for r in rows)}, "
-          f"launched only {sum(r['launched'] and not r['flagged_by_env'] for r in rows)})")
-    for v in REASONS.values():
-        print(f"  env reason {v}: {sum(v in r['reason'].split('|') for r in rows)}")
-    dofs: dict[int, int] = {}
-    for r in rows:
-        if "qvel" in r["reason"]:
-            dofs[r["fastest_dof"]] = dofs.get(r["fastest_dof"], 0) + 1
-    print("  fastest dof of the qvel cases:", sorted(dofs.items(), key=lambda kv: -kv[1]))
-    print(f"max nacon {int(max_nacon)} of naconmax {naconmax}; max ncollision {int(max_ncoll)}; "
-          f"max nefc {int(max_nefc)} of njmax {njmax}")
-    for k, v in names.items():
-        ever = int(((ever_bits & k) != 0).sum())
-        among = sum(v in r["overflow_bits_before"].split("|") for r in rows)
-        if ever or among:
-            print(f"  overflow {v:14s}: worlds that raised it {ever} (a diverged robot's world before it diverged: {among})")
-    by_item: dict[str, int] = {}
-    for r in rows:
-        by_item[r["item"]] = by_item.get(r["item"], 0) + 1
-    print("worst terrains:", sorted(by_item.items(), key=lambda kv: -kv[1])[:10])
+            for step in range(1, evaluation.num_steps + 1):
+                _, _, dones, _ = env.step(policy(obs))
+                speed = torch.linalg.norm(sim.qvel[:, 0:3], dim=1)
+                launched = ~dones & ~(speed <= MAX_BASE_SPEED)
+                new = active & (env.diverged_buf | launched)
+                ever_bits |= overflow.to(torch.int32) | torch.where(new, bits_in_step, 0)
+                peak = {"nacon": max(peak["nacon"], int(nacon[0])),
+                        "ncollision": max(peak["ncollision"], int(ncollision[0])),
+                        "nefc": max(peak["nefc"], int(sim.nefc.amax()))}
+                for w in torch.nonzero(new).flatten().tolist():
+                    tile = int(evaluation.tile[w])
+                    rows.append({"world": w, "tile": tile, "item": items[tile].id, "step": step,
+                                 "flagged_by_env": bool(env.diverged_buf[w]), "launched": bool(launched[w]),
+                                 "reason": _names(int(reason[w]), REASONS) if env.diverged_buf[w] else "",
+                                 "fastest_dof": int(fastest_dof[w]), "base_speed": float(speed[w]),
+                                 "overflow_bits": _names(int(ever_bits[w]), OVERFLOWS)})
+                active &= ~dones & ~new
+                task.update(env.base_pos[:, :2], active)
+                obs = env.set_commands(task.commands(env.base_pos[:, :2], env.commands), task.still())
+    finally:
+        env._diverged = env_diverged
+    summary = {"worlds": n, "steps": evaluation.num_steps, "naconmax": int(sim.d.naconmax), "njmax": int(sim.d.njmax),
+               **{f"max_{k}": v for k, v in peak.items()},
+               "worlds_raising": {name: int(((ever_bits & bit) != 0).sum()) for bit, name in OVERFLOWS.items()}}
+    return rows, summary
+
+
+def report(rows: list[dict], summary: dict) -> str:
+    lines = [f"{summary['worlds']} worlds, {summary['steps']} steps; diverged robots: {len(rows)} "
+             f"(env flag {sum(r['flagged_by_env'] for r in rows)}, launched only "
+             f"{sum(r['launched'] and not r['flagged_by_env'] for r in rows)})"]
+    for name in REASONS.values():
+        lines.append(f"  env reason {name}: {sum(name in r['reason'].split('|') for r in rows)}")
+    dofs = Counter(r["fastest_dof"] for r in rows if "qvel" in r["reason"])
+    lines.append(f"  fastest dof of the qvel cases: {dofs.most_common()}")
+    lines.append(f"max nacon {summary['max_nacon']} of naconmax {summary['naconmax']}; max ncollision "
+                 f"{summary['max_ncollision']}; max nefc {summary['max_nefc']} of njmax {summary['njmax']}")
+    for name, count in summary["worlds_raising"].items():
+        among = sum(name in r["overflow_bits"].split("|") for r in rows)
+        if count or among:
+            lines.append(f"  overflow {name:14s}: worlds that raised it {count} (diverged robots' worlds: {among})")
+    lines.append(f"worst terrains: {Counter(r['item'] for r in rows).most_common(10)}")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> None:
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.utils.args import apply_overrides
+
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--task", default="gente_quadruped")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--pretrained", action="store_true", help="the policy shipped for --task")
+    src.add_argument("--checkpoint", help="rsl-rl checkpoint or run folder (neither: zero actions)")
+    p.add_argument("--benchmark", default="gente_original")
+    p.add_argument("--items", nargs="+")
+    p.add_argument("--limit", type=int)
+    p.add_argument("--robots_per_terrain", type=int, default=16)
+    p.add_argument("--episode_s", type=float, default=10.0)
+    p.add_argument("--device", default="cpu")
+    p.add_argument("--set", nargs="*", default=[], metavar="SECTION.FIELD=VALUE", help="env config overrides")
+    p.add_argument("--csv", help="one row per diverged robot")
+    args = p.parse_args(argv)
+
+    items = load_benchmark(args.benchmark, args.items)[: args.limit]
+    if args.set:
+        env_cfg, train_cfg = task_registry.get_cfgs(args.task)
+        apply_overrides(args.set, env_cfg, None)
+        original = task_registry.get_cfgs
+        task_registry.get_cfgs = lambda name: (env_cfg, train_cfg) if name == args.task else original(name)
+    evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", 0)
+    policy = load_policy(evaluation, checkpoint=args.checkpoint, pretrained=args.pretrained,
+                         baseline=None if (args.checkpoint or args.pretrained) else "zero")
+    rows, summary = diagnose(evaluation, policy)
+    print(report(rows, summary))
     if args.csv and rows:
         with open(args.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
 
 
 if __name__ == "__main__":

@@ -170,6 +170,8 @@ def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], o
         moving = ~result.metrics["standing"].astype(bool)
         rates.append([ok[(result.tile == t) & moving].mean() for t in range(len(items))])
         iterations.append(_iteration(checkpoints[k]))
+        print(f"iteration {iterations[-1]}: success " + ", ".join(f"{item.id} {100 * r:.0f} %"
+                                                            for item, r in zip(items, rates[-1])), flush=True)
     rates = np.array(rates)
     plt = _plt()
     fig, ax = plt.subplots(figsize=(5, 3.2))

@@ -1,0 +1,33 @@
+"""tools/diagnose_divergence.py on the CPU: a world made to diverge is found, at its step, with the env's reason."""
+
+import importlib.util
+from pathlib import Path
+
+import torch
+
+TOOL = Path(__file__).resolve().parents[1] / "tools" / "diagnose_divergence.py"
+
+
+def test_a_world_given_a_runaway_joint_is_reported_with_its_reason_and_step():
+    spec = importlib.util.spec_from_file_location("diagnose_divergence", TOOL)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    items = load_benchmark("flat")
+    evaluation = Evaluation("gente_biped", items, robots_per_terrain=2, device="cpu", episode_length_s=0.2)
+    env = evaluation.env
+    calls = []
+
+    def policy(obs):
+        calls.append(1)
+        if len(calls) == 3:  # before the third step: robot 1's first leg joint spins at 10x sim.max_qvel
+            env.sim.qvel[1, 6] = 10.0 * env.max_qvel
+        return torch.zeros(env.num_envs, env.num_actions)
+
+    rows, summary = tool.diagnose(evaluation, policy)
+    assert [(r["world"], r["step"], r["reason"], r["flagged_by_env"]) for r in rows] == [(1, 3, "qvel>max_qvel", True)]
+    assert summary["worlds"] == 2 and summary["steps"] == evaluation.num_steps
+    assert 0 < summary["max_nacon"] <= summary["naconmax"]
+    assert "diverged robots: 1" in tool.report(rows, summary)
