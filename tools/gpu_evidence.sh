@@ -22,6 +22,7 @@ case "$phase" in
       | grep -E "Learning iteration|Mean episode length|terrain_level|Steps per second|Interrupted|Error|Traceback" | tail -8
     # keep the latest checkpoint and the run's scalars after every chunk (the log root may be temporary)
     run=$(latest_run); ls -t "$run"/model_*.pt | head -1 | xargs -I{} cp {} "$OUT_DIR/${task}_last.pt"
+    cp "$run/config.json" "$OUT_DIR/${task}_config.json"  # tools/ship_policy.py reads it beside the checkpoint
     python3 -m legged_gente.utils.tb_export "$run" "$OUT_DIR/${task}_scalars_$(basename "$run").csv" ;;
   report)
     python3 -m legged_gente.scripts.benchmark --task "$task" --num_envs ${BENCH_ENVS:-1024 4096 8192} --check_sync \
