@@ -28,7 +28,7 @@ from mujoco_warp._src.collision_core import contact_material_params, write_conta
 from mujoco_warp._src.math import make_frame
 from mujoco_warp._src.types import vec5
 
-from legged_gente.external_forces.kernels import cell_of, ground_friction, rut_sinkage_fn
+from legged_gente.external_forces.kernels import FootSoil, SoilMap, cell_of, ground_friction, rut_sinkage_fn
 
 SOLE_TYPES = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))
 
@@ -265,16 +265,6 @@ def sphere_contact_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, c
     return wp.vec4(normal[0], normal[1], normal[2], best - radius)
 
 
-@wp.struct
-class SoilMap:
-    """The soil and friction layers of the MaterialMap on the device, with the grid's placement."""
-
-    origin: wp.vec2
-    resolution: float
-    soil: wp.array2d[int]
-    friction: wp.array2d[float]
-
-
 @wp.kernel
 def sole_contact_kernel(
     # sole points (host constants): geom, capsule end (-1, 0 sphere, +1), foot
@@ -306,21 +296,8 @@ def sole_contact_kernel(
     hf_origin: wp.vec2,
     hf_res: float,
     soilmap: SoilMap,
-    friction_reference: float,
-    use_friction: int,
-    use_soil: int,
-    sole_area: float,
-    sole_width: float,
-    friction_cap: float,
-    min_friction: float,
-    sink_step: float,
+    feet: FootSoil,
     max_depth: float,
-    soil_params: wp.array3d[float],
-    foot_load: wp.array2d[float],
-    foot_support: wp.array2d[float],
-    foot_slip: wp.array2d[float],
-    foot_sinkage: wp.array2d[float],
-    foot_soil: wp.array2d[int],
     naconmax: int,
     # out
     foot_touch: wp.array2d[int],
@@ -357,10 +334,10 @@ def sole_contact_kernel(
     radius = size[0]
     xm = geom_xmat[w, g]
     centre = geom_xpos[w, g] + (pt_end[k] * size[1]) * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
-    s_foot = foot_soil[w, f]
+    s_foot = feet.soil[w, f]
     rut = float(0.0)
     if s_foot >= 0:
-        rut = foot_sinkage[w, f]
+        rut = feet.sinkage[w, f]
     geoms = wp.vec2i(terrain_geom, g)
     mid = w % geom_margin.shape[0]
     gid = w % geom_gap.shape[0]
@@ -376,18 +353,18 @@ def sole_contact_kernel(
         return
     normal = wp.vec3(res[0], res[1], res[2])
     if s_foot >= 0:
-        z = rut_sinkage_fn(foot_load[w, f] / sole_area, soil_params, w, s_foot, sole_width, foot_support[w, f])
+        z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.sole_width,
+                           feet.support[w, f])
         # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
-        wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + sink_step))
+        wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + feet.sink_step))
         foot_touch[w, f] = 1
     pos = centre - (radius + 0.5 * dist) * normal
     condim, friction, solref, solreffriction, solimp, adhesion = contact_material_params(
         geom_condim, geom_priority, geom_solmix, geom_solref, geom_solimp, geom_friction, geom_adhesion,
         pair_dim, pair_solref, pair_solreffriction, pair_solimp, pair_adhesion, pair_friction, geoms, -1, w)
     cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
-    friction = ground_friction(friction, cell, f, w, soilmap.soil, soilmap.friction, friction_reference, use_friction,
-                               use_soil, sole_area, friction_cap, soil_params, foot_load, foot_slip)
-    if friction[0] < min_friction:
+    friction = ground_friction(friction, cell, f, w, soilmap, feet)
+    if friction[0] < feet.min_friction:
         condim = 1  # frictionless (ForcesConfig.min_friction says why)
     write_contact(naconmax, 0, wp.max(dist, -max_depth), pos, make_frame(normal), margin, gap, condim, friction, solref,
                   solreffriction, solimp, adhesion, geoms, wp.vec2i(-1, -1), w, contact_dist, contact_pos,

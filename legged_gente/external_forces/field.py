@@ -116,7 +116,7 @@ class TerrainForces:
         self.water.flow_phase = arr(material.flow_phase.astype(np.float32), float)
         self.soil = arr(material.soil.astype(np.int32), int)
         self.friction = arr(material.friction.astype(np.float32), float)
-        self.soilmap = C.SoilMap()
+        self.soilmap = K.SoilMap()
         self.soilmap.origin, self.soilmap.resolution = self.origin, self.resolution
         self.soilmap.soil, self.soilmap.friction = self.soil, self.friction
         if material.has_soil().any() and int(material.soil.max()) >= len(material.soil_presets):
@@ -306,23 +306,23 @@ class TerrainForces:
         cfg, dev = self.cfg, self.device
         launches = []
         nf = max(self.nfoot, 1)
-        use_soil = int(bool(cfg.soil) and self.nfoot > 0)
-        area = self.sole_length * self.sole_width
-        cap, sink_step = float(cfg.soil_friction_cap), float(cfg.sinkage_rate) * self.dt
-        mu_min = float(cfg.min_friction)
-        ref, use_fr = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
+        feet = K.FootSoil()
+        feet.friction_reference, feet.use_friction = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
+        feet.use_soil = int(bool(cfg.soil) and self.nfoot > 0)
+        feet.sole_area, feet.sole_width = self.sole_length * self.sole_width, self.sole_width
+        feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
+        feet.sink_step = float(cfg.sinkage_rate) * self.dt
+        feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support
+        feet.slip, feet.sinkage, feet.soil = self.foot_slip, self.foot_sinkage, self.foot_soil
         launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
-                          use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut], record_cmd=True))
+                          feet.use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut],
+                  record_cmd=True))
         c = d.contact
         launches.append(wp.launch(
             K.contact_filter_kernel, dim=d.naconmax, device=dev,
-            inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.origin, self.resolution, self.soil,
-                    self.friction, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
-                    float(cfg.max_rut_depth), self.soil_params, self.foot_load, self.foot_support, self.foot_slip,
-                    self.foot_sinkage,
-                    self.foot_soil, c.pos, c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch,
-                    self.foot_cand], record_cmd=True,
+            inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.soilmap, feet, float(cfg.max_rut_depth), c.pos,
+                    c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch, self.foot_cand], record_cmd=True,
         ))
         if self.npt:
             launches.append(wp.launch(
@@ -331,10 +331,8 @@ class TerrainForces:
                         m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
                         m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
-                        self.hf_res, self.soilmap, ref, use_fr, use_soil, area, self.sole_width, cap, mu_min, sink_step,
-                        float(cfg.sole_contact_max_depth), self.soil_params, self.foot_load, self.foot_support,
-                        self.foot_slip, self.foot_sinkage, self.foot_soil,
-                        d.naconmax, self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
+                        self.hf_res, self.soilmap, feet, float(cfg.sole_contact_max_depth), d.naconmax,
+                        self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
             ))

@@ -291,32 +291,49 @@ def foot_cell_kernel(
     foot_soil[w, f] = s
 
 
+@wp.struct
+class SoilMap:
+    """The soil and friction layers of the MaterialMap on the device, with the grid's placement."""
+
+    origin: wp.vec2
+    resolution: float
+    soil: wp.array2d[int]
+    friction: wp.array2d[float]
+
+
+@wp.struct
+class FootSoil:
+    """What a foot's ground contact reads besides the maps: the map-friction and soil settings of ForcesConfig
+    and each foot's soil state (per world and foot), shared by the contact filter and the sole contacts."""
+
+    friction_reference: float  # the ground geom's friction, the map's 1.0
+    use_friction: int
+    use_soil: int
+    sole_area: float
+    sole_width: float
+    friction_cap: float
+    min_friction: float
+    sink_step: float  # sinkage_rate * dt
+    soil_params: wp.array3d[float]
+    load: wp.array2d[float]
+    support: wp.array2d[float]
+    slip: wp.array2d[float]
+    sinkage: wp.array2d[float]
+    soil: wp.array2d[int]  # the soil under the foot: an index into soil_params, -1 off soil
+
+
 @wp.func
-def ground_friction(
-    fr: vec5,
-    cell: wp.vec2i,
-    f: int,
-    w: int,
-    soil: wp.array2d[int],
-    friction: wp.array2d[float],
-    friction_reference: float,
-    use_friction: int,
-    use_soil: int,
-    sole_area: float,
-    friction_cap: float,
-    soil_params: wp.array3d[float],
-    foot_load: wp.array2d[float],
-    foot_slip: wp.array2d[float],
-) -> vec5:
+def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, feet: FootSoil) -> vec5:
     """Tangential friction of a ground contact in ``cell``: the rigid friction scaled by the cell's map friction;
     on soil under a foot ``f`` (>= 0), at most the soil's mobilised traction / F_N (Mohr-Coulomb, Janosi-Hanamoto)."""
     mu = fr[0]
-    if use_friction != 0:
-        mu = mu * friction[cell[0], cell[1]] / friction_reference
-    s = soil[cell[0], cell[1]]
-    if use_soil != 0 and f >= 0 and s >= 0:
-        mu = wp.min(mu, soil_friction_fn(soil_params[w, s, COH], soil_params[w, s, MU], sole_area, foot_load[w, f],
-                                         foot_slip[w, f], soil_params[w, s, K], friction_cap))
+    if feet.use_friction != 0:
+        mu = mu * soilmap.friction[cell[0], cell[1]] / feet.friction_reference
+    s = soilmap.soil[cell[0], cell[1]]
+    if feet.use_soil != 0 and f >= 0 and s >= 0:
+        p = feet.soil_params
+        mu = wp.min(mu, soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f], feet.slip[w, f],
+                                         p[w, s, K], feet.friction_cap))
     fr[0] = mu
     fr[1] = mu
     return fr
@@ -327,25 +344,9 @@ def contact_filter_kernel(
     nacon: wp.array[int],
     geom_foot: wp.array[int],  # ngeom: foot index or -1
     geom_bodyid: wp.array[int],
-    origin: wp.vec2,
-    resolution: float,
-    soil: wp.array2d[int],
-    friction: wp.array2d[float],
-    friction_reference: float,
-    use_friction: int,
-    use_soil: int,
-    sole_area: float,
-    sole_width: float,
-    friction_cap: float,
-    min_friction: float,
-    sink_step: float,
+    soilmap: SoilMap,
+    feet: FootSoil,
     max_rut: float,
-    soil_params: wp.array3d[float],
-    foot_load: wp.array2d[float],
-    foot_support: wp.array2d[float],
-    foot_slip: wp.array2d[float],
-    foot_sinkage: wp.array2d[float],
-    foot_soil: wp.array2d[int],
     # contacts (modified)
     contact_pos: wp.array[wp.vec3],
     contact_geom: wp.array[wp.vec2i],
@@ -387,23 +388,22 @@ def contact_filter_kernel(
     if ground < 0 or other < 0:
         return
     w = contact_worldid[i]
-    cell = cell_of(contact_pos[i], origin, resolution, soil.shape[0], soil.shape[1])
+    cell = cell_of(contact_pos[i], soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
     f = geom_foot[other]
-    fr = ground_friction(contact_friction[i], cell, f, w, soil, friction, friction_reference, use_friction,
-                         use_soil, sole_area, friction_cap, soil_params, foot_load, foot_slip)
+    fr = ground_friction(contact_friction[i], cell, f, w, soilmap, feet)
     contact_friction[i] = fr
-    if fr[0] < min_friction:
+    if fr[0] < feet.min_friction:
         contact_dim[i] = 1
     if f < 0:
         return
-    s = foot_soil[w, f]
+    s = feet.soil[w, f]
     if s < 0:
         return
-    z = rut_sinkage_fn(foot_load[w, f] / sole_area, soil_params, w, s, sole_width, foot_support[w, f])
-    rut = foot_sinkage[w, f]
+    z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s, feet.sole_width, feet.support[w, f])
+    rut = feet.sinkage[w, f]
     shown = wp.min(rut, max_rut)
     # the foot's depth counting the rut's unshown part: the rut deepens at most sink_step below it
-    wp.atomic_max(foot_cand, w, f, wp.min(z, -contact_dist[i] + rut - shown + sink_step))
+    wp.atomic_max(foot_cand, w, f, wp.min(z, -contact_dist[i] + rut - shown + feet.sink_step))
     contact_dist[i] = contact_dist[i] + shown
     foot_touch[w, f] = 1
 
