@@ -98,6 +98,36 @@ def test_a_contact_far_from_the_terrain_centre_keeps_its_depth(piece_size, deep_
     assert np.allclose(deepest, -0.06, atol=1e-3) == deep_everywhere, deepest
 
 
+def test_a_ball_on_a_seam_of_the_pieces_rests_as_inside_one():
+    """Balls (r = 3 cm, 2 kg) dropped on flat ground inside a piece, on the seam of two pieces and on the corner of
+    four come to rest at z = r less MuJoCo's soft-contact depth (below 1 mm) without drifting sideways: a seam
+    adds contacts (the ball touches two pieces), it does not make a step or a slope."""
+    import mujoco_warp as mjw
+    from types import SimpleNamespace
+
+    from legged_gente.sim.assembly import _add_terrain
+
+    terrain = SimpleNamespace(height_field=np.zeros((201, 201)), resolution=0.1, origin_xy=(0.0, 0.0))
+    spec = mujoco.MjSpec()
+    _add_terrain(spec, SimpleNamespace(static_friction=1.0, hfield_piece_size=10.0), terrain)
+    places = [(5.03, 5.07), (10.0, 5.07), (10.0, 10.0)]  # inside, on a seam, on the corner of the 2 x 2 pieces
+    for x, y in places:
+        body = spec.worldbody.add_body(pos=[x, y, 0.035])
+        body.add_freejoint()
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.03, 0, 0], mass=2.0, contype=2, conaffinity=1)
+    mjm = spec.compile()
+    assert mjm.nhfield == 4
+    with wp.ScopedDevice("cpu"):
+        m, d = mjw.put_model(mjm), mjw.make_data(mjm, nworld=1, nconmax=64, njmax=256)
+        for _ in range(500):
+            mjw.step(m, d)
+        q = d.qpos.numpy()[0].reshape(-1, 7)
+    depth = 0.03 - q[:, 2]
+    assert ((depth > 0.0) & (depth < 1e-3)).all(), depth
+    assert np.ptp(depth) < 5e-4, depth
+    assert np.allclose(q[:, :2], places, atol=1e-5)
+
+
 def test_robots_start_on_their_tiles(env):
     ground = env._ground_height(env.base_pos[:, :2])
     clearance = env.base_pos[:, 2] - ground
