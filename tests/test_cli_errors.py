@@ -41,6 +41,7 @@ def test_bad_set_field(capsys):
     ("sim.dt=0", "sim.dt=0.0: must be > 0"),
     ("algorithm.num_mini_batches=0", "algorithm.num_mini_batches=0: must be >= 1"),
     ("env.episode_length_s=0", "env.episode_length_s=0.0: must be > 0"),
+    ("terrain.hfield_piece_size=0", "terrain.hfield_piece_size=0.0: must be > 0"),
     ("runner.num_steps_per_env=2", "= 1 * 2 = 2 samples cannot fill algorithm.num_mini_batches=4"),
 ])
 def test_zero_divisors_are_rejected_before_anything_runs(capsys, override, message):
