@@ -118,23 +118,14 @@ def force_kernels_per_s(env, steps: int) -> float:
 
 
 def reset_forward_per_s(env, calls: int) -> float:
-    """Calls/s of the Warp work of the forward a step runs after its resets (``Simulation.forward``: MuJoCo's
+    """Calls/s of the Warp work of the forward a step runs after its resets (``Simulation.recompute``: MuJoCo's
     forward with the force fields' callbacks, their after-substep hooks and the per-body contact forces), on the
     current state. On a GPU the step runs it every time, whether a world reset or not (deciding would wait for
     the device). What the hooks integrate is put back afterwards, as ``forward`` does."""
-    import mujoco_warp as mjw
-
     sim = env.sim
     kept = [t.clone() for t in sim.substep_state]
-
-    def forward():
-        mjw.forward(sim.m, sim.d)
-        for hook in sim.after_substep:
-            hook()
-        sim._contact_forces()
-
     try:
-        return _timed_calls(env, forward, calls)
+        return _timed_calls(env, sim.recompute, calls)
     finally:
         for t, old in zip(sim.substep_state, kept):
             t.copy_(old)

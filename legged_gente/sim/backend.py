@@ -160,15 +160,21 @@ class Simulation:
             return
         kept = [t.clone() for t in self.substep_state]
         last = [t.clone() for t in self.observed]
+        self.recompute()
+        for t, old in zip(self.substep_state, kept):
+            t.copy_(old)
+        for t, old in zip(self.observed, last):
+            t.copy_(torch.where(mask.view(-1, *[1] * (t.dim() - 1)), t, old))
+
+    def recompute(self) -> None:
+        """The Warp work of :meth:`forward`, in every world: MuJoCo's forward (with the force fields' callbacks),
+        the ``after_substep`` hooks and the per-body contact forces. Unlike ``forward`` it keeps every new value
+        and leaves ``substep_state`` advanced."""
         with wp.ScopedDevice(self.wp_device):
             mjw.forward(self.m, self.d)
             for hook in self.after_substep:
                 hook()
             self._contact_forces()
-        for t, old in zip(self.substep_state, kept):
-            t.copy_(old)
-        for t, old in zip(self.observed, last):
-            t.copy_(torch.where(mask.view(-1, *[1] * (t.dim() - 1)), t, old))
 
     @torch.compiler.disable
     def set_const(self) -> None:
