@@ -11,8 +11,8 @@ overflow bit (diverged or not).
 
 ``--items``/``--limit`` choose the terrains, as in gente-evaluate: a cause that shows with the whole benchmark but
 not with its worst terrains alone lies in what the worlds share (buffers, or the terrain's size: that is how the
-heightfield precision loss of docs/terrain.md was found). ``--set`` overrides env config fields, e.g.
-``--set sim.cuda_graph=off sim.torch_compile=False`` to compare with plain launches.
+heightfield precision loss of docs/terrain.md was found). ``--plain_launches`` steps the env without its CUDA graph
+and compiled torch logic, to tell a graph or compiler effect from the physics.
 """
 
 from __future__ import annotations
@@ -33,9 +33,11 @@ def _names(bits: int, table: dict[int, str]) -> str:
     return "|".join(name for bit, name in table.items() if bits & bit)
 
 
-def diagnose(evaluation, policy) -> tuple[list[dict], dict]:
+def diagnose(evaluation, policy, progress: bool = False) -> tuple[list[dict], dict]:
     """Roll ``policy`` through ``evaluation`` (an ``Evaluation``); one row per robot whose world diverged (at its
     first divergence), and a summary of the shared buffers."""
+    from tqdm import tqdm
+
     from legged_gente.evaluation.evaluator import MAX_BASE_SPEED
 
     env, sim = evaluation.env, evaluation.env.sim
@@ -68,7 +70,7 @@ def diagnose(evaluation, policy) -> tuple[list[dict], dict]:
         with torch.inference_mode():
             env.reset()
             obs = env.set_commands(task.commands(env.base_pos[:, :2], env.commands), task.still())
-            for step in range(1, evaluation.num_steps + 1):
+            for step in tqdm(range(1, evaluation.num_steps + 1), disable=not progress, unit="step"):
                 _, _, dones, _ = env.step(policy(obs))
                 speed = torch.linalg.norm(sim.qvel[:, 0:3], dim=1)
                 launched = ~dones & ~(speed <= MAX_BASE_SPEED)
@@ -114,10 +116,9 @@ def report(rows: list[dict], summary: dict) -> str:
 
 
 def main(argv=None) -> None:
-    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.envs.base.step_runner import StepRunner
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
-    from legged_gente.utils.args import apply_overrides
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--task", default="gente_quadruped")
@@ -130,20 +131,18 @@ def main(argv=None) -> None:
     p.add_argument("--robots_per_terrain", type=int, default=16)
     p.add_argument("--episode_s", type=float, default=10.0)
     p.add_argument("--device", default="cpu")
-    p.add_argument("--set", nargs="*", default=[], metavar="SECTION.FIELD=VALUE", help="env config overrides")
+    p.add_argument("--plain_launches", action="store_true", help="no CUDA graph, no torch.compile in the env step")
+    p.add_argument("--no_progress", action="store_true", help="no progress bar")
     p.add_argument("--csv", help="one row per diverged robot")
     args = p.parse_args(argv)
 
     items = load_benchmark(args.benchmark, args.items)[: args.limit]
-    if args.set:
-        env_cfg, train_cfg = task_registry.get_cfgs(args.task)
-        apply_overrides(args.set, env_cfg, None)
-        original = task_registry.get_cfgs
-        task_registry.get_cfgs = lambda name: (env_cfg, train_cfg) if name == args.task else original(name)
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", 0)
+    if args.plain_launches:
+        evaluation.env._runner = StepRunner(evaluation.env, compile=False, graph=False)
     policy = load_policy(evaluation, checkpoint=args.checkpoint, pretrained=args.pretrained,
                          baseline=None if (args.checkpoint or args.pretrained) else "zero")
-    rows, summary = diagnose(evaluation, policy)
+    rows, summary = diagnose(evaluation, policy, progress=not args.no_progress)
     print(report(rows, summary))
     if args.csv and rows:
         with open(args.csv, "w", newline="") as f:
