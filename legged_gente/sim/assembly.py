@@ -209,7 +209,7 @@ def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
     # centre: a capsule 6 cm into flat ground 30 m from it gets a contact 1.3 m deep, and the robot is launched
     # (tests/test_env_terrain.py). The terrain is therefore laid down as pieces of at most hfield_piece_size,
     # each a geom centred on its own patch; neighbours share their edge samples, so the surface is unchanged.
-    cells = max(1, int(cfg_terrain.hfield_piece_size / res))
+    cells = max(1, round(cfg_terrain.hfield_piece_size / res))  # whole cells (int() would make 0.3 / 0.1 two)
     pieces = [(i, j) for i in _piece_starts(heights.shape[0], cells) for j in _piece_starts(heights.shape[1], cells)]
     for index, (i, j) in enumerate(pieces):
         patch = heights[i:i + cells + 1, j:j + cells + 1]

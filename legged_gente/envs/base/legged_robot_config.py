@@ -25,7 +25,7 @@ class LeggedRobotCfg(BaseConfig):
         mode = "curriculum"  # "curriculum" | "random" | "selected" | "generated"
         resolution = 0.1  # m, horizontal size of a heightfield cell
         # m, largest side of one MuJoCo heightfield geom: a larger terrain is laid down in pieces, as MuJoCo-Warp's
-        # heightfield collision goes wrong far from a heightfield's centre (sim/assembly.py)
+        # heightfield collision goes wrong far from a heightfield's centre (sim/assembly.py); rounded to whole cells
         hfield_piece_size = 20.0
         border_size = 5.0  # m, flat border around the tile grid
         terrain_length = 8.0  # m, tile size along x
