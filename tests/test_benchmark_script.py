@@ -118,3 +118,37 @@ def test_gpu_time_split_sorts_kernels_into_warp_and_torch():
               SimpleNamespace(name="aten::index", device_type=cpu, device_time_total=50.0)]  # its kernel's time
     split = benchmark.gpu_time_split(SimpleNamespace(events=lambda: events))
     assert split == {"total": 0.55, "warp": 0.5, "hfield": 0.4, "torch": pytest.approx(0.05)}
+
+
+def test_the_sole_contacts_are_timed_apart_and_the_force_timing_leaves_the_state_as_it_was():
+    """The sole contacts alone append one contact per touching sole point, each pass from the same count; the
+    force timing leaves the contact count and the integrated force state as they were."""
+    import argparse
+
+    import numpy as np
+    import warp as wp
+
+    from legged_gente.envs.task_registry import task_registry
+
+    cfg, _ = task_registry.get_cfgs("gente_biped")
+    cfg.env.num_envs = 3
+    env, _ = task_registry.make_env("gente_biped", env_cfg=cfg, args=argparse.Namespace(device="cpu"))
+    benchmark.settle(env, 0.3)
+    sim, forces = env.sim, env.forces
+    sim.recompute()  # the contacts of the current state
+    nacon = int(sim.d.nacon.numpy()[0])
+    state = [t.clone() for t in sim.substep_state]
+    before = sim.d.contact.geom.numpy()[:nacon].copy()
+    soles = before[np.isin(before[:, 1], forces.pt_geom.numpy())]
+    assert len(soles) > 0  # the robots stand on their soles
+    forces.sole_contacts(sim.m, sim.d)
+    added = sim.d.contact.geom.numpy()[nacon:int(sim.d.nacon.numpy()[0])]
+    # the same sole contacts again, and nothing else
+    assert sorted(map(tuple, added)) == sorted(map(tuple, soles))
+    assert set(added[:, 0]) <= set(env.layout.terrain_geoms)
+    wp.copy(sim.d.nacon, wp.array([nacon], dtype=int))
+    assert benchmark.force_kernels_per_s(env, 3, only_sole_contacts=True) > 0.0
+    assert benchmark.force_kernels_per_s(env, 3) > 0.0
+    assert int(sim.d.nacon.numpy()[0]) == nacon
+    assert (sim.d.contact.geom.numpy()[:nacon] == before).all()
+    assert all(torch.equal(t, old) for t, old in zip(sim.substep_state, state))

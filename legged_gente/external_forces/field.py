@@ -296,11 +296,21 @@ class TerrainForces:
         """Ground friction and soil ruts on MuJoCo's contacts, then the analytic sole contacts. The launches are
         recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU packing the
         sole kernel's ~60 arguments every substep would cost more than the heightfield collision it replaces."""
+        for launch in self._recorded_filter(m, d):
+            launch.launch()
+
+    def sole_contacts(self, m, d):
+        """The contact filter's analytic sole contacts alone: the feet's collision with the terrain, which
+        ``gente-benchmark`` times apart from the force kernels (its raw physics has them too)."""
+        for launch in self._recorded_filter(m, d):
+            if launch.kernel is C.sole_contact_kernel:
+                launch.launch()
+
+    def _recorded_filter(self, m, d) -> list:
         key = (id(m), id(d))
         if self._filter_key != key:
             self._filter_launches, self._filter_key = self._record_contact_filter(m, d), key
-        for launch in self._filter_launches:
-            launch.launch()
+        return self._filter_launches
 
     def _record_contact_filter(self, m, d) -> list:
         cfg, dev = self.cfg, self.device

@@ -104,17 +104,30 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
         restore()
 
 
-def force_kernels_per_s(env, steps: int) -> float:
+def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> float:
     """Force-kernel passes/s (all worlds) with no physics around them: the callbacks' and the after-substep
-    kernels launched on the current contacts and state."""
+    kernels launched on the current contacts and state (the analytic sole contacts included), or the sole
+    contacts alone (the feet's terrain collision, which the raw physics has too). Each pass starts from the
+    current contact count (the sole contacts append theirs); what the kernels integrate is put back afterwards."""
     forces, sim = env.forces, env.sim
+    nacon = wp.clone(sim.d.nacon)
+    kept = [t.clone() for t in sim.substep_state]
 
     def kernels():
+        wp.copy(sim.d.nacon, nacon)
+        if only_sole_contacts:
+            forces.sole_contacts(sim.m, sim.d)
+            return
         forces.contact_filter(sim.m, sim.d)
         forces.passive(sim.m, sim.d)
         forces.after_substep()
 
-    return _timed_calls(env, kernels, steps) * env.num_envs
+    try:
+        return _timed_calls(env, kernels, steps) * env.num_envs
+    finally:
+        wp.copy(sim.d.nacon, nacon)
+        for t, old in zip(sim.substep_state, kept):
+            t.copy_(old)
 
 
 def reset_forward_per_s(env, calls: int) -> float:
@@ -263,11 +276,14 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
         env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
         settle(env)
         raw = raw_physics(env, steps * env.cfg.control.decimation)
-        forces_share = forces_slowdown = float("nan")
+        forces_share = forces_slowdown = soles_share = float("nan")
         if env.forces is not None:
-            with_forces = raw_physics(env, steps * env.cfg.control.decimation, with_forces=True)
+            substeps = steps * env.cfg.control.decimation
+            with_forces = raw_physics(env, substeps, with_forces=True)
             forces_slowdown = max(0.0, 1.0 - with_forces / raw)
-            forces_share = with_forces / force_kernels_per_s(env, steps * env.cfg.control.decimation)
+            soles_share = with_forces / force_kernels_per_s(env, substeps, only_sole_contacts=True) \
+                if env.forces.npt else 0.0
+            forces_share = with_forces / force_kernels_per_s(env, substeps) - soles_share
         forward_s = 1.0 / reset_forward_per_s(env, steps)
         stepped = env_steps(env, steps, check_sync)
         profiled = profile_out and num_envs == (profile_envs or sizes[-1])
@@ -287,7 +303,7 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
         memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
-                     "ppo_update_share": update_share, "forces_share": forces_share,
+                     "ppo_update_share": update_share, "forces_share": forces_share, "soles_share": soles_share,
                      "forces_slowdown": forces_slowdown, "reset_forward_share": forward_s * stepped / num_envs,
                      "gpu_memory_gib": memory})
         del env, runner  # the runner holds the env: free both before the next size is built
@@ -300,18 +316,20 @@ def print_table(rows: list[dict], device: str) -> None:
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "CPU"
     print(f"\ndevice: {name}")
     header = (f"{'num_envs':>9} {'raw substeps/s':>15} {'env steps/s':>12} {'PPO steps/s':>12} {'env/raw':>8} "
-              f"{'PPO/raw':>8} {'update':>7} {'forces':>7} {'forces Δ':>8} {'forward':>8} {'GPU GiB':>8}")
+              f"{'PPO/raw':>8} {'update':>7} {'forces':>7} {'soles':>7} {'forces Δ':>8} {'forward':>8} {'GPU GiB':>8}")
     print(header)
     print("-" * len(header))
     for r in rows:
         print(f"{r['num_envs']:>9d} {r['raw_substeps_per_s']:>15,.0f} {r['env_steps_per_s']:>12,.0f} "
               f"{r['ppo_steps_per_s']:>12,.0f} {r['env_over_raw']:>8.2f} {r['ppo_over_raw']:>8.2f} "
               f"{r['ppo_update_share']:>7.1%} "
-              f"{r['forces_share']:>7.1%} {r['forces_slowdown']:>8.1%} {r['reset_forward_share']:>8.1%} "
+              f"{r['forces_share']:>7.1%} {r['soles_share']:>7.1%} {r['forces_slowdown']:>8.1%} {r['reset_forward_share']:>8.1%} "
               f"{r['gpu_memory_gib']:>8.2f}")
     print("raw: mjw.step substeps/s; raw ceiling in env steps/s = raw / decimation (the ratios' denominator);\n"
           "update: the PPO update's share of the PPO time (the rest is collection: policy + env steps);\n"
-          "forces: the terrain force kernels' time as a share of a substep with them (nan: terrain has none);\n"
+          "forces: the terrain force kernels' time (soil, water, ground friction, ruts) as a share of a substep\n"
+          "  with them (nan: terrain has none); soles: the analytic sole contacts' (the feet's terrain collision,\n"
+          "  in raw too), apart from forces;\n"
           "forces Δ: how much slower the physics substep is with the force fields on (kernels + changed contacts);\n"
           "forward: the post-reset forward's share of an env step (it runs every step on a GPU)")
 
