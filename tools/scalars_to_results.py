@@ -6,7 +6,8 @@ Episode/diverged_resets is the count per logging interval (one iteration); the r
 the run. (Runs before the divergence fix logged a running total per chunk; their results files were made so.)
 
 wall_s is the training time rsl-rl measures (collection + learning, summed over iterations): process start-up
-and the pause between resumed chunks are not in it.
+and the pause between resumed chunks are not in it. When a chunk was resumed from a checkpoint older than the
+previous chunk's last iteration, the iterations it redid are counted once, from the later chunk.
 
     python tools/scalars_to_results.py OUT.csv chunk1.csv [chunk2.csv ...]
 """
@@ -28,18 +29,23 @@ def main() -> None:
     parser.add_argument("out")
     parser.add_argument("chunks", nargs="+")
     args = parser.parse_args()
-    out_rows, wall, diverged = [], 0.0, 0.0
+    iterations = []  # (iteration, seconds, diverged resets, results values), in training order
     for path in args.chunks:
         rows = [r for r in csv.DictReader(open(path)) if r["Train/mean_episode_length"] != ""]
         if not rows:
             raise SystemExit(f"{path}: no training iterations (is it a tb_export CSV of a run?)")
+        # a chunk resumed from a checkpoint older than the previous chunk's last iteration redid those iterations
+        iterations = [it for it in iterations if it[0] < int(rows[0]["step"])]
         for r in rows:
-            wall += float(r["Perf/collection_time"]) + float(r["Perf/learning_time"])
-            diverged += float(r.get("Episode/diverged_resets") or 0.0)  # this iteration's count
-            row = {"iteration": int(r["step"]), "wall_s": round(wall, 1)}
-            row.update({name: f"{float(r[tag]):.4g}" if r.get(tag) else "" for name, tag in COLUMNS.items()})
-            row["diverged_resets_cumulative"] = int(diverged)
-            out_rows.append(row)
+            iterations.append((int(r["step"]), float(r["Perf/collection_time"]) + float(r["Perf/learning_time"]),
+                               float(r.get("Episode/diverged_resets") or 0.0),  # this iteration's count
+                               {name: f"{float(r[tag]):.4g}" if r.get(tag) else "" for name, tag in COLUMNS.items()}))
+    out_rows, wall, diverged = [], 0.0, 0.0
+    for iteration, seconds, resets, values in iterations:
+        wall += seconds
+        diverged += resets
+        out_rows.append({"iteration": iteration, "wall_s": round(wall, 1), **values,
+                         "diverged_resets_cumulative": int(diverged)})
     with open(args.out, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(out_rows[0]))
         writer.writeheader()
