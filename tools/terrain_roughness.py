@@ -1,0 +1,94 @@
+"""How rough a benchmark's terrains are, next to how a policy did on them; and how rough a task's training
+curriculum is, for comparison.
+
+A cell is *rough* when the terrain within ``window`` (0.3 m, about one stride of the biped) around it spans more
+than ``step`` (0.15 m) in height: the robot has to step up or down that much within one stride there. A
+terrain's rough share is the share of rough cells within ``centre`` (8 m) square around the tile's centre, where
+the evaluated robots spawn and walk (0.3-1.1 m/s for 9 s).
+
+    python tools/terrain_roughness.py --benchmark gente_original --report docs/results/gente_original_eval_biped_040b769.csv
+    python tools/terrain_roughness.py --curriculum gente_biped
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+
+import numpy as np
+from scipy.ndimage import maximum_filter, minimum_filter
+
+BINS = (0.0, 0.02, 0.1, 0.3, 1.0)
+
+
+def rough_cells(heights: np.ndarray, resolution: float, window: float = 0.3, step: float = 0.15) -> np.ndarray:
+    """Per cell: the height span within a ``window`` square around it exceeds ``step``."""
+    size = max(1, int(round(window / resolution)))
+    return (maximum_filter(heights, size=size) - minimum_filter(heights, size=size)) > step
+
+
+def rough_share(heights: np.ndarray, resolution: float, centre: float = 8.0, **kwargs) -> float:
+    """The rough share of the ``centre`` square (m) around the middle of ``heights``."""
+    rough = rough_cells(heights, resolution, **kwargs)
+    half = int(round(centre / 2 / resolution))
+    cx, cy = heights.shape[0] // 2, heights.shape[1] // 2
+    return float(rough[max(cx - half, 0):cx + half, max(cy - half, 0):cy + half].mean())
+
+
+def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float, float]]:
+    """(item id, rough share, success rate or NaN) per item of ``benchmark``."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    success = {}
+    if report:
+        success = {r["name"]: float(r["success_rate"]) for r in csv.DictReader(open(report)) if r["row"] == "terrain"}
+    rows = []
+    for item in load_benchmark(benchmark):
+        spec = item.spec()
+        heights, _ = spec.build()
+        rows.append((item.id, rough_share(heights, spec.resolution), success.get(item.id, float("nan"))))
+    return rows
+
+
+def print_bins(rows: list[tuple[str, float, float]]) -> None:
+    shares = np.array([r[1] for r in rows])
+    success = np.array([r[2] for r in rows])
+    print("rough share      terrains  mean of the terrains' success rates")
+    for lo, hi in zip(BINS[:-1], BINS[1:]):
+        inside = (shares >= lo) & ((shares < hi) if hi < 1.0 else (shares <= hi))
+        mean = f"{np.nanmean(success[inside]):.1%}" if inside.any() and not np.isnan(success[inside]).all() else "-"
+        print(f"[{lo:.2f}, {hi:.2f}{']' if hi == 1.0 else ')'}   {int(inside.sum()):8d}  {mean:>12}")
+
+
+def curriculum_table(task: str) -> None:
+    """Per curriculum level: the mean and largest rough share of its tiles (each whole tile)."""
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.terrain.terrain import Terrain
+
+    env_cfg, _ = task_registry.get_cfgs(task)
+    terrain = Terrain(env_cfg.terrain, env_cfg.env.num_envs)
+    rough = rough_cells(terrain.height_field, terrain.resolution)
+    rows, cols = terrain.tile_cells
+    print("level  mean rough share  largest (tile)")
+    for r in range(terrain.num_rows):
+        shares = [rough[terrain.border + r * rows:terrain.border + (r + 1) * rows,
+                        terrain.border + c * cols:terrain.border + (c + 1) * cols].mean() for c in range(terrain.num_cols)]
+        worst = int(np.argmax(shares))
+        print(f"{r:5d}  {np.mean(shares):16.3f}  {shares[worst]:.3f} ({terrain.tile_names[r, worst]})")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--benchmark", help="a benchmark name (gente100, gente_original) or folder")
+    source.add_argument("--curriculum", metavar="TASK", help="a task whose training curriculum to measure")
+    parser.add_argument("--report", help="gente-evaluate's report.csv of that benchmark: success per terrain")
+    args = parser.parse_args()
+    if args.curriculum:
+        curriculum_table(args.curriculum)
+        return
+    print_bins(benchmark_table(args.benchmark, args.report))
+
+
+if __name__ == "__main__":
+    main()
