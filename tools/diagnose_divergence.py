@@ -18,7 +18,6 @@ and compiled torch logic, to tell a graph or compiler effect from the physics.
 from __future__ import annotations
 
 import argparse
-import csv
 from collections import Counter
 
 import mujoco_warp as mjw
@@ -119,6 +118,7 @@ def main(argv=None) -> None:
     from legged_gente.envs.base.step_runner import StepRunner
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.utils.tables import write_rows
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--task", default="gente_quadruped")
@@ -145,10 +145,7 @@ def main(argv=None) -> None:
     rows, summary = diagnose(evaluation, policy, progress=not args.no_progress)
     print(report(rows, summary))
     if args.csv and rows:
-        with open(args.csv, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows(rows)
+        write_rows(args.csv, rows)
 
 
 if __name__ == "__main__":

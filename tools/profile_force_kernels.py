@@ -57,7 +57,7 @@ def main() -> None:
     import warp as wp
 
     from legged_gente.envs.task_registry import task_registry
-    from legged_gente.scripts.benchmark import settle
+    from legged_gente.scripts.benchmark import force_pass, settle
 
     env_cfg, _ = task_registry.get_cfgs(args.task)
     env_cfg.env.num_envs = args.num_envs
@@ -69,18 +69,12 @@ def main() -> None:
     kept = [t.clone() for t in sim.substep_state]
     nacon = wp.clone(sim.d.nacon)
 
-    def force_pass():
-        wp.copy(sim.d.nacon, nacon)  # the sole contacts append theirs: every pass from the same count
-        forces.contact_filter(sim.m, sim.d)
-        forces.passive(sim.m, sim.d)
-        forces.after_substep()
-
     def substep():
         mjw.step(sim.m, sim.d)
         forces.after_substep()
 
     with wp.ScopedDevice(sim.wp_device):
-        force_total = show("force kernels (one pass)", *kernel_times(force_pass, args.calls), top=20)
+        force_total = show("force kernels (one pass)", *kernel_times(force_pass(env), args.calls), top=20)
         wp.copy(sim.d.nacon, nacon)
         substep_total = show("substep with forces", *kernel_times(substep, args.calls), top=30)
         show("post-reset forward (Simulation.recompute)", *kernel_times(sim.recompute, args.calls), top=25)

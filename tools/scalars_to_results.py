@@ -15,6 +15,8 @@ previous chunk's last iteration, the iterations it redid are counted once, from 
 import argparse
 import csv
 
+from legged_gente.utils.tables import write_rows
+
 COLUMNS = {  # results column: TensorBoard tag
     "mean_episode_length": "Train/mean_episode_length",
     "rew_tracking_lin_vel": "Episode/rew_tracking_lin_vel",
@@ -46,10 +48,7 @@ def main() -> None:
         diverged += resets
         out_rows.append({"iteration": iteration, "wall_s": round(wall, 1), **values,
                          "diverged_resets_cumulative": int(diverged)})
-    with open(args.out, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(out_rows[0]))
-        writer.writeheader()
-        writer.writerows(out_rows)
+    write_rows(args.out, out_rows)
     print(f"wrote {args.out}: {len(out_rows)} iterations, {wall / 60:.1f} min of training")
 
 

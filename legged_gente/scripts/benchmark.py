@@ -21,6 +21,7 @@ import warp as wp
 from legged_gente.envs.base.legged_robot import CUDA_GRAPH_MODES
 from legged_gente.envs.task_registry import task_registry
 from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device
+from legged_gente.utils.tables import write_rows
 
 
 def _sync(device: str) -> None:
@@ -104,14 +105,13 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
         restore()
 
 
-def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> float:
-    """Force-kernel passes/s (all worlds) with no physics around them: the callbacks' and the after-substep
-    kernels launched on the current contacts and state (the analytic sole contacts included), or the sole
+def force_pass(env, only_sole_contacts: bool = False):
+    """A callable launching one pass of the force kernels with no physics around them: the callbacks' and the
+    after-substep kernels on the current contacts and state (the analytic sole contacts included), or the sole
     contacts alone (the feet's terrain collision, which the raw physics has too). Each pass starts from the
-    current contact count (the sole contacts append theirs); what the kernels integrate is put back afterwards."""
+    contact count of now: the sole contacts append theirs."""
     forces, sim = env.forces, env.sim
     nacon = wp.clone(sim.d.nacon)
-    kept = [t.clone() for t in sim.substep_state]
 
     def kernels():
         wp.copy(sim.d.nacon, nacon)
@@ -122,8 +122,17 @@ def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> fl
         forces.passive(sim.m, sim.d)
         forces.after_substep()
 
+    return kernels
+
+
+def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> float:
+    """Passes/s (all worlds) of ``force_pass``; the contact count and what the kernels integrate are put back
+    afterwards."""
+    sim = env.sim
+    nacon = wp.clone(sim.d.nacon)
+    kept = [t.clone() for t in sim.substep_state]
     try:
-        return _timed_calls(env, kernels, steps) * env.num_envs
+        return _timed_calls(env, force_pass(env, only_sole_contacts), steps) * env.num_envs
     finally:
         wp.copy(sim.d.nacon, nacon)
         for t, old in zip(sim.substep_state, kept):
@@ -376,12 +385,7 @@ def main(argv=None) -> None:
         print("check_sync: no host-device synchronisation in LeggedRobot.step")
     print_table(rows, device)
     if args.csv:
-        import csv
-
-        with open(args.csv, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-            writer.writeheader()
-            writer.writerows(rows)
+        write_rows(args.csv, rows)
 
 
 if __name__ == "__main__":
