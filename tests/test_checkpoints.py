@@ -1,5 +1,6 @@
 """Checkpoints load safely (torch.load weights_only=True: a checkpoint cannot run code), --resume gets past a
-truncated latest checkpoint, SIGTERM saves one like Ctrl-C, and a run folder records how it was made."""
+truncated latest checkpoint, SIGTERM saves one like Ctrl-C, so does --max_minutes at its deadline, and a run
+folder records how it was made."""
 
 import json
 import os
@@ -124,6 +125,32 @@ def test_sigterm_saves_a_checkpoint(terminated_run):
     run = next((cwd / "logs" / "gente_biped_flat").iterdir())
     saved = sorted(run.glob("model_*.pt"))
     assert saved and load_checkpoint(saved[-1])["infos"]["task"] == "gente_biped_flat"
+
+
+def test_max_minutes_stops_after_a_whole_iteration_and_saves_it(tmp_path, monkeypatch, capsys):
+    """A deadline already passed after the first iteration: training ends there, with that iteration saved."""
+    from legged_gente.scripts import train as train_script
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    train_script.main(["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "1", "--max_iterations", "50",
+                       "--max_minutes", "1e-6", "--set", "runner.num_steps_per_env=2", "--set",
+                       "algorithm.num_mini_batches=1", "--set", "actor.hidden_dims=[8]", "--set",
+                       "critic.hidden_dims=[8]", "--set", "runner.save_interval=1000"])
+    out = capsys.readouterr().out
+    assert "Time limit of 1e-06 min reached: saved" in out, out
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert [p.name for p in run.glob("model_*.pt")] == ["model_0.pt"]  # iteration 0 only, not 50
+    assert load_checkpoint(run / "model_0.pt")["iter"] == 0
+
+
+@pytest.mark.parametrize("minutes", ["0", "-3"])
+def test_max_minutes_must_be_positive(minutes, capsys):
+    from legged_gente.scripts import train as train_script
+
+    with pytest.raises(SystemExit) as stop:
+        train_script.main(["--task", "gente_biped_flat", "--device", "cpu", "--max_minutes", minutes])
+    assert stop.value.code == 2
+    assert "--max_minutes must be > 0" in capsys.readouterr().err
 
 
 def test_runs_go_to_the_working_directory_and_record_how_they_were_made(terminated_run):

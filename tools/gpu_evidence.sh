@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The GPU results of docs/performance.md, from the project root on a host with a GPU (the package and its
 # dependencies installed); everything it keeps goes to $OUT_DIR (default gpu_evidence/):
-#   phase train:   train $TASK at $NUM_ENVS envs for $TRAIN_SECONDS (RESUME=1 continues the latest run; $TRAIN_ARGS
+#   phase train:   train $TASK at $NUM_ENVS envs for $TRAIN_SECONDS of training (RESUME=1 continues the latest run; $TRAIN_ARGS
 #                  are more train.py flags, e.g. "--set terrain.solved_top_level=stay"); the
 #                  latest checkpoint and the run's scalars CSV go to $OUT_DIR after every chunk
 #   phase report:  benchmark (+ sync check, CSV), play (tracking plot + exports), scalars CSV -> $OUT_DIR
@@ -17,9 +17,13 @@ latest_run() { ls -d "$GENTE_LOG_ROOT/$task"/20* | tail -1; }
 case "$phase" in
   train)
     read -ra extra <<< "${TRAIN_ARGS:-}"; [ "${RESUME:-0}" = 1 ] && extra+=(--resume)
-    timeout -s INT "${TRAIN_SECONDS:-480}" python3 legged_gente/scripts/train.py --task="$task" --headless \
-      --num_envs "${NUM_ENVS:-4096}" --max_iterations "${MAX_ITERS:-100000}" "${extra[@]}" 2>&1 \
-      | grep -E "Learning iteration|Mean episode length|terrain_level|Steps per second|Interrupted|Error|Traceback" | tail -8
+    # train.py stops itself after $TRAIN_SECONDS of training (--max_minutes, counted once the env is built) and
+    # saves; the outer timeout only guards against a hang (env build and kernel compilation come on top)
+    seconds=${TRAIN_SECONDS:-480}
+    timeout -k 30 -s INT $((seconds + 300)) python3 legged_gente/scripts/train.py --task="$task" --headless \
+      --num_envs "${NUM_ENVS:-4096}" --max_iterations "${MAX_ITERS:-100000}" \
+      --max_minutes "$(python3 -c "print($seconds / 60)")" "${extra[@]}" 2>&1 \
+      | grep -E "Learning iteration|Mean episode length|terrain_level|Steps per second|Interrupted|Time limit|Error|Traceback" | tail -8
     # keep the latest checkpoint and the run's scalars after every chunk (the log root may be temporary)
     run=$(latest_run); ls -t "$run"/model_*.pt | head -1 | xargs -I{} cp {} "$OUT_DIR/${task}_last.pt"
     cp "$run/config.json" "$OUT_DIR/${task}_config.json"  # tools/ship_policy.py reads it beside the checkpoint

@@ -8,11 +8,13 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 from legged_gente.envs.base.base_config import class_to_dict
 from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import build_parser, parse_args, run_command
+from legged_gente.utils.args import build_parser, flag, parse_args, run_command
+from legged_gente.utils.episode_logger import TimeLimitReached
 
 
 def code_version() -> dict:
@@ -78,15 +80,18 @@ def train(args) -> Path | None:
         print(f"Logging to {log_dir}")
     main_thread = threading.current_thread() is threading.main_thread()  # only it may set signal handlers
     previous = signal.signal(signal.SIGTERM, _raise_terminated) if main_thread else None
+    if args.max_minutes is not None:
+        runner.logger.deadline = time.monotonic() + 60.0 * args.max_minutes
     try:
         runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
-    except KeyboardInterrupt as interrupt:  # Ctrl-C, SIGTERM, `timeout -s INT`: keep what was learned
+    except (KeyboardInterrupt, TimeLimitReached) as stop:  # Ctrl-C, SIGTERM, --max_minutes: keep what was learned
         if main_thread:
             signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the save short
         if log_dir is not None:
             path = Path(log_dir) / f"model_{runner.current_learning_iteration}.pt"
             runner.save(str(path))
-            what = "Terminated (SIGTERM)" if isinstance(interrupt, Terminated) else "Interrupted"
+            what = {Terminated: "Terminated (SIGTERM)", TimeLimitReached: f"Time limit of {args.max_minutes} min reached"
+                    }.get(type(stop), "Interrupted")
             print(f"\n{what}: saved {path}; continue with --resume", flush=True)
     finally:
         if main_thread:
@@ -94,8 +99,19 @@ def train(args) -> Path | None:
     return Path(log_dir) if log_dir else None
 
 
+def build_train_parser():
+    parser = build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp.")
+    parser.add_argument(*flag("--max_minutes"), type=float,
+                        help="stop after the iteration that passes this much wall-clock time, saving a checkpoint "
+                             "to continue with --resume (for time-limited jobs; no signal needed)")
+    return parser
+
+
 def main(argv=None) -> None:
-    args = parse_args(build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp."), argv)
+    parser = build_train_parser()
+    args = parse_args(parser, argv)
+    if args.max_minutes is not None and not args.max_minutes > 0:
+        parser.error(f"--max_minutes must be > 0, got {args.max_minutes}")
     run_command("gente-train", train, args)
 
 

@@ -4,18 +4,30 @@ rsl-rl 5.5's ``Logger.process_env_step`` finds the finished episodes with ``nonz
 returns to the host at every env step: the CPU waits for the GPU to finish the step before it can launch the
 next one, so the two never overlap. ``DeferredLogger`` keeps the per-step (done, return, length) tensors on
 the device and moves them to the host once per iteration, in ``log``. The numbers it logs are the same.
+
+It also ends training at a wall-clock deadline (``gente-train --max_minutes``): ``log`` runs once per
+iteration, after the policy update, so stopping there leaves a whole iteration to save.
 """
 
 from __future__ import annotations
 
+import time
+
 import torch
+import torch.distributed as dist
 from rsl_rl.utils.logger import Logger
+
+
+class TimeLimitReached(Exception):
+    """Training reached its wall-clock deadline after a whole iteration (raised by ``DeferredLogger.log``)."""
 
 
 class DeferredLogger(Logger):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._finished: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = []
+        self.deadline: float | None = None
+        """``time.monotonic()`` after which training stops at the end of the iteration (None: never)."""
 
     def process_env_step(self, rewards: torch.Tensor, dones: torch.Tensor, extras: dict,
                          intrinsic_rewards: torch.Tensor | None = None) -> None:
@@ -49,3 +61,15 @@ class DeferredLogger(Logger):
     def log(self, *args, **kwargs) -> None:
         self.flush()
         super().log(*args, **kwargs)
+        if self.deadline is not None and self._past_deadline():
+            raise TimeLimitReached()
+
+    def _past_deadline(self) -> bool:
+        """Whether any rank is past the deadline: every rank must stop at the same iteration, or the ones
+        that go on would wait forever in the next gradient all-reduce."""
+        late = time.monotonic() >= self.deadline
+        if not (dist.is_available() and dist.is_initialized()):
+            return late
+        flag = torch.tensor([float(late)], device=self.device)
+        dist.all_reduce(flag, op=dist.ReduceOp.MAX)
+        return bool(flag.item())
