@@ -148,3 +148,34 @@ def test_multi_gpu_report_reads_rsl_rl_logs(tmp_path):
     short = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"),
                             str(tmp_path / "2.log"), "--skip", "4"], cwd=REPO, capture_output=True, text=True)
     assert short.returncode != 0 and "only 4 iterations logged" in short.stderr
+
+
+def _deadline_vote(rank: int, port: int, results) -> None:
+    import time
+    from types import SimpleNamespace
+
+    import torch.distributed as dist
+
+    from legged_gente.utils.episode_logger import DeferredLogger
+
+    dist.init_process_group("gloo", init_method=f"tcp://127.0.0.1:{port}", rank=rank, world_size=2)
+    try:
+        # only rank 0 is past its deadline; rank 1 has an hour left
+        logger = SimpleNamespace(deadline=time.monotonic() + (-1.0 if rank == 0 else 3600.0), device="cpu")
+        results[rank] = DeferredLogger._past_deadline(logger)
+    finally:
+        dist.destroy_process_group()
+
+
+def test_max_minutes_stops_every_rank_at_the_same_iteration():
+    """One rank past --max_minutes' deadline stops them all: a rank that went on would hang in the all-reduce."""
+    import socket
+
+    import torch.multiprocessing as mp
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    results = mp.Manager().dict()
+    mp.spawn(_deadline_vote, args=(port, results), nprocs=2, join=True)
+    assert dict(results) == {0: True, 1: True}
