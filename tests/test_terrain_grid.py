@@ -33,6 +33,7 @@ class TerrainCfg:
     selected_terrain = "pyramid_stairs"
     selected_params = {"step_height": 0.12}
     generated_specs = []
+    max_difficulty = 1.0
     max_init_terrain_level = 1
     curriculum = True
     static_friction = 0.9
@@ -84,6 +85,30 @@ def test_curriculum_layout(curriculum):
     assert peaks[0] < peaks[1] < peaks[2]
     # Border is flat, rigid, at the configured friction.
     assert np.all(t.height_field[:10] == 0) and np.all(t.material.friction[:10] == np.float32(0.9))
+
+
+def test_max_difficulty_extends_every_ramp_past_the_standard_top_level():
+    """Rows 0, 0.75, 1.5: the stairs' ramp (0.05 m + 0.15 m per unit of difficulty) goes on to 0.275 m steps;
+    friction's (1.0 - 0.9 per unit) reaches ice, 0.1, at difficulty 1 and stays there."""
+    t = Terrain(cfg(num_cols=2, terrain_types=["pyramid_stairs", "low_friction"], terrain_proportions=[0.5, 0.5],
+                    max_difficulty=1.5), num_robots=2)
+    for row, difficulty in enumerate((0.0, 0.75, 1.5)):
+        stairs = t.height_field[10 + 40 * row : 50 + 40 * row, 10:50]
+        assert np.allclose(np.diff(np.unique(stairs)), 0.05 + 0.15 * difficulty, atol=1e-6)
+        friction = t.material.friction[10 + 40 * row : 50 + 40 * row, 50:90]
+        assert np.allclose(friction, max(1.0 - 0.9 * difficulty, 0.1))
+
+
+def test_max_difficulty_errors_name_the_terrain_and_the_fix():
+    with pytest.raises(ValueError, match=r"max_difficulty=2.5 must be in \(0, 2.0\]"):
+        Terrain(cfg(max_difficulty=2.5), num_robots=2)
+    # stepping stones shrink to nothing past difficulty 1.5 (1.2 m - 0.8 m per unit: -0.08 m at 1.6)
+    with pytest.raises(ValueError, match=r"difficulty 1.6: stepping_stones: stone_size=-0.080*7? m is outside .* "
+                                         r"Lower terrain.max_difficulty, or fix .*'stepping_stones:<param>=<value>'"):
+        Terrain(cfg(num_cols=1, terrain_types=["stepping_stones"], terrain_proportions=[1.0], max_difficulty=1.6),
+                num_robots=2)
+    Terrain(cfg(num_cols=1, terrain_types=["stepping_stones:stone_size=0.5"], terrain_proportions=[1.0],
+                max_difficulty=1.6), num_robots=2)  # the fix the message names
 
 
 def test_curriculum_materials(curriculum):

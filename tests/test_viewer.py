@@ -22,7 +22,7 @@ class GridCfg:
                      "low_friction"]
     terrain_proportions = [1 / 3, 1 / 3, 1 / 3]
     selected_terrain, selected_params, generated_specs = "flat", {}, []
-    max_init_terrain_level, curriculum, static_friction, seed = 0, True, 1.0, 0
+    max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 0, True, 1.0, 0
 
 
 @pytest.fixture(scope="module")

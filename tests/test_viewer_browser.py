@@ -55,7 +55,7 @@ def test_browser_shows_the_terrain(browser, tmp_path):
         terrain_types = ["hills+soil:preset=dry_sand", "river+water"]
         terrain_proportions = [0.5, 0.5]
         selected_terrain, selected_params, generated_specs = "flat", {}, []
-        max_init_terrain_level, curriculum, static_friction, seed = 0, True, 1.0, 0
+        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 0, True, 1.0, 0
 
     terrain = Terrain(Cfg, num_robots=1)
     viewer = Viewer([TerrainItem("sand and river", lambda: terrain)], port=browser.free_port(), shadows=False)

@@ -22,7 +22,7 @@ class SandAndWater:
     terrain_types = ["soil:preset=dry_sand", "water:flow=current,speed=0.5,direction=0.0,depth=0.3"]
     terrain_proportions = [0.5, 0.5]
     selected_terrain, selected_params, generated_specs = "flat", {}, []
-    max_init_terrain_level, curriculum, static_friction, seed = 0, True, 1.0, 0
+    max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 0, True, 1.0, 0
 
 
 @pytest.fixture(scope="module")

@@ -39,7 +39,7 @@ def benchmark_grid(
         terrain_types = BENCHMARK_TYPES
         terrain_proportions = [1.0 / len(BENCHMARK_TYPES)] * len(BENCHMARK_TYPES)
         selected_terrain, selected_params, generated_specs = "flat", {}, []
-        max_init_terrain_level, curriculum, static_friction, seed = 5, True, 1.0, 0
+        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 5, True, 1.0, 0
 
     Cfg.resolution, Cfg.num_rows, Cfg.num_cols = resolution, num_rows, num_cols
     times = []

@@ -41,7 +41,7 @@ def curriculum_terrain() -> Terrain:
         terrain_types = BENCHMARK_TYPES
         terrain_proportions = [1.0 / len(BENCHMARK_TYPES)] * len(BENCHMARK_TYPES)
         selected_terrain, selected_params, generated_specs = "flat", {}, []
-        max_init_terrain_level, curriculum, static_friction, seed = 5, True, 1.0, 0
+        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 5, True, 1.0, 0
 
     return Terrain(Cfg, num_robots=1)
 

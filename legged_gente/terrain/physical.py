@@ -92,7 +92,9 @@ LOW_FRICTION_RANGES = {"ice": (0.05, 0.10), "wet_tiles": (0.30, 0.40)}
                         choices=tuple(LOW_FRICTION_RANGES) + ("custom",)),
         "mu": Param(0.5, "Coulomb friction coefficient when preset is custom", "1", 0.01, 1.5),
     },
-    difficulty=lambda d: {"preset": "custom", "mu": _lerp(1.0, 0.1, d)},
+    # ice's 0.1 at difficulty 1; past it (terrain.max_difficulty > 1) the ground stays ice: lower friction
+    # stops being a surface a legged robot meets outdoors (wet ice, 0.05, is the ice preset's floor)
+    difficulty=lambda d: {"preset": "custom", "mu": max(_lerp(1.0, 0.1, d), 0.1)},
 )
 def low_friction(shape, resolution, rng, heights, preset, mu):
     value = mu if preset == "custom" else rng.uniform(*LOW_FRICTION_RANGES[preset])

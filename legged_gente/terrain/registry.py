@@ -98,15 +98,26 @@ class AtomicTerrain:
             self.rules(checked)
         return checked
 
-    def params_for_difficulty(self, difficulty: float) -> dict[str, Any]:
-        """Parameters for a curriculum difficulty in [0, 1] (defaults where the terrain has no mapping)."""
-        if not 0.0 <= difficulty <= 1.0:
-            raise ValueError(f"difficulty must be in [0, 1], got {difficulty}.")
+    def params_for_difficulty(self, difficulty: float, fixed: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Parameters for a curriculum difficulty (defaults where the terrain has no mapping; ``fixed`` params
+        replace the mapped ones).
+
+        0 is the easiest level and 1 the standard top level; up to ``MAX_DIFFICULTY`` the maps go on past it
+        (``terrain.max_difficulty``), and a parameter pushed out of its declared range raises, naming it."""
+        if not 0.0 <= difficulty <= MAX_DIFFICULTY:
+            raise ValueError(f"difficulty must be in [0, {MAX_DIFFICULTY}], got {difficulty}.")
         mapped = self.difficulty(difficulty) if self.difficulty is not None else {}
-        return self.check_params(mapped)
+        try:
+            return self.check_params({**mapped, **(fixed or {})})
+        except ValueError as error:
+            raise ValueError(f"at curriculum difficulty {difficulty:.3g}: {error} Lower terrain.max_difficulty, or "
+                             f"fix the parameter in terrain_types ('{self.name}:<param>=<value>').") from None
 
 
 ATOMIC_TERRAINS: dict[str, AtomicTerrain] = {}
+
+MAX_DIFFICULTY = 2.0
+"""Largest curriculum difficulty: twice the standard top level, where most linear maps are still physical."""
 
 
 def atomic_terrain(

@@ -1,8 +1,8 @@
 """The terrain grid: ``num_rows`` x ``num_cols`` tiles, a flat border, the material map and spawn origins.
 
 Rows run along world x (``terrain_length`` each), columns along world y (``terrain_width`` each). In
-curriculum mode a row is a difficulty level (row 0 easiest, the last row difficulty 1) and a column a terrain
-type, columns allocated to ``terrain_types`` by ``terrain_proportions``. Cell (i, j) of ``height_field`` lies at
+curriculum mode a row is a difficulty level (row 0 easiest, the last row ``max_difficulty``: 1 is the standard
+top level) and a column a terrain type, columns allocated to ``terrain_types`` by ``terrain_proportions``. Cell (i, j) of ``height_field`` lies at
 world ``origin_xy + (i, j) * resolution``; ``origin_xy == (-border_size, -border_size)`` so the first tile
 starts at world (0, 0).
 
@@ -25,7 +25,7 @@ import numpy as np
 
 from .composition import Operation, Part, Region, TileSpec, build_tile, tile_spec_from_document
 from .materials import MaterialMap
-from .registry import ATOMIC_TERRAINS
+from .registry import ATOMIC_TERRAINS, MAX_DIFFICULTY
 
 SPAWN_FOOTPRINT = 1.0
 """Side (m) of the square around a spawn point that must be flat and free of obstacles."""
@@ -153,8 +153,8 @@ class Terrain:
         operations = []
         for name, fixed in ops:
             atomic = ATOMIC_TERRAINS[name]
-            base = atomic.params_for_difficulty(difficulty) if difficulty is not None else {}
-            operations.append(Operation(name, atomic.check_params({**base, **fixed})))
+            params = atomic.params_for_difficulty(difficulty, fixed) if difficulty is not None else atomic.check_params(fixed)
+            operations.append(Operation(name, params))
         size_x, size_y = self.tile_size
         spec = TileSpec(size_x, size_y, self.resolution, self._tile_seed(r, c),
                         [Part(Region(0.0, 0.0, size_x, size_y), operations)])
@@ -165,6 +165,10 @@ class Terrain:
         cfg, rows, cols = self.cfg, self.num_rows, self.num_cols
         plan = {}
         if self.mode in ("curriculum", "random"):
+            top = float(cfg.max_difficulty)
+            if not 0.0 < top <= MAX_DIFFICULTY:
+                raise ValueError(f"terrain.max_difficulty={cfg.max_difficulty} must be in (0, {MAX_DIFFICULTY}]; "
+                                 f"1 is the standard top level.")
             types = [parse_tile_type(t) for t in cfg.terrain_types]
             if len(types) != len(cfg.terrain_proportions):
                 raise ValueError(
@@ -175,7 +179,7 @@ class Terrain:
             column_type = allocate_columns(cfg.terrain_proportions, cols)
             self.terrain_types[:] = column_type
             for r in range(rows):
-                difficulty = r / (rows - 1) if rows > 1 else 0.0
+                difficulty = top * r / (rows - 1) if rows > 1 else 0.0
                 for c in range(cols):
                     k = column_type[c]
                     plan[r, c] = (cfg.terrain_types[k], self._atomic_tile(r, c, types[k], difficulty))
@@ -183,7 +187,7 @@ class Terrain:
             p = normalised_proportions(cfg.terrain_proportions)
             rng = np.random.default_rng(int(cfg.seed))
             kinds = rng.choice(len(types), size=(rows, cols), p=p)
-            difficulties = rng.uniform(0.0, 1.0, (rows, cols))
+            difficulties = rng.uniform(0.0, top, (rows, cols))
             for r in range(rows):
                 for c in range(cols):
                     k = kinds[r, c]

@@ -37,6 +37,10 @@ class LeggedRobotCfg(BaseConfig):
         selected_terrain = None  # atomic terrain name for mode "selected"
         selected_params: dict = {}
         generated_specs: list = []  # spec JSON paths for mode "generated"
+        # difficulty of the last row (the first is 0): 1 is each terrain's standard top level (steps and obstacles
+        # 0.2 m, slopes 0.4); more extends every terrain's ramp past it, up to 2 (registry.MAX_DIFFICULTY), for a
+        # policy that has outgrown the standard curriculum
+        max_difficulty = 1.0
         max_init_terrain_level = 5
         curriculum = True
         # a robot that solves the hardest level: "random" sends it to a random level (legged_gym; keeps the easy
