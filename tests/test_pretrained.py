@@ -76,3 +76,26 @@ def test_ship_policy_keeps_the_actor_and_the_run_config(tmp_path):
     assert config["note"] == "a test" and config["source_checkpoint"] == "run/model_4.pt"
     with pytest.raises(ValueError, match="is for gente_biped_flat, not gente_quadruped"):
         ship_policy(run / "model_4.pt", "gente_quadruped", "wrong", destination=tmp_path / "other")
+
+
+def test_evaluate_checkpoint_takes_a_shipped_policy_file(tmp_path):
+    """A shipped model.pt holds only the actor: --checkpoint evaluates it like --pretrained (it needs no critic)."""
+    args = evaluate_script.build_parser().parse_args([
+        "--task", SHIPPED, "--checkpoint", str(policies_root() / SHIPPED / "model.pt"), "--out", str(tmp_path),
+        "--device", "cpu", "--limit", "1", "--robots_per_terrain", "1", "--episode_s", "0.2", "--settle_s", "0",
+        "--no_progress"])
+    report = evaluate_script.evaluate(args)
+    assert report["meta"]["policy_file"] == str(policies_root() / SHIPPED / "model.pt")
+
+
+def test_resuming_from_a_policy_only_checkpoint_is_a_one_line_error(tmp_path, capsys):
+    run = tmp_path / SHIPPED / "shipped_run"
+    run.mkdir(parents=True)
+    (run / "model_7.pt").write_bytes((policies_root() / SHIPPED / "model.pt").read_bytes())
+    with pytest.raises(SystemExit) as exit_info:
+        play_script.main(["--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--headless", "--steps", "1",
+                          "--log_root", str(tmp_path), "--set", "actor.hidden_dims=[32, 32]",
+                          "--set", "critic.hidden_dims=[32, 32]"])
+    assert exit_info.value.code == 2
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "holds only the policy" in line and "model_7.pt" in line, line

@@ -26,3 +26,11 @@ def test_a_step_is_rough_within_half_a_window_of_its_edge():
     # the 8 m square around the centre: 80 x 80 cells, of which 2 columns of 80 are rough
     assert tool.rough_share(heights, 0.1, centre=8.0) == 2 * 80 / (80 * 80)
     assert tool.rough_share(np.zeros((100, 100)), 0.1) == 0.0
+
+
+def test_the_curriculum_table_takes_gente_train_overrides(capsys):
+    """--set terrain.num_rows=2 --set terrain.num_cols=1: one flat column, two levels (both smooth)."""
+    _tool().curriculum_table("gente_biped", ["terrain.num_rows=2", "terrain.num_cols=1", "terrain.terrain_types=['flat']",
+                                             "terrain.terrain_proportions=[1.0]"])
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1:] == ["    0             0.000  0.000 (flat)", "    1             0.000  0.000 (flat)"]

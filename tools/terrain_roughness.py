@@ -7,7 +7,7 @@ terrain's rough share is the share of rough cells within ``centre`` (8 m) square
 the evaluated robots spawn and walk (0.3-1.1 m/s for 9 s).
 
     python tools/terrain_roughness.py --benchmark gente_original --report docs/results/gente_original_eval_biped_040b769.csv
-    python tools/terrain_roughness.py --curriculum gente_biped
+    python tools/terrain_roughness.py --curriculum gente_biped [--set terrain.max_difficulty=1.5 --set terrain.num_rows=14]
 """
 
 from __future__ import annotations
@@ -60,12 +60,15 @@ def print_bins(rows: list[tuple[str, float, float]]) -> None:
         print(f"[{lo:.2f}, {hi:.2f}{']' if hi == 1.0 else ')'}   {int(inside.sum()):8d}  {mean:>12}")
 
 
-def curriculum_table(task: str) -> None:
-    """Per curriculum level: the mean and largest rough share of its tiles (each whole tile)."""
+def curriculum_table(task: str, overrides: list[str] = ()) -> None:
+    """Per curriculum level: the mean and largest rough share of its tiles (each whole tile); ``overrides`` are
+    gente-train's ``--set`` values."""
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.terrain.terrain import Terrain
+    from legged_gente.utils.args import apply_overrides
 
-    env_cfg, _ = task_registry.get_cfgs(task)
+    env_cfg, train_cfg = task_registry.get_cfgs(task)
+    apply_overrides(list(overrides), env_cfg, train_cfg)
     terrain = Terrain(env_cfg.terrain, env_cfg.env.num_envs)
     rough = rough_cells(terrain.height_field, terrain.resolution)
     rows, cols = terrain.tile_cells
@@ -83,9 +86,11 @@ def main() -> None:
     source.add_argument("--benchmark", help="a benchmark name (gente100, gente_original) or folder")
     source.add_argument("--curriculum", metavar="TASK", help="a task whose training curriculum to measure")
     parser.add_argument("--report", help="gente-evaluate's report.csv of that benchmark: success per terrain")
+    parser.add_argument("--set", action="append", default=[], dest="overrides", metavar="SECTION.FIELD=VALUE",
+                        help="with --curriculum: a config override, as gente-train's --set")
     args = parser.parse_args()
     if args.curriculum:
-        curriculum_table(args.curriculum)
+        curriculum_table(args.curriculum, args.overrides)
         return
     print_bins(benchmark_table(args.benchmark, args.report))
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import warnings
 from datetime import datetime
@@ -152,18 +153,29 @@ class TaskRegistry:
     def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):
         """A runner (no run folder) with the policy shipped for task ``name`` loaded (actor only), its network
         sizes taken from the shipped config. The checkpoint's path."""
-        from legged_gente.envs.base.base_config import update_from_dict
         from legged_gente.utils.checkpoints import pretrained_policy
 
-        path, config = pretrained_policy(name)
+        path, _ = pretrained_policy(name)
+        return self.make_policy_runner(env, name, path, train_cfg), path
+
+    def make_policy_runner(self, env, name: str, checkpoint: Path, train_cfg: LeggedRobotCfgPPO | None = None):
+        """A runner (no run folder) with the actor of ``checkpoint`` loaded, for playing or evaluating it: a run's
+        ``model_<N>.pt`` or a shipped, actor-only ``model.pt``. The network sizes come from the ``config.json``
+        beside it when there is one (a run folder or a shipped policy's folder), else from ``train_cfg``."""
+        from legged_gente.envs.base.base_config import update_from_dict
+
         train_cfg = train_cfg or self.get_cfgs(name)[1]
         train_cfg.runner.resume = False
-        for section in ("actor", "critic"):
-            update_from_dict(getattr(train_cfg, section), config["train"][section], section)
+        config_path = Path(checkpoint).parent / "config.json"
+        if config_path.is_file():
+            train = json.loads(config_path.read_text()).get("train", {})
+            for section in ("actor", "critic"):
+                if section in train:
+                    update_from_dict(getattr(train_cfg, section), train[section], section)
         runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
-        runner.load(str(path), load_cfg={"actor": True}, map_location=env.device)
-        runner.loaded_checkpoint = path
-        return runner, path
+        runner.load(str(checkpoint), load_cfg={"actor": True}, map_location=env.device)
+        runner.loaded_checkpoint = Path(checkpoint)
+        return runner
 
 
 def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) -> Path:

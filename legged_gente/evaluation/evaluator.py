@@ -267,6 +267,5 @@ def load_policy_and_file(evaluation, checkpoint: str | None = None, exported: st
         path = find_checkpoint(path.parent, path.name)
     if not path.is_file():
         raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
-    runner, _, _ = task_registry.make_alg_runner(env, evaluation.task_name, train_cfg=evaluation.train_cfg, log_root=None)
-    runner.load(str(path), map_location=env.device)
+    runner = task_registry.make_policy_runner(env, evaluation.task_name, path, evaluation.train_cfg)
     return runner.get_inference_policy(device=env.device), path.resolve()

@@ -21,7 +21,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description="Evaluate a locomotion policy on a terrain benchmark.")
     p.add_argument("--task", default="gente_biped", help="registered task name")
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, or a run folder (its latest checkpoint)")
+    src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, a run folder (its latest checkpoint) or a "
+                                          "shipped policy's model.pt; network sizes from the config.json beside it")
     src.add_argument("--exported", help="policy.onnx exported by gente-play (run with onnxruntime on the CPU)")
     src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")

@@ -188,10 +188,14 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         """rsl-rl's load, but safe (``torch.load(weights_only=True)``) and with a one-line error for a checkpoint
         of another task; also restores the env's curriculum when the checkpoint has one that fits
         (``self.curriculum_message`` says what happened)."""
-        from legged_gente.utils.checkpoints import check_checkpoint_fits, load_checkpoint
+        from legged_gente.utils.checkpoints import CheckpointError, check_checkpoint_fits, load_checkpoint
 
         loaded = load_checkpoint(path, map_location)
         check_checkpoint_fits(loaded, path, self.task_name, self.env.num_actions, self.alg.get_policy().state_dict())
+        if "critic_state_dict" not in loaded and (load_cfg is None or load_cfg.get("critic", False)):
+            raise CheckpointError(
+                f"checkpoint {path} holds only the policy (a shipped model.pt): play or evaluate it (gente-play "
+                f"--pretrained, gente-evaluate --checkpoint); resuming training needs a run's model_<N>.pt.")
         if self.alg.load(loaded, load_cfg, strict):
             self.current_learning_iteration = loaded["iter"]
         infos = loaded["infos"]
