@@ -102,7 +102,7 @@ def test_max_difficulty_extends_every_ramp_past_the_standard_top_level():
 def test_max_difficulty_errors_name_the_terrain_and_the_fix():
     with pytest.raises(ValueError, match=r"max_difficulty=2.5 must be in \(0, 2.0\]"):
         Terrain(cfg(max_difficulty=2.5), num_robots=2)
-    # stepping stones shrink to nothing past difficulty 1.5 (1.2 m - 0.8 m per unit: -0.08 m at 1.6)
+    # stepping stones: 1.2 m - 0.8 m per unit of difficulty, below their 0.2 m minimum past 1.25 (-0.08 m at 1.6)
     with pytest.raises(ValueError, match=r"difficulty 1.6: stepping_stones: stone_size=-0.080*7? m is outside .* "
                                          r"Lower terrain.max_difficulty, or fix .*'stepping_stones:<param>=<value>'"):
         Terrain(cfg(num_cols=1, terrain_types=["stepping_stones"], terrain_proportions=[1.0], max_difficulty=1.6),
