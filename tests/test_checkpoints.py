@@ -118,6 +118,25 @@ def terminated_run(tmp_path_factory):
     return cwd, proc.returncode, "".join(lines) + out
 
 
+def test_load_run_takes_the_path_of_a_run_folder_anywhere(runner, tmp_path):
+    """A run copied from another machine resumes from where it lies, with no run under the log root yet."""
+    copied = tmp_path / "copied" / "2026-01-03_00-00-00"
+    copied.mkdir(parents=True)
+    for iteration in (50, 61):
+        runner.current_learning_iteration = iteration
+        runner.save(str(copied / f"model_{iteration}.pt"))
+    empty_root = tmp_path / "logs" / "gente_biped_flat"
+    assert load_newest_readable(runner, empty_root, load_run=str(copied)) == copied / "model_61.pt"
+    assert runner.current_learning_iteration == 61
+    assert load_newest_readable(runner, empty_root, load_run=str(copied), checkpoint=50) == copied / "model_50.pt"
+    # a name under the log root still wins, and a name that is neither is one clear error
+    (empty_root / "mine").mkdir(parents=True)
+    runner.save(str(empty_root / "mine" / "model_3.pt"))
+    assert load_newest_readable(runner, empty_root, load_run="mine") == empty_root / "mine" / "model_3.pt"
+    with pytest.raises(FileNotFoundError, match=r"run 'nowhere' is neither a run under .* \(runs: \['mine'\]\) nor a folder"):
+        load_newest_readable(runner, empty_root, load_run="nowhere")
+
+
 def test_sigterm_saves_a_checkpoint(terminated_run):
     cwd, code, out = terminated_run
     assert code == 0, out

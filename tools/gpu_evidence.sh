@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The GPU results of docs/performance.md, from the project root on a host with a GPU (the package and its
 # dependencies installed); everything it keeps goes to $OUT_DIR (default gpu_evidence/):
-#   phase train:   train $TASK at $NUM_ENVS envs for $TRAIN_SECONDS of training (RESUME=1 continues the latest run; $TRAIN_ARGS
-#                  are more train.py flags, e.g. "--set terrain.solved_top_level=stay"); the
+#   phase train:   train $TASK at $NUM_ENVS envs for $TRAIN_SECONDS of training (RESUME=1 continues the latest run;
+#                  $TRAIN_ARGS are more train.py flags, e.g. "--set terrain.solved_top_level=stay", or
+#                  "--resume --load_run <path of a run folder brought from elsewhere>"); the
 #                  latest checkpoint and the run's scalars CSV go to $OUT_DIR after every chunk
 #   phase report:  benchmark (+ sync check, CSV), play (tracking plot + exports), scalars CSV -> $OUT_DIR
 #   phase eval:    gente-evaluate the latest $TASK run on gente100 -> $OUT_DIR/eval; with FIG_ITEMS="id id id"

@@ -24,7 +24,8 @@ def build_parser(description: str) -> argparse.ArgumentParser:
     parser.add_argument(*flag("--max_iterations"), type=int, help="PPO iterations to run")
     parser.add_argument("--headless", action="store_true", help="never open a viewer window")
     parser.add_argument("--resume", action="store_true", help="continue from a checkpoint")
-    parser.add_argument(*flag("--load_run"), help="run folder name under logs/<experiment>/ (default: the latest)")
+    parser.add_argument(*flag("--load_run"), help="run folder name under logs/<experiment>/, or the path of a run "
+                                                  "folder anywhere (default: the latest under logs/<experiment>/)")
     parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
     parser.add_argument(*flag("--experiment_name"), help="logs/<experiment_name>/")
     parser.add_argument(*flag("--run_name"), help="suffix of the run folder")

@@ -45,12 +45,19 @@ def _models(run: Path) -> list[Path]:
     return sorted(run.glob("model_*.pt"), key=_iteration)
 
 
-def _run(root: Path, runs: list[Path], load_run) -> Path:
+def _run(experiment_root: Path | None, load_run) -> Path:
+    """The run folder to load from: the latest under ``experiment_root``, the one named ``load_run`` there, or,
+    when no run there has that name, ``load_run`` as a path to a run folder anywhere (e.g. copied from another
+    machine)."""
     if load_run in (-1, "-1", None):
-        return runs[-1]
-    run = root / str(load_run)
+        return _runs(experiment_root)[-1]
+    named = Path(experiment_root) / str(load_run) if experiment_root is not None else None
+    run = named if named is not None and named.is_dir() else Path(str(load_run)).expanduser()
     if not run.is_dir():
-        raise FileNotFoundError(f"run {load_run!r} not found under {root}; runs: {[r.name for r in runs]}")
+        root = Path(experiment_root) if experiment_root is not None else None
+        runs = sorted(r.name for r in root.iterdir() if r.is_dir()) if root is not None and root.is_dir() else []
+        raise FileNotFoundError(f"run {load_run!r} is neither a run under {experiment_root} (runs: {runs}) nor a "
+                                f"folder; pass a run name or the path of a run folder.")
     if not _models(run):
         raise FileNotFoundError(f"run {run} has no model_*.pt checkpoints.")
     return run
@@ -64,9 +71,7 @@ def find_checkpoint(experiment_root: Path | None, load_run=-1, checkpoint=-1) ->
 def checkpoint_candidates(experiment_root: Path | None, load_run=-1, checkpoint=-1) -> list[Path]:
     """Checkpoints to try, in order: a named checkpoint alone; else the run's checkpoints newest first, then
     (when no run was named) those of the earlier runs, newest first."""
-    runs = _runs(experiment_root)
-    root = Path(experiment_root)
-    run = _run(root, runs, load_run)
+    run = _run(experiment_root, load_run)
     models = _models(run)
     if checkpoint not in (-1, "-1", None):
         path = run / f"model_{checkpoint}.pt"
@@ -75,7 +80,7 @@ def checkpoint_candidates(experiment_root: Path | None, load_run=-1, checkpoint=
         return [path]
     candidates = models[::-1]
     if load_run in (-1, "-1", None):
-        for earlier in runs[-2::-1]:
+        for earlier in _runs(experiment_root)[-2::-1]:
             candidates += _models(earlier)[::-1]
     return candidates
 
