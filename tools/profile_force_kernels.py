@@ -66,20 +66,17 @@ def main() -> None:
         parser.error(f"task {args.task} has no terrain force fields; pick one with forces (e.g. gente_biped)")
     settle(env)
     sim, forces = env.sim, env.forces
-    kept = [t.clone() for t in sim.substep_state]
     nacon = wp.clone(sim.d.nacon)
 
     def substep():
         mjw.step(sim.m, sim.d)
         forces.after_substep()
 
-    with wp.ScopedDevice(sim.wp_device):
+    with wp.ScopedDevice(sim.wp_device), sim.substep_state_kept():
         force_total = show("force kernels (one pass)", *kernel_times(force_pass(env), args.calls), top=20)
         wp.copy(sim.d.nacon, nacon)
         substep_total = show("substep with forces", *kernel_times(substep, args.calls), top=30)
         show("post-reset forward (Simulation.recompute)", *kernel_times(sim.recompute, args.calls), top=25)
-    for t, old in zip(sim.substep_state, kept):
-        t.copy_(old)
     print(f"force kernels: {force_total / substep_total:.1%} of the substep's kernel time ({args.num_envs} robots, "
           f"{torch.cuda.get_device_name()})")
 

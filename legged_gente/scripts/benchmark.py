@@ -130,13 +130,11 @@ def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> fl
     afterwards."""
     sim = env.sim
     nacon = wp.clone(sim.d.nacon)
-    kept = [t.clone() for t in sim.substep_state]
-    try:
-        return _timed_calls(env, force_pass(env, only_sole_contacts), steps) * env.num_envs
-    finally:
-        wp.copy(sim.d.nacon, nacon)
-        for t, old in zip(sim.substep_state, kept):
-            t.copy_(old)
+    with sim.substep_state_kept():
+        try:
+            return _timed_calls(env, force_pass(env, only_sole_contacts), steps) * env.num_envs
+        finally:
+            wp.copy(sim.d.nacon, nacon)
 
 
 def reset_forward_per_s(env, calls: int) -> float:
@@ -144,13 +142,8 @@ def reset_forward_per_s(env, calls: int) -> float:
     forward with the force fields' callbacks, their after-substep hooks and the per-body contact forces), on the
     current state. On a GPU the step runs it every time, whether a world reset or not (deciding would wait for
     the device). What the hooks integrate is put back afterwards, as ``forward`` does."""
-    sim = env.sim
-    kept = [t.clone() for t in sim.substep_state]
-    try:
-        return _timed_calls(env, sim.recompute, calls)
-    finally:
-        for t, old in zip(sim.substep_state, kept):
-            t.copy_(old)
+    with env.sim.substep_state_kept():
+        return _timed_calls(env, env.sim.recompute, calls)
 
 
 def env_steps(env, steps: int, check_sync: bool = False) -> float:

@@ -9,7 +9,8 @@ env records them into its own graph of the whole step with ``cuda_graph = "env_s
 
 from __future__ import annotations
 
-from typing import Callable
+import contextlib
+from typing import Callable, Iterator
 
 import mujoco
 import mujoco_warp as mjw
@@ -158,13 +159,21 @@ class Simulation:
         must not wait for the device)."""
         if not self.wp_device.is_cuda and not bool(mask.any()):
             return
-        kept = [t.clone() for t in self.substep_state]
         last = [t.clone() for t in self.observed]
-        self.recompute()
-        for t, old in zip(self.substep_state, kept):
-            t.copy_(old)
+        with self.substep_state_kept():
+            self.recompute()
         for t, old in zip(self.observed, last):
             t.copy_(torch.where(mask.view(-1, *[1] * (t.dim() - 1)), t, old))
+
+    @contextlib.contextmanager
+    def substep_state_kept(self) -> Iterator[None]:
+        """Everything in ``substep_state`` put back, in every world, when the block ends (however it ends)."""
+        kept = [t.clone() for t in self.substep_state]
+        try:
+            yield
+        finally:
+            for t, old in zip(self.substep_state, kept):
+                t.copy_(old)
 
     def recompute(self) -> None:
         """The Warp work of :meth:`forward`, in every world: MuJoCo's forward (with the force fields' callbacks),

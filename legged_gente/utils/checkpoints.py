@@ -51,10 +51,10 @@ def _run(experiment_root: Path | None, load_run) -> Path:
     machine)."""
     if load_run in (-1, "-1", None):
         return _runs(experiment_root)[-1]
-    named = Path(experiment_root) / str(load_run) if experiment_root is not None else None
+    root = Path(experiment_root) if experiment_root is not None else None
+    named = root / str(load_run) if root is not None else None
     run = named if named is not None and named.is_dir() else Path(str(load_run)).expanduser()
     if not run.is_dir():
-        root = Path(experiment_root) if experiment_root is not None else None
         runs = sorted(r.name for r in root.iterdir() if r.is_dir()) if root is not None and root.is_dir() else []
         raise FileNotFoundError(f"run {load_run!r} is neither a run under {experiment_root} (runs: {runs}) nor a "
                                 f"folder; pass a run name or the path of a run folder.")
