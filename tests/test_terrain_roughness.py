@@ -34,3 +34,21 @@ def test_the_curriculum_table_takes_gente_train_overrides(capsys):
                                              "terrain.terrain_proportions=[1.0]"])
     lines = capsys.readouterr().out.splitlines()
     assert lines[1:] == ["    0             0.000  0.000 (flat)", "    1             0.000  0.000 (flat)"]
+
+
+def test_bins_average_success_falls_and_tracking_over_their_terrains(tmp_path, capsys):
+    """Two rough terrains (success 0.5 and 1.0, fall rate 0.25 and 0, tracking 0.2 and 0.4 m/s) average to
+    75 %, 12.5 %, 0.300; a terrain with no moving robot (empty cells) enters no mean; an empty bin prints '-'."""
+    tool = _tool()
+    report = tmp_path / "report.csv"
+    report.write_text("row,name,success_rate,fall_rate,tracking_error\n"
+                      "terrain,a,0.5,0.25,0.2\nterrain,b,1.0,0.0,0.4\nterrain,c,,,\nterrain,d,0.0,1.0,0.9\n"
+                      "overall,all,0.6,0.2,0.3\n")
+    metrics = tool.read_report(str(report))
+    assert set(metrics) == {"a", "b", "c", "d"} and np.isnan(metrics["c"]["success_rate"])
+    tool.print_bins([("a", 0.5, metrics["a"]), ("b", 0.9, metrics["b"]), ("c", 0.4, metrics["c"]),
+                     ("d", 0.05, metrics["d"])])
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1].split()[2:] == ["0", "-", "-", "-"]  # [0.00, 0.02): no terrain
+    assert lines[2].split()[2:] == ["1", "0.0%", "100.0%", "0.900"]
+    assert lines[4].split()[2:] == ["3", "75.0%", "12.5%", "0.300"]

@@ -35,29 +35,44 @@ def rough_share(heights: np.ndarray, resolution: float, centre: float = 8.0, **k
     return float(rough[max(cx - half, 0):cx + half, max(cy - half, 0):cy + half].mean())
 
 
-def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float, float]]:
-    """(item id, rough share, success rate or NaN) per item of ``benchmark``."""
+REPORT_COLUMNS = ("success_rate", "fall_rate", "tracking_error")  # per terrain, from gente-evaluate's report.csv
+
+
+def read_report(path: str) -> dict[str, dict[str, float]]:
+    """Per terrain of a report.csv: its ``REPORT_COLUMNS`` (NaN where empty: no moving robot there)."""
+    with open(path, newline="") as f:
+        return {r["name"]: {k: float(r[k] or "nan") for k in REPORT_COLUMNS}
+                for r in csv.DictReader(f) if r["row"] == "terrain"}
+
+
+def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float, dict[str, float]]]:
+    """(item id, rough share, the report's ``REPORT_COLUMNS`` for it, NaN without a report) per item of
+    ``benchmark``."""
     from legged_gente.evaluation.benchmark import load_benchmark
 
-    success = {}
-    if report:
-        success = {r["name"]: float(r["success_rate"]) for r in csv.DictReader(open(report)) if r["row"] == "terrain"}
+    metrics = read_report(report) if report else {}
+    missing = dict.fromkeys(REPORT_COLUMNS, float("nan"))
     rows = []
     for item in load_benchmark(benchmark):
         spec = item.spec()
         heights, _ = spec.build()
-        rows.append((item.id, rough_share(heights, spec.resolution), success.get(item.id, float("nan"))))
+        rows.append((item.id, rough_share(heights, spec.resolution), metrics.get(item.id, missing)))
     return rows
 
 
-def print_bins(rows: list[tuple[str, float, float]]) -> None:
+def print_bins(rows: list[tuple[str, float, dict[str, float]]]) -> None:
+    """Per bin of rough share: the terrains' count and the means of their success rate, fall rate and tracking
+    error (m/s), which tell falling from being too slow."""
     shares = np.array([r[1] for r in rows])
-    success = np.array([r[2] for r in rows])
-    print("rough share      terrains  mean of the terrains' success rates")
+    print("rough share      terrains   success  fall rate  tracking error (means over the terrains)")
     for lo, hi in zip(BINS[:-1], BINS[1:]):
         inside = (shares >= lo) & ((shares < hi) if hi < 1.0 else (shares <= hi))
-        mean = f"{np.nanmean(success[inside]):.1%}" if inside.any() and not np.isnan(success[inside]).all() else "-"
-        print(f"[{lo:.2f}, {hi:.2f}{']' if hi == 1.0 else ')'}   {int(inside.sum()):8d}  {mean:>12}")
+        means = []
+        for column, fmt in zip(REPORT_COLUMNS, ("{:.1%}", "{:.1%}", "{:.3f}")):
+            values = np.array([r[2][column] for r, keep in zip(rows, inside) if keep])
+            means.append(fmt.format(np.nanmean(values)) if np.isfinite(values).any() else "-")
+        print(f"[{lo:.2f}, {hi:.2f}{']' if hi == 1.0 else ')'}   {int(inside.sum()):8d}  {means[0]:>8}  {means[1]:>9}  "
+              f"{means[2]:>14}")
 
 
 def curriculum_table(task: str, overrides: list[str] = ()) -> None:
@@ -85,7 +100,8 @@ def main() -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--benchmark", help="a benchmark name (gente100, gente_original) or folder")
     source.add_argument("--curriculum", metavar="TASK", help="a task whose training curriculum to measure")
-    parser.add_argument("--report", help="gente-evaluate's report.csv of that benchmark: success per terrain")
+    parser.add_argument("--report", help="gente-evaluate's report.csv of that benchmark: success, fall rate and "
+                        "tracking error per terrain")
     parser.add_argument("--set", action="append", default=[], dest="overrides", metavar="SECTION.FIELD=VALUE",
                         help="with --curriculum: a config override, as gente-train's --set")
     args = parser.parse_args()
