@@ -2,9 +2,9 @@
 
 Rows run along world x (``terrain_length`` each), columns along world y (``terrain_width`` each). In
 curriculum mode a row is a difficulty level (row 0 easiest, the last row ``max_difficulty``: 1 is the standard
-top level) and a column a terrain type, columns allocated to ``terrain_types`` by ``terrain_proportions``. Cell (i, j) of ``height_field`` lies at
-world ``origin_xy + (i, j) * resolution``; ``origin_xy == (-border_size, -border_size)`` so the first tile
-starts at world (0, 0).
+top level) and a column a terrain type, columns allocated to ``terrain_types`` by ``terrain_proportions``.
+Cell (i, j) of ``height_field`` lies at world ``origin_xy + (i, j) * resolution``; ``origin_xy ==
+(-border_size, -border_size)`` so the first tile starts at world (0, 0).
 
 A ``terrain_types`` entry is an atomic terrain name, optionally with fixed parameters after a colon:
 ``"stairs:direction=down"`` or ``"water:flow=current,speed=0.5"``; the curriculum sets the others. Several
@@ -153,7 +153,10 @@ class Terrain:
         operations = []
         for name, fixed in ops:
             atomic = ATOMIC_TERRAINS[name]
-            params = atomic.params_for_difficulty(difficulty, fixed) if difficulty is not None else atomic.check_params(fixed)
+            if difficulty is None:
+                params = atomic.check_params(fixed)
+            else:
+                params = atomic.params_for_difficulty(difficulty, fixed)
             operations.append(Operation(name, params))
         size_x, size_y = self.tile_size
         spec = TileSpec(size_x, size_y, self.resolution, self._tile_seed(r, c),
