@@ -275,3 +275,40 @@ def test_the_evaluation_gives_the_same_metrics_through_the_compiled_step():
             np.testing.assert_allclose(metrics[name], plain[name], rtol=1e-4, atol=1e-5, err_msg=name)
         for name in ("fell", "diverged"):
             assert (metrics[name] == plain[name]).all()
+
+
+
+def _still_env(yaw: list[float], heading: list[float], standing: list[bool], heading_mode: bool = True):
+    """The state the recorder reads after a step, for robots at rest facing ``yaw`` (rad): nothing simulated."""
+    from types import SimpleNamespace
+
+    n = len(yaw)
+    half = torch.tensor(yaw) / 2
+    quat = torch.stack([half.cos(), torch.zeros(n), torch.zeros(n), half.sin()], 1)  # w, x, y, z
+    commands = torch.zeros(n, 4)
+    commands[:, 0], commands[:, 3] = 0.6, torch.tensor(heading)
+    zeros = torch.zeros(n, dtype=torch.bool)
+    return SimpleNamespace(
+        num_envs=n, device="cpu", dt=0.02, base_quat=quat, commands=commands, heading_command=heading_mode,
+        standing_still=torch.tensor(standing), base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3),
+        base_ang_vel=torch.zeros(n, 3), sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)),
+        diverged_buf=zeros, time_out_buf=zeros, torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
+        penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3))
+
+
+def test_heading_error_is_the_wrapped_angle_to_the_commanded_heading():
+    """The base-frame metrics cannot see a robot that walks but faces away from its commanded heading; the heading
+    error (degrees, the last measured step) can. Values by hand: |0.5 - 0| rad = 28.65 deg; 3.0 and -3.0 rad are
+    2 pi - 6 = 0.2832 rad = 16.23 deg apart; a stand-still robot and the yaw-rate mode have none."""
+    from legged_gente.evaluation.evaluator import Recorder
+
+    env = _still_env(yaw=[0.0, -3.0, 1.0, 0.2], heading=[0.5, 3.0, 1.0, 2.0], standing=[False, False, False, True])
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    recorder.record(env, torch.zeros(4, dtype=torch.bool))
+    expected = [28.648, 16.226, 0.0]
+    assert recorder.heading_error[:3].tolist() == pytest.approx(expected, abs=1e-3)
+    assert math.isnan(recorder.heading_error[3])
+    env = _still_env(yaw=[0.0], heading=[0.5], standing=[False], heading_mode=False)
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    recorder.record(env, torch.zeros(1, dtype=torch.bool))
+    assert math.isnan(recorder.heading_error[0])

@@ -21,6 +21,9 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
 * ``progress``: velocity task: the distance covered along the command over the commanded distance, both after
   ``settle_s``: sum over steps of (v_xy . c_xy / |c_xy|) dt divided by the sum of |c_xy| dt (base frame). A
   robot that stands scores 0, one that follows the command 1; undefined (NaN) for a stand-still command.
+* ``heading_error`` (deg): heading mode only (else NaN): |commanded heading - base yaw| at the robot's last
+  measured step, for moving commands. The other metrics are taken in the base frame, so a robot that walks
+  well but turns away from its commanded heading passes them; this one shows it (not part of ``success``).
 * ``standing``: the robot was commanded to stand still (velocity task).
 * ``success``: never for a diverged robot; velocity task, moving command (|c_xy| >= 0.3 m/s): not fell,
   tracking_error < ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still
@@ -46,6 +49,7 @@ import torch
 from legged_gente.evaluation.benchmark import Item, tile_geometry
 from legged_gente.evaluation.tasks import VelocityTask, WaypointTask, zigzag_waypoints
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
+from legged_gente.utils.torch_math import wrap_to_pi, yaw_of
 
 CONTACT_THRESHOLD = 1.0
 """N; a penalised body with a larger contact force is touching something."""
@@ -72,6 +76,7 @@ class Recorder:
         self.fell, self.diverged = z(torch.bool), z(torch.bool)
         self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
         self.along_cmd, self.cmd_distance = z(), z()
+        self.heading_error = torch.full((n,), float("nan"), device=dev)
         self.collisions = z()
         self.in_contact = z(torch.bool)
         self.start_xy = env.base_pos[:, :2].clone()
@@ -102,6 +107,10 @@ class Recorder:
         along = torch.sum(env.base_lin_vel[:, :2] * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
         self.along_cmd += torch.where(alive, along, 0.0) * self.dt * counted
         self.cmd_distance += cmd_speed * self.dt * counted
+        if env.heading_command:
+            heading_error = torch.rad2deg(wrap_to_pi(env.commands[:, 3] - yaw_of(env.base_quat)).abs())
+            measured = alive & ~env.standing_still & (self.step > self.settle_steps)
+            self.heading_error = torch.where(measured, heading_error, self.heading_error)
         self.distance += torch.where(alive, torch.norm(xy - self.last_xy, dim=1), 0.0)
         self.last_xy = torch.where(alive[:, None], xy, self.last_xy)
         power = torch.sum(torch.abs(env.torques * env.dof_vel), dim=1)
@@ -217,7 +226,7 @@ class Evaluation:
             "fell": r.fell, "tracking_error": tracking, "distance": r.distance,
             "displacement": torch.norm(r.last_xy - r.start_xy, dim=1), "collisions": r.collisions,
             "energy": r.energy, "time_s": r.alive_steps * env.dt, "finished": task.finished,
-            "progress": progress, "standing": standing, "diverged": r.diverged,
+            "progress": progress, "heading_error": r.heading_error, "standing": standing, "diverged": r.diverged,
         }
         out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
         traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}

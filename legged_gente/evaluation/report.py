@@ -29,8 +29,8 @@ except a ``flat`` call at a non-zero height: a raised block (a sketch's black ob
 BASE_GROUND = ("flat", "natural_ground", "random_uniform", "waves")
 CATEGORIES = ("water", "soil", "obstacles", "slopes_and_stairs")
 
-METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "progress", "distance", "displacement", "collisions",
-                  "falls", "fall_rate", "diverged", "energy_per_m")
+METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "progress", "heading_error", "distance", "displacement",
+                  "collisions", "falls", "fall_rate", "diverged", "energy_per_m")
 
 
 def categories_of(spec) -> list[str]:
@@ -84,11 +84,13 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
     falls = int(metrics["fell"].sum())
     finite = np.isfinite(kept["tracking_error"])
     progress = kept["progress"][np.isfinite(kept["progress"])] if "progress" in kept else np.zeros(0)
+    heading = kept["heading_error"][np.isfinite(kept["heading_error"])] if "heading_error" in kept else np.zeros(0)
     return {
         "robots": n,
         "success_rate": float(ok.mean()) if n else math.nan,
         "tracking_error": float(kept["tracking_error"][finite].mean()) if finite.any() else math.nan,
         "progress": float(progress.mean()) if progress.size else math.nan,
+        "heading_error": float(heading.mean()) if heading.size else math.nan,
         "distance": float(kept["distance"].mean()) if m else math.nan,
         "displacement": float(kept["displacement"].mean()) if m else math.nan,
         "collisions": float(kept["collisions"].mean()) if m else math.nan,

@@ -10,6 +10,7 @@ velocities, positions, waypoints) to ``--out``. See docs/evaluation.md for the m
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import numpy as np
@@ -82,8 +83,10 @@ def evaluate(args) -> dict:
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
+    heading = o.get("heading_error")
+    heading = f"heading error {heading:.1f} deg; " if heading is not None and math.isfinite(heading) else ""
     print(f"success {100 * o['success_rate']:.1f}% over {o['robots']} robots on {o['terrains']} terrains; "
-          f"tracking error {o['tracking_error']:.3f} m/s; falls {o['falls']}; diverged {o['diverged']}")
+          f"tracking error {o['tracking_error']:.3f} m/s; {heading}falls {o['falls']}; diverged {o['diverged']}")
     for name, g in report["groups"].items():
         print(f"  {name:18s} success {100 * g['success_rate']:5.1f}%  ({g['terrains']} terrains)")
     print(f"wrote {json_path}, {csv_path}")
