@@ -279,21 +279,29 @@ def test_the_evaluation_gives_the_same_metrics_through_the_compiled_step():
 
 
 def _still_env(yaw: list[float], heading: list[float], standing: list[bool], heading_mode: bool = True):
-    """The state the recorder reads after a step, for robots at rest facing ``yaw`` (rad): nothing simulated."""
+    """The state the recorder reads after a step, for robots facing ``yaw`` (rad) and commanded vx = 0.6 m/s and
+    ``heading``; at rest until a test sets ``sim.qvel`` (world frame): nothing simulated."""
     from types import SimpleNamespace
 
     n = len(yaw)
-    half = torch.tensor(yaw) / 2
-    quat = torch.stack([half.cos(), torch.zeros(n), torch.zeros(n), half.sin()], 1)  # w, x, y, z
     commands = torch.zeros(n, 4)
     commands[:, 0], commands[:, 3] = 0.6, torch.tensor(heading)
     zeros = torch.zeros(n, dtype=torch.bool)
-    return SimpleNamespace(
-        num_envs=n, device="cpu", dt=0.02, base_quat=quat, commands=commands, heading_command=heading_mode,
+    params = SimpleNamespace(commands=SimpleNamespace(heading_stiffness=torch.tensor(0.5),
+                                                      ang_vel_yaw=torch.tensor([-1.0, 1.0])))
+    env = SimpleNamespace(
+        num_envs=n, device="cpu", dt=0.02, commands=commands, heading_command=heading_mode, params=params,
         standing_still=torch.tensor(standing), base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3),
         base_ang_vel=torch.zeros(n, 3), sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)),
         diverged_buf=zeros, time_out_buf=zeros, torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
         penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3))
+    _face(env, yaw)
+    return env
+
+
+def _face(env, yaw: list[float]) -> None:
+    half = torch.tensor(yaw) / 2
+    env.base_quat = torch.stack([half.cos(), torch.zeros(len(yaw)), torch.zeros(len(yaw)), half.sin()], 1)  # wxyz
 
 
 def test_heading_error_is_the_wrapped_angle_to_the_commanded_heading():
@@ -312,3 +320,43 @@ def test_heading_error_is_the_wrapped_angle_to_the_commanded_heading():
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     recorder.record(env, torch.zeros(1, dtype=torch.bool))
     assert math.isnan(recorder.heading_error[0])
+
+
+def test_progress_is_measured_along_the_path_a_perfect_follower_would_take():
+    """Walking the commanded speed in the wrong direction is not progress. Robots spawned facing +x, commanded
+    vx = 0.6 m/s; each then moves at 0.6 m/s in the world: (0) along +x, heading 0: progress 1; (1) along +y with
+    its base turned to +y (the base-frame velocity matches the command), heading 0: progress 0; (2) heading 0.5
+    rad: the reference yaw after k steps is 0.5 (1 - (1 - 0.5 dt)^k) (heading_stiffness 0.5 /s, below the 1 rad/s
+    clamp); a robot moving along +x scores the mean of cos(reference yaw) over the steps."""
+    from legged_gente.evaluation.evaluator import Recorder
+
+    dt, steps = 0.02, 100
+    env = _still_env(yaw=[0.0, 0.0, 0.0], heading=[0.0, 0.0, 0.5], standing=[False, False, False])
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    _face(env, [0.0, math.pi / 2, 0.0])
+    env.sim.qvel[:, :2] = torch.tensor([[0.6, 0.0], [0.0, 0.6], [0.6, 0.0]])
+    env.base_lin_vel[:, 0] = 0.6  # in its own frame every robot walks as commanded
+    for _ in range(steps):
+        recorder.record(env, torch.zeros(3, dtype=torch.bool))
+    progress = recorder.along_cmd / recorder.cmd_distance
+    reference = [0.5 * (1 - (1 - 0.5 * dt) ** k) for k in range(1, steps + 1)]
+    expected = [1.0, 0.0, sum(math.cos(y) for y in reference) / steps]
+    assert progress.tolist() == pytest.approx(expected, abs=1e-4)
+    assert expected[2] < 0.99  # the reference turned: the check can fail
+
+
+def test_the_reference_yaw_follows_the_commanded_yaw_rate_without_a_heading():
+    """Yaw-rate mode: the reference turns at the commanded rate, 1 rad/s for 50 steps of 0.02 s = 1 rad; a robot
+    moving at 0.6 m/s along (cos 1, sin 1) at the end is on the path."""
+    from legged_gente.evaluation.evaluator import Recorder
+
+    env = _still_env(yaw=[0.0], heading=[0.0], standing=[False], heading_mode=False)
+    env.commands[:, 2] = 1.0
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    for _ in range(50):
+        recorder.record(env, torch.zeros(1, dtype=torch.bool))
+    assert float(recorder.reference_yaw[0]) == pytest.approx(1.0, abs=1e-5)
+    env.sim.qvel[:, :2] = 0.6 * torch.tensor([[math.cos(1.0), math.sin(1.0)]])
+    before = float(recorder.along_cmd[0])
+    recorder.record(env, torch.zeros(1, dtype=torch.bool))  # the reference turns to 1.02 rad in this step
+    assert float(recorder.along_cmd[0]) - before == pytest.approx(0.6 * math.cos(0.02) * 0.02, abs=1e-6)

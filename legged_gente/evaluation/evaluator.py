@@ -18,9 +18,13 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
 * ``fell``: the episode ended by a termination (terminating contact, tilt, height), not by divergence.
 * ``tracking_error`` (m/s): mean over the robot's steps after ``settle_s`` of |v_cmd_xy - v_xy|, the
   horizontal base velocity in the base frame against the commanded (vx, vy).
-* ``progress``: velocity task: the distance covered along the command over the commanded distance, both after
-  ``settle_s``: sum over steps of (v_xy . c_xy / |c_xy|) dt divided by the sum of |c_xy| dt (base frame). A
-  robot that stands scores 0, one that follows the command 1; undefined (NaN) for a stand-still command.
+* ``progress``: velocity task: the distance covered along the commanded path over the commanded distance, both
+  after ``settle_s``: sum over steps of (v_xy . u) dt divided by the sum of |c_xy| dt, with v_xy the base's world
+  velocity and u the command's direction (c_xy / |c_xy|, given in the base frame) turned by a reference yaw: the
+  yaw of a perfect follower of the command, which starts at the spawn yaw and turns as the env commands (heading
+  mode: heading_stiffness times the error to the commanded heading, clamped to the yaw-rate range; yaw-rate
+  mode: the commanded rate). A robot that stands scores 0, one that follows the command 1, one that walks the
+  commanded speed facing the wrong way less (cos of the angle); undefined (NaN) for a stand-still command.
 * ``heading_error`` (deg): heading mode only (else NaN): |commanded heading - base yaw| at the robot's last
   measured step, for moving commands. The other metrics are taken in the base frame, so a robot that walks
   well but turns away from its commanded heading passes them; this one shows it (not part of ``success``).
@@ -77,6 +81,7 @@ class Recorder:
         self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
         self.along_cmd, self.cmd_distance = z(), z()
         self.heading_error = torch.full((n,), float("nan"), device=dev)
+        self.reference_yaw = yaw_of(env.base_quat).clone()
         self.collisions = z()
         self.in_contact = z(torch.bool)
         self.start_xy = env.base_pos[:, :2].clone()
@@ -104,7 +109,11 @@ class Recorder:
         self.err_sum += torch.where(alive, err, 0.0) * counted
         self.err_steps += counted
         cmd_speed = torch.norm(env.commands[:, :2], dim=1)
-        along = torch.sum(env.base_lin_vel[:, :2] * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
+        self._turn_reference(env)
+        cos, sin = torch.cos(self.reference_yaw), torch.sin(self.reference_yaw)
+        c = env.commands[:, :2] / cmd_speed.clamp(min=1e-6)[:, None]
+        v = env.sim.qvel[:, 0:2]  # world frame
+        along = v[:, 0] * (cos * c[:, 0] - sin * c[:, 1]) + v[:, 1] * (sin * c[:, 0] + cos * c[:, 1])
         self.along_cmd += torch.where(alive, along, 0.0) * self.dt * counted
         self.cmd_distance += cmd_speed * self.dt * counted
         if env.heading_command:
@@ -129,6 +138,17 @@ class Recorder:
         self.trace["pos"].append(xy[r].clone())
         self.trace["active"].append(alive[r].clone())
         self.trace["qpos"].append(env.sim.qpos[r].clone())  # gente-view replays the robot from it
+
+    def _turn_reference(self, env) -> None:
+        """Advance the reference yaw by one policy step as the env's command turns a perfect follower."""
+        c = env.params.commands
+        if env.heading_command:
+            rate = c.heading_stiffness * wrap_to_pi(env.commands[:, 3] - self.reference_yaw)
+            rate = torch.clamp(rate, c.ang_vel_yaw[0], c.ang_vel_yaw[1])
+            rate = torch.where(env.standing_still, 0.0, rate)
+        else:
+            rate = env.commands[:, 2]
+        self.reference_yaw = wrap_to_pi(self.reference_yaw + rate * self.dt)
 
 
 @dataclasses.dataclass
