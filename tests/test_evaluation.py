@@ -325,13 +325,15 @@ def test_heading_error_is_the_wrapped_angle_to_the_commanded_heading():
 def test_progress_is_measured_along_the_path_a_perfect_follower_would_take():
     """Walking the commanded speed in the wrong direction is not progress. Robots spawned facing +x, commanded
     vx = 0.6 m/s; each then moves at 0.6 m/s in the world: (0) along +x, heading 0: progress 1; (1) along +y with
-    its base turned to +y (the base-frame velocity matches the command), heading 0: progress 0; (2) heading 0.5
-    rad: the reference yaw after k steps is 0.5 (1 - (1 - 0.5 dt)^k) (heading_stiffness 0.5 /s, below the 1 rad/s
-    clamp); a robot moving along +x scores the mean of cos(reference yaw) over the steps."""
+    its base turned to +y (the base-frame velocity matches the command), heading 0: progress 0 (the env commands
+    it back, but the reference starts at the heading and stays); (2) heading 0.5 rad, still facing +x, commanded
+    0.5 * 0.5 = 0.25 rad/s (heading_stiffness 0.5 /s): the reference turns 0.005 rad a step and stops at 0.5
+    after 100 steps; moving along +x it scores the mean of cos(reference yaw) over 150 steps."""
     from legged_gente.evaluation.evaluator import Recorder
 
-    dt, steps = 0.02, 100
+    steps = 150
     env = _still_env(yaw=[0.0, 0.0, 0.0], heading=[0.0, 0.0, 0.5], standing=[False, False, False])
+    env.commands[:, 2] = torch.tensor([0.0, 0.5 * -math.pi / 2, 0.25])  # the env's heading controller
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     _face(env, [0.0, math.pi / 2, 0.0])
     env.sim.qvel[:, :2] = torch.tensor([[0.6, 0.0], [0.0, 0.6], [0.6, 0.0]])
@@ -339,10 +341,11 @@ def test_progress_is_measured_along_the_path_a_perfect_follower_would_take():
     for _ in range(steps):
         recorder.record(env, torch.zeros(3, dtype=torch.bool))
     progress = recorder.along_cmd / recorder.cmd_distance
-    reference = [0.5 * (1 - (1 - 0.5 * dt) ** k) for k in range(1, steps + 1)]
+    reference = [min(0.005 * k, 0.5) for k in range(1, steps + 1)]
     expected = [1.0, 0.0, sum(math.cos(y) for y in reference) / steps]
     assert progress.tolist() == pytest.approx(expected, abs=1e-4)
-    assert expected[2] < 0.99  # the reference turned: the check can fail
+    assert float(recorder.reference_yaw[2]) == pytest.approx(0.5, abs=1e-6)
+    assert expected[2] < 0.97  # the reference turned: the check can fail
 
 
 def test_the_reference_yaw_follows_the_commanded_yaw_rate_without_a_heading():

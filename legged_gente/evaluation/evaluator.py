@@ -21,10 +21,11 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
 * ``progress``: velocity task: the distance covered along the commanded path over the commanded distance, both
   after ``settle_s``: sum over steps of (v_xy . u) dt divided by the sum of |c_xy| dt, with v_xy the base's world
   velocity and u the command's direction (c_xy / |c_xy|, given in the base frame) turned by a reference yaw: the
-  yaw of a perfect follower of the command, which starts at the spawn yaw and turns as the env commands (heading
-  mode: heading_stiffness times the error to the commanded heading, clamped to the yaw-rate range; yaw-rate
-  mode: the commanded rate). A robot that stands scores 0, one that follows the command 1, one that walks the
-  commanded speed facing the wrong way less (cos of the angle); undefined (NaN) for a stand-still command.
+  yaw of a robot that turned exactly at the yaw rates it was commanded, from its spawn yaw (in heading mode it
+  stops at the commanded heading: the env commands the rate from the robot's own yaw, so a robot that turns late
+  is commanded on after the reference has arrived). A robot that stands scores 0, one that follows the command
+  1, one that walks the commanded speed facing the wrong way less (cos of the angle); undefined (NaN) for a
+  stand-still command.
 * ``heading_error`` (deg): heading mode only (else NaN): |commanded heading - base yaw| at the robot's last
   measured step, for moving commands. The other metrics are taken in the base frame, so a robot that walks
   well but turns away from its commanded heading passes them; this one shows it (not part of ``success``).
@@ -82,6 +83,8 @@ class Recorder:
         self.along_cmd, self.cmd_distance = z(), z()
         self.heading_error = torch.full((n,), float("nan"), device=dev)
         self.reference_yaw = yaw_of(env.base_quat).clone()
+        self.reference_arrived = torch.zeros(n, dtype=torch.bool, device=dev)
+        self.yaw_rate = env.commands[:, 2].clone()  # commanded for the coming step
         self.collisions = z()
         self.in_contact = z(torch.bool)
         self.start_xy = env.base_pos[:, :2].clone()
@@ -140,15 +143,17 @@ class Recorder:
         self.trace["qpos"].append(env.sim.qpos[r].clone())  # gente-view replays the robot from it
 
     def _turn_reference(self, env) -> None:
-        """Advance the reference yaw by one policy step as the env's command turns a perfect follower."""
-        c = env.params.commands
+        """Advance the reference yaw by the yaw rate commanded for the step just taken; in heading mode it stays
+        at the commanded heading once it gets there. Then keep the rate commanded for the next step."""
+        turned = wrap_to_pi(self.reference_yaw + self.yaw_rate * self.dt)
         if env.heading_command:
-            rate = c.heading_stiffness * wrap_to_pi(env.commands[:, 3] - self.reference_yaw)
-            rate = torch.clamp(rate, c.ang_vel_yaw[0], c.ang_vel_yaw[1])
-            rate = torch.where(env.standing_still, 0.0, rate)
-        else:
-            rate = env.commands[:, 2]
-        self.reference_yaw = wrap_to_pi(self.reference_yaw + rate * self.dt)
+            heading = env.commands[:, 3]
+            before, after = wrap_to_pi(heading - self.reference_yaw), wrap_to_pi(heading - turned)
+            passed = (before.abs() < 1e-6) | ((torch.sign(before) != torch.sign(after)) & (before.abs() < math.pi / 2))
+            self.reference_arrived |= passed
+            turned = torch.where(self.reference_arrived, heading, turned)
+        self.reference_yaw = turned
+        self.yaw_rate = env.commands[:, 2].clone()
 
 
 @dataclasses.dataclass
