@@ -277,7 +277,6 @@ def test_the_evaluation_gives_the_same_metrics_through_the_compiled_step():
             assert (metrics[name] == plain[name]).all()
 
 
-
 def _still_env(yaw: list[float], heading: list[float], standing: list[bool], heading_mode: bool = True):
     """The state the recorder reads after a step, for robots facing ``yaw`` (rad) and commanded vx = 0.6 m/s and
     ``heading``; at rest until a test sets ``sim.qvel`` (world frame): nothing simulated."""
@@ -287,10 +286,8 @@ def _still_env(yaw: list[float], heading: list[float], standing: list[bool], hea
     commands = torch.zeros(n, 4)
     commands[:, 0], commands[:, 3] = 0.6, torch.tensor(heading)
     zeros = torch.zeros(n, dtype=torch.bool)
-    params = SimpleNamespace(commands=SimpleNamespace(heading_stiffness=torch.tensor(0.5),
-                                                      ang_vel_yaw=torch.tensor([-1.0, 1.0])))
     env = SimpleNamespace(
-        num_envs=n, device="cpu", dt=0.02, commands=commands, heading_command=heading_mode, params=params,
+        num_envs=n, device="cpu", dt=0.02, commands=commands, heading_command=heading_mode,
         standing_still=torch.tensor(standing), base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3),
         base_ang_vel=torch.zeros(n, 3), sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)),
         diverged_buf=zeros, time_out_buf=zeros, torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),

@@ -27,8 +27,8 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
   1, one that walks the commanded speed facing the wrong way less (cos of the angle); undefined (NaN) for a
   stand-still command.
 * ``heading_error`` (deg): heading mode only (else NaN): |commanded heading - base yaw| at the robot's last
-  measured step, for moving commands. The other metrics are taken in the base frame, so a robot that walks
-  well but turns away from its commanded heading passes them; this one shows it (not part of ``success``).
+  measured step, for moving commands: how far from its heading a robot ends, which ``progress`` weighs only
+  through the distance lost (not part of ``success``).
 * ``standing``: the robot was commanded to stand still (velocity task).
 * ``success``: never for a diverged robot; velocity task, moving command (|c_xy| >= 0.3 m/s): not fell,
   tracking_error < ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still
@@ -54,7 +54,7 @@ import torch
 from legged_gente.evaluation.benchmark import Item, tile_geometry
 from legged_gente.evaluation.tasks import VelocityTask, WaypointTask, zigzag_waypoints
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
-from legged_gente.utils.torch_math import wrap_to_pi, yaw_of
+from legged_gente.utils.torch_math import quat_rotate_inverse, wrap_to_pi, yaw_of, yaw_quat
 
 CONTACT_THRESHOLD = 1.0
 """N; a penalised body with a larger contact force is touching something."""
@@ -113,10 +113,9 @@ class Recorder:
         self.err_steps += counted
         cmd_speed = torch.norm(env.commands[:, :2], dim=1)
         self._turn_reference(env)
-        cos, sin = torch.cos(self.reference_yaw), torch.sin(self.reference_yaw)
-        c = env.commands[:, :2] / cmd_speed.clamp(min=1e-6)[:, None]
-        v = env.sim.qvel[:, 0:2]  # world frame
-        along = v[:, 0] * (cos * c[:, 0] - sin * c[:, 1]) + v[:, 1] * (sin * c[:, 0] + cos * c[:, 1])
+        # the base's world velocity (free joint) in the reference frame, where the command is given
+        velocity = quat_rotate_inverse(yaw_quat(self.reference_yaw), env.sim.qvel[:, 0:3])[:, :2]
+        along = torch.sum(velocity * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
         self.along_cmd += torch.where(alive, along, 0.0) * self.dt * counted
         self.cmd_distance += cmd_speed * self.dt * counted
         if env.heading_command:
