@@ -270,3 +270,13 @@ def test_docs_table_lists_every_atomic_with_intact_columns():
     rows = atomic_table_markdown().splitlines()[2:]
     assert [r.split("|")[1].strip(" `") for r in rows] == list(ATOMIC_TERRAINS)
     assert all(r.replace("\\|", "").count("|") == 7 for r in rows)
+
+
+def test_curriculum_map_reaches_a_declared_bound_exactly():
+    """A linear map that lands on a parameter's bound is in range despite float rounding (0.4 x 1.75 is
+    0.7000000000000001 in binary), and one step further still raises, naming the parameter."""
+    slope = ATOMIC_TERRAINS["pyramid_slope"]
+    assert slope.params["slope"].high == 0.7
+    assert slope.params_for_difficulty(1.75)["slope"] == pytest.approx(0.4 * 1.75)
+    with pytest.raises(ValueError, match="slope"):
+        slope.params_for_difficulty(1.76)

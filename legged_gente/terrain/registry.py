@@ -107,6 +107,8 @@ class AtomicTerrain:
         if not 0.0 <= difficulty <= MAX_DIFFICULTY:
             raise ValueError(f"difficulty must be in [0, {MAX_DIFFICULTY}], got {difficulty}.")
         mapped = self.difficulty(difficulty) if self.difficulty is not None else {}
+        # a map that lands on a bound must pass it: 0.4 * 1.75 is 0.7000000000000001 in binary floating point
+        mapped = {k: round(v, 12) if isinstance(v, float) else v for k, v in mapped.items()}
         try:
             return self.check_params({**mapped, **(fixed or {})})
         except ValueError as error:
