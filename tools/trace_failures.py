@@ -1,0 +1,133 @@
+"""Why robots that stay up still fail the velocity benchmark: the tallest step on the line they were told to walk.
+
+The velocity task commands a fixed (vx, vy) in a fixed heading; success needs 70 % of the commanded distance along
+that direction. For every moving robot this tool takes the commanded straight line in the world: from where the
+robot stands once it has turned (``--turn_s``, 2 s) along its commanded direction (the heading command turned by
+the angle of (vx, vy)), as long as the success rule asks it to walk (70 % of speed x the rest of the episode) plus
+0.5 m. The line's *step* is the largest rise of the ground over ``run`` (0.3 m, about one stride of the biped)
+along it. The robots that neither fell nor diverged are binned by that step, with their success rate; of those
+that failed, the share that had stalled (moved less than 30 % of the commanded speed over the last 3 s).
+
+    python tools/trace_failures.py --task gente_biped --pretrained --benchmark gente_original \
+        --report docs/results/heading_tracking/gente_original_eval_biped_29219.csv
+
+``--report`` picks the terrains where robots stay up and fail (fall rate < 0.2, success < 0.5 in that report);
+``--items`` names them instead; without either, every item of the benchmark. The rollout is ``gente-evaluate``'s (same robots, commands and success rule for
+the same item list), so run it where the items' evaluation fits (16 robots on 37 items: about 3 min on a CPU).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+
+import numpy as np
+
+STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, math.inf)  # m
+
+
+def commanded_direction(command: np.ndarray) -> np.ndarray:
+    """(n, 2) world unit vectors of (vx, vy, yaw rate, heading) commands: (vx, vy) turned by the heading."""
+    angle = np.arctan2(command[:, 1], command[:, 0]) + command[:, 3]
+    return np.stack([np.cos(angle), np.sin(angle)], axis=1)
+
+
+def line_step(height, start_xy: np.ndarray, direction: np.ndarray, length: float, run: float = 0.3,
+              spacing: float = 0.1) -> float:
+    """The largest rise of ``height(x, y)`` over ``run`` metres along the line from ``start_xy`` in
+    ``direction`` (a unit vector) for ``length`` metres, sampled every ``spacing`` metres."""
+    r = np.arange(0.0, length + spacing / 2, spacing)
+    z = height(start_xy[0] + r * direction[0], start_xy[1] + r * direction[1])
+    lag = max(1, int(round(run / spacing)))
+    if len(z) <= lag:
+        return 0.0
+    return float(max(0.0, (z[lag:] - z[:-lag]).max()))
+
+
+def print_bins(steps: np.ndarray, success: np.ndarray, stalled: np.ndarray) -> None:
+    """Per bin of the line's step, the robots that stayed up: count, success, and the failed ones' stalled share."""
+    print("step on the line (m)   robots  success  failed: stalled")
+    for lo, hi in zip(STEP_BINS[:-1], STEP_BINS[1:]):
+        in_bin = (steps >= lo) & (steps < hi)
+        failed = in_bin & ~success
+        label = f"[{lo:.2f}, {hi:.2f})" if math.isfinite(hi) else f">= {lo:.2f}"
+        ok = f"{success[in_bin].mean():.1%}" if in_bin.any() else "-"
+        stall = f"{stalled[failed].mean():.1%}" if failed.any() else "-"
+        print(f"{label:20s} {in_bin.sum():7d}  {ok:>7s}  {stall:>15s}")
+
+
+def failing_terrains(report: str, max_fall_rate: float = 0.2, max_success: float = 0.5) -> list[str]:
+    """The terrains of a gente-evaluate report.csv where robots stay up (fall rate below ``max_fall_rate``) and
+    still fail (success below ``max_success``)."""
+    names = []
+    for row in csv.DictReader(open(report)):
+        if row["row"] == "terrain" and row["success_rate"] and row["fall_rate"]:
+            if float(row["fall_rate"]) < max_fall_rate and float(row["success_rate"]) < max_success:
+                names.append(row["name"])
+    if not names:
+        raise SystemExit(f"{report}: no terrain with fall rate < {max_fall_rate} and success < {max_success}.")
+    return names
+
+
+def main() -> None:
+    import torch
+
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.evaluation.report import MIN_PROGRESS, success as robot_success
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--task", required=True)
+    policy = parser.add_mutually_exclusive_group(required=True)
+    policy.add_argument("--checkpoint", help="rsl-rl model_N.pt (config.json beside it) or a shipped model.pt")
+    policy.add_argument("--pretrained", action="store_true", help="the policy shipped for --task")
+    policy.add_argument("--baseline", choices=("zero", "random"))
+    parser.add_argument("--benchmark", default="gente_original")
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument("--report", help="gente-evaluate report.csv: its terrains with fall rate < 0.2, success < 0.5")
+    which.add_argument("--items", nargs="+", help="these item ids (default, without --report: every item)")
+    parser.add_argument("--robots_per_terrain", type=int, default=16)
+    parser.add_argument("--episode_s", type=float, default=10.0)
+    parser.add_argument("--turn_s", type=float, default=2.0, help="s after which the line starts (the turn is done)")
+    parser.add_argument("--device", default="cpu")
+    args = parser.parse_args()
+    if not 0.0 <= args.turn_s < args.episode_s - 3.0:
+        raise SystemExit(f"--turn_s {args.turn_s}: give a value in [0, episode_s - 3) (episode_s {args.episode_s}).")
+
+    ids = failing_terrains(args.report) if args.report else args.items  # None: all
+    items = load_benchmark(args.benchmark, ids)
+    evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity")
+    act = load_policy(evaluation, checkpoint=args.checkpoint, baseline=args.baseline, pretrained=args.pretrained)
+    env = evaluation.env
+    positions = []
+
+    def policy(obs):
+        positions.append(env.base_pos[:, :2].clone())  # where each robot stands before the step
+        return act(obs)
+
+    task = evaluation.make_task()
+    result = evaluation.run(policy, task, progress=False)
+    m = result.metrics
+    xy = torch.stack(positions, 1).cpu().numpy()  # (robots, steps, 2)
+    command = task.commands(env.base_pos[:, :2], env.commands).cpu().numpy()
+    moving = ~m["standing"]
+    up = moving & ~m["fell"] & ~m["diverged"]
+    success = up & robot_success(m, "velocity")
+
+    start = int(round(args.turn_s / evaluation.dt))
+    last = int(round(3.0 / evaluation.dt))
+    speed = np.linalg.norm(command[:, :2], axis=1)
+    direction = commanded_direction(command)
+    length = MIN_PROGRESS * speed * (args.episode_s - args.turn_s) + 0.5
+    robots = np.flatnonzero(up)
+    steps = np.array([line_step(env.terrain.height_at, xy[i, start], direction[i], length[i]) for i in robots])
+    moved = np.linalg.norm(xy[robots, -1] - xy[robots, -last], axis=1) / (last * evaluation.dt)
+    stalled = moved < 0.3 * speed[robots]
+    print(f"{len(items)} terrains, {int(moving.sum())} moving robots: {int(success.sum())} succeed, "
+          f"{int((moving & m['fell']).sum())} fall, {int((up & ~success).sum())} stay up and fail")
+    print_bins(steps, success[robots], stalled)
+
+
+if __name__ == "__main__":
+    main()
