@@ -99,7 +99,7 @@ def test_shipped_data_is_found_from_any_directory(tmp_path, monkeypatch):
     assert resolve_path(biped) == Path(biped)
     with pytest.raises(FileNotFoundError, match="robot file 'my_robot.xml' not found"):
         resolve_path("my_robot.xml")
-    with pytest.raises(FileNotFoundError, match=r"shipped benchmark: \['flat', 'gente100', 'gente_original'\]"):
+    with pytest.raises(FileNotFoundError, match=r"shipped benchmark: \['flat', 'gente100', 'gente_original', 'steps'\]"):
         load_benchmark("gente1000")
 
 
@@ -114,3 +114,20 @@ def test_readme_gives_the_two_commands_ci_runs():
     assert commands[1].endswith('pip install -e ".[test]" && python -m pytest -q')
     assert block[block.index(commands[1]) - 1] == "# set up and run the tests (CPU)"
     assert "grep -A1 -x '# set up and run the tests (CPU)' README.md" in (REPO / ".ci" / "run").read_text()
+
+
+def test_steps_benchmark_is_a_pit_in_ground_raised_by_each_height():
+    """`--benchmark steps`: nine 20 m tiles; the pit at the centre lies at 0 (its walls at 9 m and 11 m blend over
+    the composition's 0.3 m seam band into it, so its floor is cells 92-107 at 0.1 m), the ground 1.5 m and more
+    off the centre in every direction at the item's height, 0.10 to 0.50 m."""
+    items = load_benchmark("steps")
+    assert [i.id for i in items] == [f"step_{cm}cm" for cm in (10, 15, 20, 25, 30, 35, 40, 45, 50)]
+    for item, height in zip(items, (0.10, 0.15, 0.20, 0.25, 0.30, 0.35, 0.40, 0.45, 0.50)):
+        heights, materials = item.spec().build()
+        assert heights.shape == (200, 200)
+        assert not heights[92:108, 92:108].any() and heights[91, 100] > 0.0 and heights[108, 100] > 0.0
+        for i, j in ((85, 100), (115, 100), (100, 85), (100, 115), (85, 85), (115, 115), (0, 0), (199, 199)):
+            assert heights[i, j] == pytest.approx(height)
+        assert not materials.has_water().any() and not materials.has_soil().any()
+        assert shipped(str(item.spec_path.relative_to(PACKAGE)))
+    assert shipped("benchmarks/steps/manifest.json")
