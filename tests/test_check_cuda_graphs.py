@@ -1,24 +1,17 @@
 """tools/check_cuda_graphs.py's verdicts, on the CPU: any mismatch of the env, the evaluation or PPO (a NaN
 difference included) is a mismatch, and a mismatch exits with 1."""
 
-import importlib.util
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "check_cuda_graphs.py"
-
 
 @pytest.fixture(scope="module")
-def tool():
-    spec = importlib.util.spec_from_file_location("check_cuda_graphs", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def tool(load_file):
+    return load_file("tools/check_cuda_graphs.py")
 
 
 def env_run(reward=1.0, critic_nan=False):

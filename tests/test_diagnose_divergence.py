@@ -1,17 +1,10 @@
 """tools/diagnose_divergence.py on the CPU: a world made to diverge is found, at its step, with the env's reason."""
 
-import importlib.util
-from pathlib import Path
-
 import torch
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "diagnose_divergence.py"
 
-
-def test_a_world_given_a_runaway_joint_is_reported_with_its_reason_and_step():
-    spec = importlib.util.spec_from_file_location("diagnose_divergence", TOOL)
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+def test_a_world_given_a_runaway_joint_is_reported_with_its_reason_and_step(load_file):
+    tool = load_file("tools/diagnose_divergence.py")
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation
 

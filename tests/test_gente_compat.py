@@ -169,12 +169,8 @@ def test_gente_toolset_rejects_stacks_beyond_the_bound():
             OpenAIBackend(srv.url, "m", toolset="gente", timeout=5.0, max_retries=0).generate(text="x")
 
 
-def test_converter_on_a_made_up_clone(tmp_path):
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "legged_gente/benchmarks/gente_original/build.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
+def test_converter_on_a_made_up_clone(tmp_path, load_file):
+    build = load_file("legged_gente/benchmarks/gente_original/build.py")
     for i, (part, kind) in enumerate([("single_part", "txt"), ("multi_parts", "image")], start=1):
         folder = tmp_path / "GenTe" / "dataset" / part / kind / str(i)
         folder.mkdir(parents=True)
@@ -190,14 +186,10 @@ def test_converter_on_a_made_up_clone(tmp_path):
     assert [i["id"] for i in manifest["items"]] == ["single_text_01", "multi_image_02"]
 
 
-def test_converter_writes_heightmap_specs(tmp_path):
-    import importlib.util
-
+def test_converter_writes_heightmap_specs(tmp_path, load_file):
     from legged_gente.evaluation.benchmark import load_benchmark
 
-    spec = importlib.util.spec_from_file_location("gente_original_build", ROOT / "legged_gente/benchmarks/gente_original/build.py")
-    build = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build)
+    build = load_file("legged_gente/benchmarks/gente_original/build.py")
     ramp = np.arange(200)[:, None] * np.ones((1, 200), np.int64)
     for i, units in enumerate([5, 200], start=1):  # 199 * 5 = 995 units; 199 * 200 = 39800 wraps around int16
         folder = tmp_path / "GenTe" / "dataset" / "multi_parts" / "image" / str(i)

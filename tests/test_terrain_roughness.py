@@ -1,22 +1,15 @@
 """tools/terrain_roughness.py: the rough cells of a step, counted by hand."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
-
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "terrain_roughness.py"
-
-
-def _tool():
-    spec = importlib.util.spec_from_file_location("terrain_roughness", TOOL)
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
-    return tool
+import pytest
 
 
-def test_a_step_is_rough_within_half_a_window_of_its_edge():
-    tool = _tool()
+@pytest.fixture(scope="module")
+def tool(load_file):
+    return load_file("tools/terrain_roughness.py")
+
+
+def test_a_step_is_rough_within_half_a_window_of_its_edge(tool):
     heights = np.zeros((100, 100), np.float32)
     heights[:, 60:] = 0.2  # a 0.2 m step between columns 59 and 60, at 0.1 m cells
     rough = tool.rough_cells(heights, 0.1, window=0.3, step=0.15)
@@ -28,18 +21,17 @@ def test_a_step_is_rough_within_half_a_window_of_its_edge():
     assert tool.rough_share(np.zeros((100, 100)), 0.1) == 0.0
 
 
-def test_the_curriculum_table_takes_gente_train_overrides(capsys):
+def test_the_curriculum_table_takes_gente_train_overrides(tool, capsys):
     """--set terrain.num_rows=2 --set terrain.num_cols=1: one flat column, two levels (both smooth)."""
-    _tool().curriculum_table("gente_biped", ["terrain.num_rows=2", "terrain.num_cols=1", "terrain.terrain_types=['flat']",
+    tool.curriculum_table("gente_biped", ["terrain.num_rows=2", "terrain.num_cols=1", "terrain.terrain_types=['flat']",
                                              "terrain.terrain_proportions=[1.0]"])
     lines = capsys.readouterr().out.splitlines()
     assert lines[1:] == ["    0             0.000  0.000 (flat)", "    1             0.000  0.000 (flat)"]
 
 
-def test_bins_average_success_falls_and_tracking_over_their_terrains(tmp_path, capsys):
+def test_bins_average_success_falls_and_tracking_over_their_terrains(tool, tmp_path, capsys):
     """Two rough terrains (success 0.5 and 1.0, fall rate 0.25 and 0, tracking 0.2 and 0.4 m/s) average to
     75 %, 12.5 %, 0.300; a terrain with no moving robot (empty cells) enters no mean; an empty bin prints '-'."""
-    tool = _tool()
     report = tmp_path / "report.csv"
     report.write_text("row,name,success_rate,fall_rate,tracking_error\n"
                       "terrain,a,0.5,0.25,0.2\nterrain,b,1.0,0.0,0.4\nterrain,c,,,\nterrain,d,0.0,1.0,0.9\n"

@@ -1,28 +1,22 @@
 """tools/trace_failures.py: the commanded line's direction and its tallest step, worked out by hand."""
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "trace_failures.py"
+
+@pytest.fixture(scope="module")
+def tool(load_file):
+    return load_file("tools/trace_failures.py")
 
 
-def _tool():
-    spec = importlib.util.spec_from_file_location("trace_failures", TOOL)
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
-    return tool
-
-
-def test_the_commanded_direction_is_the_velocity_turned_by_the_heading():
+def test_the_commanded_direction_is_the_velocity_turned_by_the_heading(tool):
     # forward in heading 90 deg walks +y; sideways left (vy > 0) in heading 0 walks +y; backwards in heading 0 walks -x
     command = np.array([[0.8, 0.0, 0.0, math.pi / 2], [0.0, 0.4, 0.0, 0.0], [-0.5, 0.0, 0.0, 0.0],
                         [0.3, 0.3, 0.0, math.pi]])  # 45 deg left of backwards: (-1, -1) / sqrt(2)
     expected = np.array([[0.0, 1.0], [0.0, 1.0], [-1.0, 0.0], [-math.sqrt(0.5), -math.sqrt(0.5)]])
-    np.testing.assert_allclose(_tool().commanded_direction(command), expected, atol=1e-12)
+    np.testing.assert_allclose(tool.commanded_direction(command), expected, atol=1e-12)
 
 
 def step_ground(x, y):
@@ -30,8 +24,7 @@ def step_ground(x, y):
     return 0.4 * np.clip((np.asarray(x) - 2.0) / 0.2, 0.0, 1.0) + 0.0 * np.asarray(y)
 
 
-def test_a_wall_across_the_line_is_its_step_and_one_along_it_is_not():
-    tool = _tool()
+def test_a_wall_across_the_line_is_its_step_and_one_along_it_is_not(tool):
     # across: samples every 0.1 m, the rise over 0.3 m from x = 1.9 (0) to 2.2 (0.4) is the whole wall
     assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 4.0) == pytest.approx(0.4)
     # over a 0.1 m run the ramp rises 0.2 m per sample
@@ -46,10 +39,9 @@ def test_a_wall_across_the_line_is_its_step_and_one_along_it_is_not():
     assert tool.line_step(slope, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 2.0) == pytest.approx(0.03)
 
 
-def test_bins_count_success_and_the_failed_robots_stalled_share(capsys):
+def test_bins_count_success_and_the_failed_robots_stalled_share(tool, capsys):
     """Five robots: steps 0.05 (succeeded), 0.15 (failed, stalled), 0.15 (failed, moving), 0.5 and 2.0 (failed,
     one stalled): the first bin 1 robot at 100 %; the second 2 at 0 %, half stalled; the last 2 at 0 %, half."""
-    tool = _tool()
     tool.print_bins(np.array([0.05, 0.15, 0.15, 0.5, 2.0]), np.array([True, False, False, False, False]),
                     np.array([False, True, False, True, False]))
     lines = capsys.readouterr().out.splitlines()
@@ -59,22 +51,22 @@ def test_bins_count_success_and_the_failed_robots_stalled_share(capsys):
     assert lines[5].split()[-3:] == ["2", "0.0%", "50.0%"]
 
 
-def test_the_report_picks_terrains_where_robots_stay_up_and_fail(tmp_path):
+def test_the_report_picks_terrains_where_robots_stay_up_and_fail(tool, tmp_path):
     report = tmp_path / "report.csv"
     report.write_text("row,name,success_rate,fall_rate\nterrain,up_and_failing,0.3,0.1\nterrain,falling,0.3,0.5\n"
                       "terrain,succeeding,0.9,0.0\nterrain,no_moving_robot,,\ngroup,text,0.1,0.1\n")
-    assert _tool().failing_terrains(str(report)) == ["up_and_failing"]
+    assert tool.failing_terrains(str(report)) == ["up_and_failing"]
     report.write_text("row,name,success_rate,fall_rate\nterrain,succeeding,0.9,0.0\n")
     with pytest.raises(SystemExit, match="no terrain with fall rate < 0.2 and success < 0.5"):
-        _tool().failing_terrains(str(report))
+        tool.failing_terrains(str(report))
 
 
-def test_on_flat_ground_every_robot_that_stays_up_has_a_line_without_a_step(monkeypatch, capsys):
+def test_on_flat_ground_every_robot_that_stays_up_has_a_line_without_a_step(tool, monkeypatch, capsys):
     """The shipped biped on the flat benchmark: every line lies in the first bin, which holds every robot that
     neither fell nor diverged."""
     monkeypatch.setattr("sys.argv", ["trace_failures.py", "--task", "gente_biped", "--pretrained", "--benchmark",
                                      "flat", "--robots_per_terrain", "6", "--episode_s", "4", "--turn_s", "0.5"])
-    _tool().main()
+    tool.main()
     lines = capsys.readouterr().out.splitlines()
     header = next(line for line in lines if "moving robots" in line).split()
     moving, succeeded, fell, up_failing = int(header[2]), int(header[5]), int(header[7]), int(header[9])

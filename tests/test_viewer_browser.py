@@ -18,20 +18,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.browser
 
 
-def _load_tool():
-    spec = importlib.util.spec_from_file_location("viewer_screenshot", ROOT / "tools" / "viewer_screenshot.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
-def browser():
-    tool = _load_tool()
+def browser(load_file):
+    tool = load_file("tools/viewer_screenshot.py")
     if not (Path(tool.CHROMIUM).exists() and Path(tool.CHROMEDRIVER).exists()):
         if os.geteuid() != 0 or shutil.which("apt-get") is None:
             pytest.fail("chromium and chromium-driver are missing: apt-get install -y chromium chromium-driver")
