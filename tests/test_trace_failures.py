@@ -65,7 +65,8 @@ def test_on_flat_ground_every_robot_that_stays_up_has_a_line_without_a_step(tool
     """The shipped biped on the flat benchmark: every line lies in the first bin, which holds every robot that
     neither fell nor diverged."""
     monkeypatch.setattr("sys.argv", ["trace_failures.py", "--task", "gente_biped", "--pretrained", "--benchmark",
-                                     "flat", "--robots_per_terrain", "6", "--episode_s", "4", "--turn_s", "0.5"])
+                                     "flat", "--robots_per_terrain", "6", "--episode_s", "4", "--turn_s", "0.5",
+                                     "--no_progress"])
     tool.main()
     lines = capsys.readouterr().out.splitlines()
     header = next(line for line in lines if "moving robots" in line).split()

@@ -61,10 +61,11 @@ def failing_terrains(report: str, max_fall_rate: float = 0.2, max_success: float
     """The terrains of a gente-evaluate report.csv where robots stay up (fall rate below ``max_fall_rate``) and
     still fail (success below ``max_success``)."""
     names = []
-    for row in csv.DictReader(open(report)):
-        if row["row"] == "terrain" and row["success_rate"] and row["fall_rate"]:
-            if float(row["fall_rate"]) < max_fall_rate and float(row["success_rate"]) < max_success:
-                names.append(row["name"])
+    with open(report) as f:
+        for row in csv.DictReader(f):
+            if row["row"] == "terrain" and row["success_rate"] and row["fall_rate"]:
+                if float(row["fall_rate"]) < max_fall_rate and float(row["success_rate"]) < max_success:
+                    names.append(row["name"])
     if not names:
         raise SystemExit(f"{report}: no terrain with fall rate < {max_fall_rate} and success < {max_success}.")
     return names
@@ -91,6 +92,7 @@ def main() -> None:
     parser.add_argument("--episode_s", type=float, default=10.0)
     parser.add_argument("--turn_s", type=float, default=2.0, help="s after which the line starts (the turn is done)")
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--no_progress", action="store_true", help="no progress bar")
     args = parser.parse_args()
     if not 0.0 <= args.turn_s < args.episode_s - 3.0:
         raise SystemExit(f"--turn_s {args.turn_s}: give a value in [0, episode_s - 3) (episode_s {args.episode_s}).")
@@ -100,6 +102,9 @@ def main() -> None:
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity")
     act = load_policy(evaluation, checkpoint=args.checkpoint, baseline=args.baseline, pretrained=args.pretrained)
     env = evaluation.env
+    if not env.heading_command:
+        raise SystemExit(f"{args.task} commands a yaw rate, not a heading: its commanded path is no straight line; "
+                         "this tool needs commands.heading_command = True.")
     positions = []
 
     def policy(obs):
@@ -107,7 +112,7 @@ def main() -> None:
         return act(obs)
 
     task = evaluation.make_task()
-    result = evaluation.run(policy, task, progress=False)
+    result = evaluation.run(policy, task, progress=not args.no_progress)
     m = result.metrics
     xy = torch.stack(positions, 1).cpu().numpy()  # (robots, steps, 2)
     command = task.commands(env.base_pos[:, :2], env.commands).cpu().numpy()

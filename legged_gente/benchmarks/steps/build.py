@@ -14,7 +14,8 @@ HEIGHTS_CM = (10, 15, 20, 25, 30, 35, 40, 45, 50)
 SIZE, PIT = 20.0, 2.0  # m
 
 
-def spec(height: float) -> dict:
+def spec(height_cm: int) -> dict:
+    height = height_cm / 100.0
     lo, hi = (SIZE - PIT) / 2.0, (SIZE + PIT) / 2.0
     raised = [  # four bands around the pit
         {"x0": 0.0, "y0": 0.0, "x1": lo, "y1": SIZE}, {"x0": hi, "y0": 0.0, "x1": SIZE, "y1": SIZE},
@@ -22,7 +23,7 @@ def spec(height: float) -> dict:
     ]
     calls = [{"tool": "flat", "region": "full", "params": {}, "mode": "set"}]
     calls += [{"tool": "flat", "region": r, "params": {"height": height}, "mode": "set"} for r in raised]
-    return {"version": 1, "name": f"step_{round(height * 100):02d}cm", "size_x": SIZE, "size_y": SIZE,
+    return {"version": 1, "name": f"step_{height_cm:02d}cm", "size_x": SIZE, "size_y": SIZE,
             "resolution": 0.1, "seed": 0, "source": {"text": f"a {PIT:g} m pit in ground {height:g} m higher"},
             "backend": "hand-written", "model": None, "calls": calls}
 
@@ -32,7 +33,7 @@ def main() -> None:
     (root / "specs").mkdir(exist_ok=True)
     items = []
     for cm in HEIGHTS_CM:
-        s = spec(cm / 100.0)
+        s = spec(cm)
         (root / "specs" / f"{s['name']}.json").write_text(json.dumps(s, indent=2) + "\n")
         items.append({"id": s["name"], "kind": "text", "prompt": s["source"]["text"], "spec": f"specs/{s['name']}.json"})
     manifest = {"name": "steps", "tile_size": [SIZE, SIZE], "resolution": 0.1, "items": items}
