@@ -39,16 +39,21 @@ def test_a_wall_across_the_line_is_its_step_and_one_along_it_is_not(tool):
     assert tool.line_step(slope, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 2.0) == pytest.approx(0.03)
 
 
-def test_bins_count_success_and_the_failed_robots_stalled_share(tool, capsys):
-    """Five robots: steps 0.05 (succeeded), 0.15 (failed, stalled), 0.15 (failed, moving), 0.5 and 2.0 (failed,
-    one stalled): the first bin 1 robot at 100 %; the second 2 at 0 %, half stalled; the last 2 at 0 %, half."""
-    tool.print_bins(np.array([0.05, 0.15, 0.15, 0.5, 2.0]), np.array([True, False, False, False, False]),
-                    np.array([False, True, False, True, False]))
+def test_bins_count_success_falls_and_the_stalled_share_of_robots_up_and_failing(tool, capsys):
+    """Six robots: steps 0.05 (succeeded), 0.15 (up, failed, stalled), 0.15 (up, failed, moving), 0.15 (fell;
+    marked stalled, which must not count), 0.5 (up, failed, stalled) and 2.0 (fell): the first bin 1 robot at
+    100 %, none fell; the second 3 at 0 %, one in three fell, half of the two up ones stalled; 0.5 m lies in
+    [0.45, 0.7): 1 robot, stalled; the wall bin 1 robot, fallen, with no robot up and failing."""
+    tool.print_bins(np.array([0.05, 0.15, 0.15, 0.15, 0.5, 2.0]),
+                    np.array([True, False, False, False, False, False]),
+                    np.array([False, False, False, True, False, True]),
+                    np.array([False, True, False, True, True, False]))
     lines = capsys.readouterr().out.splitlines()
-    assert lines[1].split()[-3:] == ["1", "100.0%", "-"]
-    assert lines[2].split()[-3:] == ["2", "0.0%", "50.0%"]
-    assert lines[3].split()[-3:] == ["0", "-", "-"] and lines[4].split()[-3:] == ["0", "-", "-"]
-    assert lines[5].split()[-3:] == ["2", "0.0%", "50.0%"]
+    assert lines[1].split()[-4:] == ["1", "100.0%", "0.0%", "-"]
+    assert lines[2].split()[-4:] == ["3", "0.0%", "33.3%", "50.0%"]
+    assert lines[3].split()[-4:] == ["0", "-", "-", "-"] and lines[4].split()[-4:] == ["0", "-", "-", "-"]
+    assert lines[5].split()[:2] == ["[0.45,", "0.70)"] and lines[5].split()[-4:] == ["1", "0.0%", "0.0%", "100.0%"]
+    assert lines[6].split()[:2] == [">=", "0.70"] and lines[6].split()[-4:] == ["1", "0.0%", "100.0%", "-"]
 
 
 def test_the_report_picks_terrains_where_robots_stay_up_and_fail(tool, tmp_path):
@@ -61,9 +66,9 @@ def test_the_report_picks_terrains_where_robots_stay_up_and_fail(tool, tmp_path)
         tool.failing_terrains(str(report))
 
 
-def test_on_flat_ground_every_robot_that_stays_up_has_a_line_without_a_step(tool, monkeypatch, capsys):
-    """The shipped biped on the flat benchmark: every line lies in the first bin, which holds every robot that
-    neither fell nor diverged."""
+def test_on_flat_ground_every_robot_has_a_line_without_a_step(tool, monkeypatch, capsys):
+    """The shipped biped on the flat benchmark: every line lies in the first bin, which holds every moving robot
+    (none diverges on flat ground)."""
     monkeypatch.setattr("sys.argv", ["trace_failures.py", "--task", "gente_biped", "--pretrained", "--benchmark",
                                      "flat", "--robots_per_terrain", "6", "--episode_s", "4", "--turn_s", "0.5",
                                      "--no_progress"])
@@ -71,7 +76,7 @@ def test_on_flat_ground_every_robot_that_stays_up_has_a_line_without_a_step(tool
     lines = capsys.readouterr().out.splitlines()
     header = next(line for line in lines if "moving robots" in line).split()
     moving, succeeded, fell, up_failing = int(header[2]), int(header[5]), int(header[7]), int(header[9])
-    assert moving >= 1 and succeeded + up_failing == moving - fell
-    table = lines[lines.index("step on the line (m)   robots  success  failed: stalled") + 1:]
-    assert table[0].split()[:3] == ["[0.00,", "0.10)", str(moving - fell)]
-    assert all(row.split()[-3:] == ["0", "-", "-"] for row in table[1:])
+    assert moving >= 1 and succeeded + up_failing + fell == moving
+    table = lines[lines.index("step on the line (m)   robots  success     fell  up, failed: stalled") + 1:]
+    assert table[0].split()[:3] == ["[0.00,", "0.10)", str(moving)]
+    assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[1:])

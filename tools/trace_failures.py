@@ -5,8 +5,10 @@ that direction. For every moving robot this tool takes the commanded straight li
 robot stands once it has turned (``--turn_s``, 2 s) along its commanded direction (the heading command turned by
 the angle of (vx, vy)), as long as the success rule asks it to walk (70 % of speed x the rest of the episode) plus
 0.5 m. The line's *step* is the largest rise of the ground over ``run`` (0.3 m, about one stride of the biped)
-along it. The robots that neither fell nor diverged are binned by that step, with their success rate; of those
-that failed, the share that had stalled (moved less than 30 % of the commanded speed over the last 3 s).
+along it. Every moving robot that did not diverge is binned by that step (a robot that fell before ``--turn_s``
+from where it respawned), with its bin's success and fall rates; of the robots that stayed up and failed, the
+share that had stalled (moved less than 30 % of the commanded speed over the last 3 s). The last bin, a rise of
+0.7 m or more, is taller than the biped's knees (about 0.5 m above the ground) and the quadruped's hips (0.3 m).
 
     python tools/trace_failures.py --task gente_biped --pretrained --benchmark gente_original \
         --report docs/results/heading_tracking/gente_original_eval_biped_29219.csv
@@ -24,7 +26,7 @@ import math
 
 import numpy as np
 
-STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, math.inf)  # m
+STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, 0.7, math.inf)  # m
 
 
 def commanded_direction(command: np.ndarray) -> np.ndarray:
@@ -45,16 +47,17 @@ def line_step(height, start_xy: np.ndarray, direction: np.ndarray, length: float
     return float(max(0.0, (z[lag:] - z[:-lag]).max()))
 
 
-def print_bins(steps: np.ndarray, success: np.ndarray, stalled: np.ndarray) -> None:
-    """Per bin of the line's step, the robots that stayed up: count, success, and the failed ones' stalled share."""
-    print("step on the line (m)   robots  success  failed: stalled")
+def print_bins(steps: np.ndarray, success: np.ndarray, fell: np.ndarray, stalled: np.ndarray) -> None:
+    """Per bin of the line's step: robots, success and fall rates, and the stalled share of those that stayed up
+    and failed (``stalled`` is read only there)."""
+    print("step on the line (m)   robots  success     fell  up, failed: stalled")
     for lo, hi in zip(STEP_BINS[:-1], STEP_BINS[1:]):
         in_bin = (steps >= lo) & (steps < hi)
-        failed = in_bin & ~success
+        up_failed = in_bin & ~success & ~fell
         label = f"[{lo:.2f}, {hi:.2f})" if math.isfinite(hi) else f">= {lo:.2f}"
-        ok = f"{success[in_bin].mean():.1%}" if in_bin.any() else "-"
-        stall = f"{stalled[failed].mean():.1%}" if failed.any() else "-"
-        print(f"{label:20s} {in_bin.sum():7d}  {ok:>7s}  {stall:>15s}")
+        ok, down = (f"{success[in_bin].mean():.1%}", f"{fell[in_bin].mean():.1%}") if in_bin.any() else ("-", "-")
+        stall = f"{stalled[up_failed].mean():.1%}" if up_failed.any() else "-"
+        print(f"{label:20s} {in_bin.sum():7d}  {ok:>7s}  {down:>7s}  {stall:>19s}")
 
 
 def failing_terrains(report: str, max_fall_rate: float = 0.2, max_success: float = 0.5) -> list[str]:
@@ -117,22 +120,22 @@ def main() -> None:
     xy = torch.stack(positions, 1).cpu().numpy()  # (robots, steps, 2)
     command = task.commands(env.base_pos[:, :2], env.commands).cpu().numpy()
     moving = ~m["standing"]
-    up = moving & ~m["fell"] & ~m["diverged"]
-    success = up & robot_success(m, "velocity")
+    counted = moving & ~m["diverged"]
+    success = counted & robot_success(m, "velocity")
 
     start = int(round(args.turn_s / evaluation.dt))
     last = int(round(3.0 / evaluation.dt))
     speed = np.linalg.norm(command[:, :2], axis=1)
     direction = commanded_direction(command)
     length = MIN_PROGRESS * speed * (args.episode_s - args.turn_s) + 0.5
-    robots = np.flatnonzero(up)
+    robots = np.flatnonzero(counted)
     steps = np.array([line_step(env.terrain.height_at, xy[i, start], direction[i], length[i]) for i in robots])
     moved = np.linalg.norm(xy[robots, -1] - xy[robots, -last], axis=1) / (last * evaluation.dt)
     stalled = moved < 0.3 * speed[robots]
+    fell = m["fell"][robots]
     print(f"{len(items)} terrains, {int(moving.sum())} moving robots: {int(success.sum())} succeed, "
-          f"{int((moving & m['fell']).sum())} fall, {int((up & ~success).sum())} stay up and fail")
-    print_bins(steps, success[robots], stalled)
-
+          f"{int((moving & m['fell']).sum())} fall, {int((counted & ~m['fell'] & ~success).sum())} stay up and fail")
+    print_bins(steps, success[robots], fell, stalled)
 
 if __name__ == "__main__":
     main()
