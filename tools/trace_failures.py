@@ -137,5 +137,6 @@ def main() -> None:
           f"{int((moving & m['fell']).sum())} fall, {int((counted & ~m['fell'] & ~success).sum())} stay up and fail")
     print_bins(steps, success[robots], fell, stalled)
 
+
 if __name__ == "__main__":
     main()
