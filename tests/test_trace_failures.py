@@ -25,18 +25,34 @@ def step_ground(x, y):
 
 
 def test_a_wall_across_the_line_is_its_step_and_one_along_it_is_not(tool):
-    # across: samples every 0.1 m, the rise over 0.3 m from x = 1.9 (0) to 2.2 (0.4) is the whole wall
-    assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 4.0) == pytest.approx(0.4)
-    # over a 0.1 m run the ramp rises 0.2 m per sample
-    assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 4.0, run=0.1) == pytest.approx(0.2)
+    # across: samples every 0.1 m, the rise over 0.3 m from x = 1.9 (0) to 2.2 (0.4) is the whole wall, its top at 2.2 m
+    assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 4.0) == pytest.approx((0.4, 2.2))
+    # from x = 1 m the same top lies 1.2 m along the line
+    assert tool.line_step(step_ground, np.array([1.0, 0.0]), np.array([1.0, 0.0]), 4.0) == pytest.approx((0.4, 1.2))
+    # over a 0.1 m run the ramp rises 0.2 m per sample, first from 2.0 to 2.1 m
+    assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 4.0,
+                          run=0.1) == pytest.approx((0.2, 2.1))
     # along the wall's foot (x = 1 m, walking +y) the ground does not rise; walking down it (-x from x = 3 m) neither
-    assert tool.line_step(step_ground, np.array([1.0, 0.0]), np.array([0.0, 1.0]), 4.0) == 0.0
-    assert tool.line_step(step_ground, np.array([3.0, 0.0]), np.array([-1.0, 0.0]), 4.0) == 0.0
+    assert tool.line_step(step_ground, np.array([1.0, 0.0]), np.array([0.0, 1.0]), 4.0) == (0.0, 0.0)
+    assert tool.line_step(step_ground, np.array([3.0, 0.0]), np.array([-1.0, 0.0]), 4.0) == (0.0, 0.0)
     # a line that stops before the wall (1.5 m from the origin) sees none of it
-    assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 1.5) == 0.0
-    # a slope of 0.1 (rise 0.03 m over 0.3 m)
+    assert tool.line_step(step_ground, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 1.5) == (0.0, 0.0)
+    # a slope of 0.1 (rise 0.03 m over 0.3 m, the same everywhere on it)
     slope = lambda x, y: 0.1 * np.asarray(x)  # noqa: E731
-    assert tool.line_step(slope, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 2.0) == pytest.approx(0.03)
+    assert tool.line_step(slope, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 2.0)[0] == pytest.approx(0.03)
+
+
+def test_walls_count_how_the_robots_that_succeed_pass_them(tool, capsys):
+    """Four robots on lines with a wall: one failed (not counted), one succeeded with the wall past the asked
+    distance, two got past it, 1.0 m and 3.0 m off the line at most: median 2.0 m."""
+    tool.print_walls(np.array([False, True, True, True]), np.array([True, True, False, False]),
+                     np.array([True, False, True, True]), np.array([9.0, 0.1, 1.0, 3.0]))
+    assert capsys.readouterr().out.strip() == ("succeed on a line rising 0.7 m or more: 3; the rise past the asked "
+                                               "distance: 1; past the rise's distance along the line: 2, their "
+                                               "median largest sideways offset 2.0 m")
+    tool.print_walls(np.array([False]), np.array([False]), np.array([False]), np.array([0.0]))
+    assert capsys.readouterr().out.strip().endswith("or more: 0; the rise past the asked distance: 0; past the "
+                                                    "rise's distance along the line: 0")
 
 
 def test_bins_count_success_falls_and_the_stalled_share_of_robots_up_and_failing(tool, capsys):
@@ -79,4 +95,5 @@ def test_on_flat_ground_every_robot_has_a_line_without_a_step(tool, monkeypatch,
     assert moving >= 1 and succeeded + up_failing + fell == moving
     table = lines[lines.index("step on the line (m)   robots  success     fell  up, failed: stalled") + 1:]
     assert table[0].split()[:3] == ["[0.00,", "0.10)", str(moving)]
-    assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[1:])
+    assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[1:6])
+    assert table[6].startswith("succeed on a line rising 0.7 m or more: 0;")

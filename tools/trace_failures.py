@@ -8,7 +8,9 @@ the angle of (vx, vy)), as long as the success rule asks it to walk (70 % of spe
 along it. Every moving robot that did not diverge is binned by that step (a robot that fell before ``--turn_s``
 from where it respawned), with its bin's success and fall rates; of the robots that stayed up and failed, the
 share that had stalled (moved less than 30 % of the commanded speed over the last 3 s). The last bin, a rise of
-0.7 m or more, is taller than the biped's knees (about 0.5 m above the ground) and the quadruped's hips (0.3 m).
+0.7 m or more, is taller than the biped's knees (about 0.5 m above the ground) and the quadruped's hips (0.3 m):
+for the robots that succeed on such a line the tool says how they passed it (the rise past the distance the rule
+asks for, or the robot past the rise's distance along the line, with its largest sideways offset).
 
     python tools/trace_failures.py --task gente_biped --pretrained --benchmark gente_original \
         --report docs/results/heading_tracking/gente_original_eval_biped_29219.csv
@@ -27,6 +29,7 @@ import math
 import numpy as np
 
 STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, 0.7, math.inf)  # m
+WALL = STEP_BINS[-2]  # m: the last bin's rise
 
 
 def commanded_direction(command: np.ndarray) -> np.ndarray:
@@ -36,15 +39,18 @@ def commanded_direction(command: np.ndarray) -> np.ndarray:
 
 
 def line_step(height, start_xy: np.ndarray, direction: np.ndarray, length: float, run: float = 0.3,
-              spacing: float = 0.1) -> float:
+              spacing: float = 0.1) -> tuple[float, float]:
     """The largest rise of ``height(x, y)`` over ``run`` metres along the line from ``start_xy`` in
-    ``direction`` (a unit vector) for ``length`` metres, sampled every ``spacing`` metres."""
+    ``direction`` (a unit vector) for ``length`` metres, sampled every ``spacing`` metres, and the distance along
+    the line of its top (0 m where the line does not rise)."""
     r = np.arange(0.0, length + spacing / 2, spacing)
     z = height(start_xy[0] + r * direction[0], start_xy[1] + r * direction[1])
     lag = max(1, int(round(run / spacing)))
     if len(z) <= lag:
-        return 0.0
-    return float(max(0.0, (z[lag:] - z[:-lag]).max()))
+        return 0.0, 0.0
+    rise = z[lag:] - z[:-lag]
+    k = int(rise.argmax())
+    return (float(rise[k]), float(r[k + lag])) if rise[k] > 0.0 else (0.0, 0.0)
 
 
 def print_bins(steps: np.ndarray, success: np.ndarray, fell: np.ndarray, stalled: np.ndarray) -> None:
@@ -58,6 +64,16 @@ def print_bins(steps: np.ndarray, success: np.ndarray, fell: np.ndarray, stalled
         ok, down = (f"{success[in_bin].mean():.1%}", f"{fell[in_bin].mean():.1%}") if in_bin.any() else ("-", "-")
         stall = f"{stalled[up_failed].mean():.1%}" if up_failed.any() else "-"
         print(f"{label:20s} {in_bin.sum():7d}  {ok:>7s}  {down:>7s}  {stall:>19s}")
+
+
+def print_walls(success: np.ndarray, beyond: np.ndarray, passed: np.ndarray, sideways: np.ndarray) -> None:
+    """How the robots that succeed on a line with a wall pass it. ``success``: per robot, succeeded on such a line;
+    ``beyond``: the rise's top lies past the distance the rule asks for; ``passed``: the robot got past the rise's
+    distance along the line; ``sideways``: its largest distance from the line (m)."""
+    n, went_past = int(success.sum()), success & passed
+    offset = f", their median largest sideways offset {np.median(sideways[went_past]):.1f} m" if went_past.any() else ""
+    print(f"succeed on a line rising {WALL} m or more: {n}; the rise past the asked distance: "
+          f"{int((success & beyond).sum())}; past the rise's distance along the line: {int(went_past.sum())}{offset}")
 
 
 def failing_terrains(report: str, max_fall_rate: float = 0.2, max_success: float = 0.5) -> list[str]:
@@ -129,13 +145,19 @@ def main() -> None:
     direction = commanded_direction(command)
     length = MIN_PROGRESS * speed * (args.episode_s - args.turn_s) + 0.5
     robots = np.flatnonzero(counted)
-    steps = np.array([line_step(env.terrain.height_at, xy[i, start], direction[i], length[i]) for i in robots])
+    lines = np.array([line_step(env.terrain.height_at, xy[i, start], direction[i], length[i]) for i in robots])
+    steps, rise_at = lines[:, 0], lines[:, 1]
+    path = xy[robots, start:] - xy[robots, start, None]  # (robots, steps, 2) from the line's start
+    normal = np.stack([-direction[robots, 1], direction[robots, 0]], axis=1)
+    along = np.einsum("ntk,nk->nt", path, direction[robots]).max(axis=1)
+    sideways = np.abs(np.einsum("ntk,nk->nt", path, normal)).max(axis=1)
     moved = np.linalg.norm(xy[robots, -1] - xy[robots, -last], axis=1) / (last * evaluation.dt)
     stalled = moved < 0.3 * speed[robots]
     fell = m["fell"][robots]
     print(f"{len(items)} terrains, {int(moving.sum())} moving robots: {int(success.sum())} succeed, "
           f"{int((moving & m['fell']).sum())} fall, {int((counted & ~m['fell'] & ~success).sum())} stay up and fail")
     print_bins(steps, success[robots], fell, stalled)
+    print_walls(success[robots] & (steps >= WALL), rise_at > length[robots] - 0.5, along > rise_at, sideways)
 
 
 if __name__ == "__main__":
