@@ -1,4 +1,4 @@
-"""Why robots that stay up still fail the velocity benchmark: the tallest step on the line they were told to walk.
+"""Where robots fail the velocity benchmark: the tallest step on the line they were told to walk.
 
 The velocity task commands a fixed (vx, vy) in a fixed heading; success needs 70 % of the commanded distance along
 that direction. For every moving robot this tool takes the commanded straight line in the world: from where the
@@ -30,6 +30,7 @@ import numpy as np
 
 STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, 0.7, math.inf)  # m
 WALL = STEP_BINS[-2]  # m: the last bin's rise
+LINE_MARGIN = 0.5  # m: how far the line runs past the distance the success rule asks for
 
 
 def commanded_direction(command: np.ndarray) -> np.ndarray:
@@ -143,7 +144,8 @@ def main() -> None:
     last = int(round(3.0 / evaluation.dt))
     speed = np.linalg.norm(command[:, :2], axis=1)
     direction = commanded_direction(command)
-    length = MIN_PROGRESS * speed * (args.episode_s - args.turn_s) + 0.5
+    asked = MIN_PROGRESS * speed * (args.episode_s - args.turn_s)  # m: the distance the success rule asks for
+    length = asked + LINE_MARGIN
     robots = np.flatnonzero(counted)
     lines = np.array([line_step(env.terrain.height_at, xy[i, start], direction[i], length[i]) for i in robots])
     steps, rise_at = lines[:, 0], lines[:, 1]
@@ -157,7 +159,7 @@ def main() -> None:
     print(f"{len(items)} terrains, {int(moving.sum())} moving robots: {int(success.sum())} succeed, "
           f"{int((moving & m['fell']).sum())} fall, {int((counted & ~m['fell'] & ~success).sum())} stay up and fail")
     print_bins(steps, success[robots], fell, stalled)
-    print_walls(success[robots] & (steps >= WALL), rise_at > length[robots] - 0.5, along > rise_at, sideways)
+    print_walls(success[robots] & (steps >= WALL), rise_at > asked[robots], along > rise_at, sideways)
 
 
 if __name__ == "__main__":
