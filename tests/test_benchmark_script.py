@@ -10,7 +10,7 @@ from legged_gente.scripts import benchmark
 
 
 def test_benchmark_prints_and_writes_a_table(tmp_path, capsys):
-    out = tmp_path / "bench.csv"
+    out = tmp_path / "new" / "bench.csv"  # its folder is made
     benchmark.main(["--task", "gente_biped_flat", "--num_envs", "2", "3", "--steps", "2", "--iterations", "1",
                     "--device", "cpu", "--csv", str(out)])
     printed = capsys.readouterr().out

@@ -67,7 +67,10 @@ def test_truncated_and_garbage_files_are_unreadable_checkpoints(runner, tmp_path
     truncated.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
     garbage = tmp_path / "garbage.pt"
     garbage.write_bytes(b"\x00not a checkpoint" * 10)
-    for path in (truncated, garbage):
+    text, sentence = tmp_path / "text.pt", tmp_path / "sentence.pt"  # the legacy unpickler: KeyError, IndexError
+    text.write_text("hello")
+    sentence.write_text("this is not a torch file")
+    for path in (truncated, garbage, text, sentence):
         with pytest.raises(UnreadableCheckpoint, match="unreadable"):
             load_checkpoint(path)
     plain = tmp_path / "plain.pt"

@@ -5,6 +5,7 @@ import pytest
 import torch
 
 from legged_gente.envs.task_registry import task_registry
+from legged_gente.scripts import benchmark as benchmark_script
 from legged_gente.scripts import evaluate as evaluate_script
 from legged_gente.scripts import generate as generate_script
 from legged_gente.scripts import play as play_script
@@ -46,6 +47,49 @@ def test_bad_set_field(capsys):
 ])
 def test_zero_divisors_are_rejected_before_anything_runs(capsys, override, message):
     line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--set", override])
+    assert message in line
+
+
+@pytest.mark.parametrize("override, message", [
+    ("algorithm.learning_rate=-1", "algorithm.learning_rate=-1.0: must be a number > 0"),
+    ("algorithm.gamma=5", "algorithm.gamma=5.0: must be a number in (0, 1]"),
+    ("algorithm.clip_param=-1", "algorithm.clip_param=-1.0: must be a number > 0"),
+    ("algorithm.schedule=bogus", "algorithm.schedule='bogus': use 'adaptive'"),
+    ("commands.ranges.lin_vel_x=[1.0,2.0,3.0]", "cfg.commands.ranges.lin_vel_x=[1.0, 2.0, 3.0]; use [low, high]"),
+])
+def test_nonsense_settings_are_rejected_before_anything_runs(capsys, override, message):
+    """rsl-rl would train on with a negative learning rate or clip, a discount above 1 or an unknown schedule
+    (it treats any schedule but 'adaptive' as fixed)."""
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--set", override])
+    assert message in line
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--episode_s", "0"], "episode_s must be > 0 s, got 0.0"),
+    (["--episode_s", "-1"], "episode_s must be > 0 s, got -1.0"),
+    (["--tracking_threshold", "-1"], "tracking_threshold must be > 0 m/s"),
+    (["--min_progress", "5"], "min_progress is a share of the commanded distance, in (0, 1]; got 5.0"),
+    (["--min_speed", "0"], "min_speed must be > 0 m/s"),
+    (["--out", "FILE"], "is a file; give a folder"),
+])
+def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
+    (tmp_path / "FILE").write_text("")
+    flags = [str(tmp_path / f) if f == "FILE" else f for f in flags]
+    out = [] if "--out" in flags else ["--out", str(tmp_path / "out")]
+    line = one_line_error(capsys, evaluate_script.main, ["--task", "gente_biped_flat", "--baseline", "zero",
+                                                         "--benchmark", "flat", "--robots_per_terrain", "2",
+                                                         "--device", "cpu", "--no_progress", *out, *flags])
+    assert message in line
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--task", "nope"], "unknown task 'nope'; registered tasks:"),
+    (["--steps", "0"], "--steps 0 must be >= 1"),
+    (["--steps", "-3"], "--steps -3 must be >= 1"),
+    (["--iterations", "-1"], "--iterations -1 >= 0"),
+])
+def test_nonsense_benchmark_flags(capsys, flags, message):
+    line = one_line_error(capsys, benchmark_script.main, ["--num_envs", "2", "--device", "cpu", *flags])
     assert message in line
 
 

@@ -124,8 +124,13 @@ def test_one_evaluation_runs_several_times():
         return torch.zeros(evaluation.env.num_envs, evaluation.env.num_actions)
 
     for d in (0.1, 20.0):
-        result = evaluation.run(still, evaluation.make_task(reach_distance=d), progress=False)
+        result = evaluation.run(still, evaluation.make_task(reach_distance=d), settle_s=0.1, progress=False)
         assert result.traces["pos"].shape[1] == round(0.2 / 0.02)
+    for settle_s in (-0.1, 0.2, 1.0):  # the episode is 0.2 s: settling through it leaves nothing to measure
+        with pytest.raises(ValueError, match=f"settle_s {settle_s} s leaves nothing"):
+            evaluation.run(still, progress=False, settle_s=settle_s)
+    with pytest.raises(ValueError, match="speed must be > 0"):
+        evaluation.make_task(speed=-1.0)
 
 
 def test_success_needs_progress_and_tight_tracking():

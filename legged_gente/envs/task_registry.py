@@ -37,8 +37,23 @@ def shipped_task_warnings_quiet(task: str, verbose: bool):
         yield
 
 
+# PPO's settings outside which rsl-rl trains on without complaint but learns nothing sensible: (field, test, bound)
+PPO_RANGES = (
+    ("learning_rate", lambda v: v > 0, "> 0"),
+    ("clip_param", lambda v: v > 0, "> 0"),
+    ("gamma", lambda v: 0 < v <= 1, "in (0, 1]"),
+    ("lam", lambda v: 0 <= v <= 1, "in [0, 1]"),
+    ("max_grad_norm", lambda v: v > 0, "> 0"),
+    ("value_loss_coef", lambda v: v >= 0, ">= 0"),
+    ("entropy_coef", lambda v: v >= 0, ">= 0"),
+    ("desired_kl", lambda v: v > 0, "> 0"),
+)
+PPO_SCHEDULES = ("adaptive", "fixed")
+
+
 def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO | None) -> None:
-    """The settings that divide or count (a zero would crash deep in the env or rsl-rl), checked up front."""
+    """The settings that divide or count (a zero would crash deep in the env or rsl-rl) and PPO's ranges, checked
+    up front."""
     checks = []
     if env_cfg is not None:
         checks += [("sim.dt", env_cfg.sim.dt, float, 0.0), ("env.episode_length_s", env_cfg.env.episode_length_s, float, 0.0),
@@ -58,6 +73,17 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
         if (value <= low) if kind is float else (value < low):
             bound = f"> {low}" if kind is float else f">= {low}"
             raise ValueError(f"{name}={value!r}: must be {bound} (--set {name}=...)")
+    if train_cfg is not None:
+        a = train_cfg.algorithm
+        for field, test, bound in PPO_RANGES:
+            value = getattr(a, field)
+            if value is None and field == "desired_kl":
+                continue  # rsl-rl's "no KL target": the learning rate stays fixed
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not test(value):
+                raise ValueError(f"algorithm.{field}={value!r}: must be a number {bound} (--set algorithm.{field}=...)")
+        if a.schedule not in PPO_SCHEDULES:
+            raise ValueError(f"algorithm.schedule={a.schedule!r}: use 'adaptive' (the learning rate follows "
+                             f"desired_kl) or 'fixed' (--set algorithm.schedule=...)")
     if env_cfg is not None and train_cfg is not None:
         batch = env_cfg.env.num_envs * train_cfg.runner.num_steps_per_env
         if batch < train_cfg.algorithm.num_mini_batches:

@@ -175,6 +175,8 @@ class Evaluation:
 
         if robots_per_terrain < 1:
             raise ValueError(f"robots_per_terrain must be >= 1, got {robots_per_terrain}.")
+        if not episode_length_s > 0:
+            raise ValueError(f"episode_s must be > 0 s, got {episode_length_s}.")
         if mode not in ("velocity", "waypoints"):
             raise ValueError(f"mode {mode!r}: use 'velocity' or 'waypoints'.")
         self.items, self.mode, self.seed = list(items), mode, seed
@@ -223,6 +225,9 @@ class Evaluation:
         from tqdm import tqdm
 
         env = self.env
+        if not 0.0 <= settle_s < self.num_steps * self.dt:
+            raise ValueError(f"settle_s {settle_s} s leaves nothing of the {self.num_steps * self.dt:g} s episode to "
+                             f"measure; give a value in [0, episode_s).")
         task = task or self.make_task()
         torch.manual_seed(self.seed)
         first = torch.arange(0, env.num_envs, self.robots_per_terrain, device=env.device)

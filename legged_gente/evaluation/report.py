@@ -101,12 +101,21 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
     }
 
 
+def check_success_rule(tracking_threshold: float, min_progress: float) -> None:
+    """The success rule's thresholds, or a one-line error: a tracking error bound in m/s, a share of the distance."""
+    if not tracking_threshold > 0:
+        raise ValueError(f"tracking_threshold must be > 0 m/s, got {tracking_threshold}.")
+    if not 0.0 < min_progress <= 1.0:
+        raise ValueError(f"min_progress is a share of the commanded distance, in (0, 1]; got {min_progress}.")
+
+
 def build_report(result, items: list[Item], tracking_threshold: float = TRACKING_THRESHOLD,
                  meta: dict | None = None, min_progress: float = MIN_PROGRESS) -> dict:
     """JSON-ready report: ``terrains`` (one entry per item), ``groups`` (kinds and categories) and ``overall``.
 
     Terrains, kinds, categories and overall count the robots with a moving command; the robots told to stand
     still are the group ``stand_still`` (velocity task)."""
+    check_success_rule(tracking_threshold, min_progress)
     ok = success(result.metrics, result.task, tracking_threshold, min_progress)
     standing = result.metrics.get("standing", np.zeros_like(ok)).astype(bool)
 

@@ -28,6 +28,8 @@ class VelocityTask:
                  min_speed: float = 0.3, stand_fraction: float = 0.1):
         if not 0.0 <= stand_fraction <= 1.0:
             raise ValueError(f"stand_fraction must be in [0, 1], got {stand_fraction}.")
+        if not min_speed > 0:
+            raise ValueError(f"min_speed must be > 0 m/s, got {min_speed}.")
         g = torch.Generator().manual_seed(seed)
         n = num_robots
         yaw = _uniform(*ranges.ang_vel_yaw, n, g) if not heading_command else torch.zeros(n)
@@ -89,6 +91,8 @@ class WaypointTask:
             raise ValueError(f"waypoints must be (num_robots, K >= 1, 2) world xy, got {tuple(waypoints.shape)}.")
         if not reach_distance > 0:
             raise ValueError(f"reach_distance must be > 0 m, got {reach_distance}.")
+        if not speed > 0:
+            raise ValueError(f"speed must be > 0 m/s, got {speed}.")
         self.waypoints = waypoints
         self.reach_distance = float(reach_distance)
         self.speed = float(speed)

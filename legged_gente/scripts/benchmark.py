@@ -20,7 +20,7 @@ import warp as wp
 
 from legged_gente.envs.base.legged_robot import CUDA_GRAPH_MODES
 from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device
+from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
 from legged_gente.utils.tables import write_rows
 
 
@@ -359,24 +359,31 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     quiet_third_party(args.verbose)
     try:
-        device = resolve_device(args.device)
+        args.device = resolve_device(args.device)
     except ValueError as error:
         parser.error(str(error))
     if any(n < 1 for n in args.num_envs):
         parser.error("--num_envs values must be >= 1")
+    if args.steps < 1 or args.iterations < 0:
+        parser.error(f"--steps {args.steps} must be >= 1 and --iterations {args.iterations} >= 0 (0 skips PPO)")
     if args.terrain_build:
         from legged_gente.terrain.benchmark import benchmark_grid, describe
 
         print(describe(benchmark_grid()), flush=True)
     if args.profile_envs is not None and args.profile_envs not in args.num_envs:
         parser.error(f"--profile_envs {args.profile_envs} is not one of --num_envs {args.num_envs}")
-    if args.check_sync and not device.startswith("cuda"):
+    if args.check_sync and not args.device.startswith("cuda"):
         parser.error("--check_sync needs a CUDA device (--device cuda)")
-    rows = run(args.task, args.num_envs, device, args.steps, args.iterations, args.check_sync, args.profile,
+    run_command("gente-benchmark", measure, args)
+
+
+def measure(args: argparse.Namespace) -> None:
+    """Run the benchmark the flags ask for; print its table and write its CSV."""
+    rows = run(args.task, args.num_envs, args.device, args.steps, args.iterations, args.check_sync, args.profile,
                args.profile_envs, args.cuda_graph)
     if args.check_sync:
         print("check_sync: no host-device synchronisation in LeggedRobot.step")
-    print_table(rows, device)
+    print_table(rows, args.device)
     if args.csv:
         write_rows(args.csv, rows)
 

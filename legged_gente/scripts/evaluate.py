@@ -55,19 +55,22 @@ def build_parser() -> argparse.ArgumentParser:
 def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
-    from legged_gente.evaluation.report import build_report, write_reports
+    from legged_gente.evaluation.report import build_report, check_success_rule, write_reports
     from legged_gente.envs.task_registry import shipped_task_warnings_quiet
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built
             raise FileNotFoundError(f"{name} {given}: no such file or run folder.")
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise ValueError(f"--out {args.out} is a file; give a folder (new or existing) for the reports.")
+    check_success_rule(args.tracking_threshold, args.min_progress)  # before the rollout, not after it
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
         if args.limit < 1:
             raise ValueError(f"--limit must be >= 1, got {args.limit}.")
         items = items[: args.limit]
     device = resolve_device(args.device)
-    episode_s = args.episode_s or (20.0 if args.mode == "waypoints" else 10.0)
+    episode_s = args.episode_s if args.episode_s is not None else (20.0 if args.mode == "waypoints" else 10.0)
     with shipped_task_warnings_quiet(args.task, args.verbose):
         evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
@@ -83,6 +86,9 @@ def evaluate(args) -> dict:
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
+    if o["robots"] == 0:
+        print(f"no robot had a moving command (all were told to stand still, --stand_fraction "
+              f"{args.stand_fraction}); raise --robots_per_terrain to score the moving ones.")
     heading = o.get("heading_error")
     heading = f"heading error {heading:.1f} deg; " if heading is not None and math.isfinite(heading) else ""
     print(f"success {100 * o['success_rate']:.1f}% over {o['robots']} robots on {o['terrains']} terrains; "

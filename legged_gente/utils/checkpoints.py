@@ -103,9 +103,11 @@ def load_checkpoint(path: str | Path, map_location=None) -> dict:
                                   ) from None
         reason = [line.strip() for line in str(error).splitlines() if line.strip()][-2:-1] or [type(error).__name__]
         raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (corrupt: {reason[0]}).") from None
-    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError) as error:
-        first = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (truncated or corrupt: {first}).") from None
+    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError, KeyError, IndexError) as error:
+        # KeyError, IndexError: the legacy unpickler reading bytes that are not a pickle (a text file)
+        first = str(error).splitlines()[0] if str(error) else ""
+        raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (truncated, corrupt or not written by "
+                                   f"torch.save: {type(error).__name__} {first}).") from None
     if not isinstance(loaded, dict) or "actor_state_dict" not in loaded:
         raise CheckpointError(f"checkpoint {path} is not an rsl-rl training checkpoint (no actor_state_dict); "
                               f"gente-play exports policies, checkpoints are the model_<iteration>.pt of a run.")
@@ -138,8 +140,8 @@ def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int
     if saved_actions != num_actions or (saved_task and task and saved_task != task
                                         and _shapes(saved) != _shapes(actor_state)):
         raise CheckpointError(f"checkpoint {path} is for {checkpoint_summary(loaded)}; this task is "
-                              f"{task or 'unnamed'} ({num_actions} actions). Pick a checkpoint of this task "
-                              f"(--task, --load_run, --checkpoint).")
+                              f"{task or 'unnamed'} ({num_actions} actions). Pick a checkpoint of this task, or "
+                              f"the task of this checkpoint (--task).")
     for key, shape in _shapes(actor_state).items():
         if key in saved and tuple(saved[key].shape) != shape:
             raise CheckpointError(
@@ -165,7 +167,7 @@ def pretrained_policy(task: str) -> tuple[Path, dict]:
             if policies_root().is_dir() else []
         raise FileNotFoundError(f"--pretrained: no policy is shipped for task {task!r} (shipped: "
                                 f"{', '.join(shipped) or 'none'}); train one with gente-train --task {task}, then "
-                                f"use --load_run/--checkpoint")
+                                f"load it from its run (gente-play --load_run, gente-evaluate --checkpoint).")
     return folder / "model.pt", json.loads((folder / "config.json").read_text())
 
 

@@ -7,7 +7,9 @@ from pathlib import Path
 
 
 def write_rows(path: str | Path, rows: list[dict]) -> Path:
-    """``rows`` to a CSV at ``path``: a header of the first row's keys, then one line per row."""
+    """``rows`` to a CSV at ``path`` (its folder made if missing): a header of the first row's keys, then one line
+    per row."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()

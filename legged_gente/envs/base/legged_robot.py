@@ -124,8 +124,9 @@ class LeggedRobot(VecEnv):
              f"cfg.domain_rand.init_lin_vel_xy_noise={cfg.domain_rand.init_lin_vel_xy_noise}; use >= 0 (m/s)"),
         ]
         for name in COMMAND_RANGES:
-            low, high = getattr(cfg.commands.ranges, name)
-            checks.append((low <= high, f"cfg.commands.ranges.{name}=[{low}, {high}]; use [low, high], low <= high"))
+            bounds = list(getattr(cfg.commands.ranges, name))
+            ok = len(bounds) == 2 and bounds[0] <= bounds[1]
+            checks.append((ok, f"cfg.commands.ranges.{name}={bounds}; use [low, high], low <= high"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
