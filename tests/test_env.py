@@ -1,7 +1,5 @@
 """LeggedRobot on the CPU: shapes, masked resets, reward terms, config subclassing."""
 
-import math
-
 import pytest
 import torch
 

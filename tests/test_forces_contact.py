@@ -225,7 +225,7 @@ def test_sphere_released_inside_a_pillar_is_not_launched():
     tc, dmax, depth_cap, g = 0.02, 0.95, 0.03, 9.81
     v_max = depth_cap / (2 * dmax * tc)  # 0.79 m/s
     h = tall_step(1.5)
-    xml = f"""<mujoco><option timestep="0.005"/>
+    xml = """<mujoco><option timestep="0.005"/>
       <asset><hfield name="hf" nrow="21" ncol="21" size="1 1 1.5 0.1"/></asset>
       <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
         <body name="foot"><joint type="slide" axis="1 0 0"/><joint type="slide" axis="0 0 1"/>

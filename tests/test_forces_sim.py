@@ -3,7 +3,6 @@
 import mujoco
 import mujoco_warp as mjw
 import numpy as np
-import pytest
 import warp as wp
 
 from legged_gente.external_forces import models

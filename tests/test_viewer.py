@@ -11,7 +11,7 @@ import pytest
 
 from legged_gente.terrain.terrain import LOW_FRICTION_COLOUR, SOIL_COLOURS, WATER_COLOUR, Terrain
 from legged_gente.viewer.rollout import Kinematics, Rollout, robot_geoms, robot_model
-from legged_gente.viewer.scene import Arrows, BareTerrain, Label, Lines, Mesh, Points, terrain_scene
+from legged_gente.viewer.scene import BareTerrain, Label, Lines, Points, terrain_scene
 
 
 class GridCfg:

@@ -12,7 +12,7 @@ import pytest
 
 from legged_gente.terrain.terrain import SOIL_COLOURS, Terrain
 from legged_gente.viewer.scene import terrain_scene
-from legged_gente.viewer.video import CHECKER_DARK, TEXELS_PER_CELL, VideoRenderer, ground_texture, render_model
+from legged_gente.viewer.video import CHECKER_DARK, TEXELS_PER_CELL, ground_texture, render_model
 
 
 class SandAndWater:

@@ -282,8 +282,6 @@ def evaluation_agrees(task: str, robots_per_terrain: int = 32, episode_s: float 
 def compare_evaluations(runs: dict[str, dict], reference: str) -> bool:
     """True when every run has the reference run's diverged and fallen robots, and its mean tracking error and
     distance over the robots that did not diverge agree within STATISTICS_TOLERANCE (+ 0.02)."""
-    import numpy as np
-
     def summary(m):
         kept = ~m["diverged"]
         return {"diverged": int(m["diverged"].sum()), "falls": int(m["fell"].sum()),

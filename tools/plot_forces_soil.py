@@ -15,7 +15,6 @@ Preset means (no per-episode scatter), CPU, about a minute:
 from __future__ import annotations
 
 import argparse
-import math
 
 import matplotlib
 

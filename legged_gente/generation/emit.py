@@ -18,7 +18,6 @@ import importlib.util
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 from legged_gente.generation.spec import TerrainSpec
 

@@ -25,7 +25,6 @@ from typing import Callable
 
 import torch
 import warp as wp
-from tensordict import TensorDict
 
 
 def rebound_attributes(owner, before: dict) -> dict:
