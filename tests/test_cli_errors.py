@@ -1,6 +1,9 @@
 """A user's mistake on the command line is one line on stderr and exit status 2, never a traceback; flags take
 both spellings (--num_envs, --num-envs) in every command; the CPU default of 4096 robots is called out."""
 
+import json
+from pathlib import Path
+
 import pytest
 import torch
 
@@ -10,6 +13,7 @@ from legged_gente.scripts import evaluate as evaluate_script
 from legged_gente.scripts import generate as generate_script
 from legged_gente.scripts import play as play_script
 from legged_gente.scripts import train as train_script
+from legged_gente.scripts import view as view_script
 from legged_gente.utils.args import build_parser, flag, parse_args
 
 
@@ -23,6 +27,7 @@ def one_line_error(capsys, main, argv) -> str:
     return lines[-1]
 
 
+BENCHMARKS = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks"
 CPU = ["--device", "cpu", "--num_envs", "1", "--headless"]
 
 
@@ -91,6 +96,85 @@ def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
 def test_nonsense_benchmark_flags(capsys, flags, message):
     line = one_line_error(capsys, benchmark_script.main, ["--num_envs", "2", "--device", "cpu", *flags])
     assert message in line
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--port", "99999"], "--port 99999 must be in 0..65535"),
+    (["--play", "--policy", "zero", "--steps", "0"], "--steps 0 >= 1"),
+    (["TEXT.npz"], "TEXT.npz is not a readable NumPy .npz archive"),
+    (["gente100", "--traces", "TEXT.npz"], "TEXT.npz is not a readable NumPy .npz archive"),
+])
+def test_nonsense_viewer_input(capsys, tmp_path, argv, message):
+    """A port out of range kept the viewer waiting for a server that never came; a text file named .npz showed
+    numpy's advice to unpickle it."""
+    (tmp_path / "TEXT.npz").write_text("hello")
+    argv = [str(tmp_path / a) if a == "TEXT.npz" else a for a in argv]
+    line = one_line_error(capsys, view_script.main, ["--task", "gente_biped_flat", "--headless", "--seconds", "0",
+                                                     *argv])
+    assert message in line
+
+
+def test_play_needs_a_step(capsys):
+    line = one_line_error(capsys, play_script.main, ["--task", "gente_biped_flat", *CPU, "--steps", "-5"])
+    assert "--steps -5: roll out at least 1 policy step" in line
+
+
+def test_a_checkpoint_is_picked_only_to_resume(capsys):
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--checkpoint", "5"])
+    assert "add --resume" in line
+
+
+FLAT_SPEC = BENCHMARKS / "flat" / "specs" / "flat.json"
+
+
+@pytest.mark.parametrize("change, message", [
+    ("{not json", "is not valid JSON (Expecting property name"),
+    ({"version": 99}, "terrain spec format version 99; this code reads version 1"),
+    ({"size_x": -5.0}, "size_x -5, size_y 20 and resolution 0.1 must be > 0 m"),
+    ({"calls": [{"tool": "flat", "region": "upper_half_ish", "params": {}}]},
+     "region 'upper_half_ish' is none of the named regions (full, "),
+])
+def test_a_bad_terrain_spec_names_the_problem(capsys, tmp_path, change, message):
+    path = tmp_path / "spec.json"
+    document = json.loads(FLAT_SPEC.read_text())
+    path.write_text(change if isinstance(change, str) else json.dumps(document | change))
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--terrain", str(path)])
+    assert message in line
+
+
+@pytest.mark.parametrize("manifest, message", [
+    ('{"items": [', "manifest.json is not valid JSON"),
+    ('{"name": "x"}', "is not a benchmark manifest (KeyError: 'items'): it needs"),
+    ('{"items": [{"id": "a", "kind": "text"}]}', "is not a benchmark manifest (KeyError: 'spec')"),
+])
+def test_a_bad_manifest_names_its_file(capsys, tmp_path, manifest, message):
+    (tmp_path / "manifest.json").write_text(manifest)
+    line = one_line_error(capsys, evaluate_script.main, ["--baseline", "zero", "--benchmark", str(tmp_path),
+                                                         "--out", str(tmp_path / "out"), "--device", "cpu"])
+    assert message in line and str(tmp_path) in line
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--text", "   "], "--text is empty; describe the scene"),
+    (["--text", "a hill", "--out", "FILE"], "is a file; give a folder"),
+])
+def test_nonsense_generation_flags(capsys, tmp_path, argv, message):
+    (tmp_path / "FILE").write_text("")
+    argv = [str(tmp_path / a) if a == "FILE" else a for a in argv]
+    line = one_line_error(capsys, generate_script.main, ["--out", str(tmp_path / "out"), *argv])
+    assert message in line
+
+
+def test_generation_errors_are_one_line_and_name_the_image(capsys, tmp_path):
+    """Two problems of one spec on one line; an unreadable image by its path, not by Pillow's buffer."""
+    assert generate_script.main(["--text", "a hill", "--size", "100000", "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "'size_x'" in err and "'size_y'" in err, err
+    image = tmp_path / "photo.png"
+    image.write_text("not an image")
+    assert generate_script.main(["--image", str(image), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert f"{image} could not be read as an image" in err and "BytesIO" not in err, err
 
 
 def test_cuda_without_a_gpu_says_so(capsys, monkeypatch):

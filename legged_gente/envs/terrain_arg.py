@@ -19,9 +19,14 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
     if not path.is_file():
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
     if path.suffix == ".json":
+        try:
+            document = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ValueError(f"--terrain {value} is not valid JSON ({exc}); pass a spec.json written by "
+                             f"gente-generate") from None
         try:  # the terrain takes the spec's own tile size and resolution; its calls are checked when it is built
-            spec = tile_spec_from_document(json.loads(path.read_text()), path.parent)
-        except ValueError as exc:  # also json.JSONDecodeError
+            spec = tile_spec_from_document(document, path.parent)
+        except ValueError as exc:
             raise ValueError(f"--terrain {value}: {exc}") from None
         terrain = env_cfg.terrain
         terrain.mesh_type, terrain.mode, terrain.curriculum = "heightfield", "generated", False

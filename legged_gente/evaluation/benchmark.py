@@ -58,13 +58,20 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     if not manifest.is_file():
         raise FileNotFoundError(f"{manifest} not found; pass a benchmark folder with a manifest.json, or a shipped "
                                 f"benchmark: {sorted(p.parent.name for p in SHIPPED.glob('*/manifest.json'))}.")
-    data = json.loads(manifest.read_text())
+    try:
+        data = json.loads(manifest.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{manifest} is not valid JSON ({exc}); fix it, or rebuild the benchmark.") from None
     items = []
-    for entry in data["items"]:
-        if entry["kind"] not in KINDS:
-            raise ValueError(f"{manifest}: item {entry['id']!r} has kind {entry['kind']!r}; use one of {KINDS}.")
-        items.append(Item(entry["id"], entry["kind"], root / entry["spec"], entry.get("prompt"),
-                          root / entry["image"] if entry.get("image") else None, tuple(entry.get("names", ()))))
+    try:
+        for entry in data["items"]:
+            if entry["kind"] not in KINDS:
+                raise ValueError(f"{manifest}: item {entry['id']!r} has kind {entry['kind']!r}; use one of {KINDS}.")
+            items.append(Item(entry["id"], entry["kind"], root / entry["spec"], entry.get("prompt"),
+                              root / entry["image"] if entry.get("image") else None, tuple(entry.get("names", ()))))
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{manifest} is not a benchmark manifest ({type(exc).__name__}: {exc}): it needs "
+                         f'{{"items": [{{"id", "kind", "spec", ...}}, ...]}} (docs/evaluation.md).') from None
     if ids is not None:
         known = {i.id: i for i in items}
         missing = [i for i in ids if i not in known]

@@ -41,7 +41,10 @@ def generate_spec(
         raise ValueError(f"unknown backend {backend!r}; use one of {list(BACKENDS)}.")
     image_bytes = None
     if image is not None:
+        from legged_gente.generation.backends.image import open_image
+
         image_bytes = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
+        open_image(image_bytes, str(image) if isinstance(image, (str, Path)) else "the image")  # readable, or say so
     if backend == "planner":
         if image_bytes is not None:
             from legged_gente.generation.backends.image import plan_image

@@ -29,6 +29,7 @@ from legged_gente.terrain.composition import (
     MAX_ABS_HEIGHT,
     Operation,
     Part,
+    SPEC_VERSION,
     Region,
     TileSpec,
     heightmap_ground,
@@ -36,8 +37,6 @@ from legged_gente.terrain.composition import (
     tile_spec_from_document,
 )
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
-
-SPEC_VERSION = 1
 
 Rect = tuple[float, float, float, float]
 

@@ -72,8 +72,12 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.text is not None and not args.text.strip():
+        parser.error("--text is empty; describe the scene, e.g. --text 'a knee-deep river in a forest'.")
     if not args.text and args.image is None:
         parser.error("give --text, --image, or both.")
+    if args.out.exists() and not args.out.is_dir():
+        parser.error(f"--out {args.out} is a file; give a folder (new or existing) for the terrain.")
     if args.image is not None and not args.image.is_file():
         parser.error(f"--image {args.image} is not a file.")
     if args.backend == "openai" and not (args.base_url and args.model):
@@ -100,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"warning: {warning}", file=sys.stderr)
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
     except (ValidationError, GenerationError, ValueError) as exc:
-        print(f"gente-generate: error: {exc}", file=sys.stderr)
+        print(f"gente-generate: error: {' '.join(str(exc).splitlines())}", file=sys.stderr)
         return 1
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0

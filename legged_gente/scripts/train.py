@@ -112,6 +112,9 @@ def main(argv=None) -> None:
     args = parse_args(parser, argv)
     if args.max_minutes is not None and not args.max_minutes > 0:
         parser.error(f"--max_minutes must be > 0, got {args.max_minutes}")
+    if not args.resume and (args.load_run is not None or args.checkpoint is not None):
+        parser.error("--load_run/--checkpoint pick the checkpoint to resume from: add --resume (without it "
+                     "training starts from scratch)")
     run_command("gente-train", train, args)
 
 

@@ -74,7 +74,9 @@ def _benchmark_items(root: Path, args):
     specs = {i.id: i for i in items}
     if args.traces is None:
         return [TerrainItem(i.id, _task_terrain(args, i.spec_path)) for i in items], None
-    with np.load(args.traces) as f:
+    from legged_gente.viewer.rollout import open_npz
+
+    with open_npz(args.traces) as f:
         if "qpos" not in f.files:
             raise ValueError(f"{args.traces} has no qpos (written by an older gente-evaluate); evaluate again to "
                              f"replay the robots.")
@@ -165,6 +167,8 @@ def main(argv=None) -> None:
     source = Path(args.source) if args.source else None
     if source is not None and not source.suffix:
         source = benchmark_root(source)  # a folder, or a shipped benchmark by name (gente100)
+    if not 0 <= args.port <= 65535 or args.steps < 1:
+        parser.error(f"--port {args.port} must be in 0..65535 and --steps {args.steps} >= 1")
     if args.pretrained and not args.play:
         parser.error("--pretrained plays the shipped policy: add --play")
     if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):

@@ -26,6 +26,8 @@ from .heightmap import load_heightmap
 from .materials import MaterialMap
 from .registry import ATOMIC_TERRAINS, AtomicTerrain
 
+SPEC_VERSION = 1
+"""Format version of the terrain spec document (``spec.json``) this code reads and writes."""
 SEAM_BAND = 0.3
 """Width (m) of the band outside a part over which it blends into what lies below."""
 
@@ -176,19 +178,33 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
     An optional ``"heightmap": {"file": "map.npy", "vertical_scale": 0.005}`` makes the array in ``file`` (a path
     relative to ``base_dir``, the spec file's folder) the ground under the calls: one value per ``resolution``
     cell, times ``vertical_scale`` metres; ``size_x`` and ``size_y`` must be its cells times ``resolution``."""
+    if isinstance(data, dict) and data.get("version", SPEC_VERSION) != SPEC_VERSION:
+        raise ValueError(f"terrain spec format version {data['version']!r}; this code reads version {SPEC_VERSION}: "
+                         f"generate the spec again")
     try:
         size_x, size_y = float(data["size_x"]), float(data["size_y"])
         resolution = float(data["resolution"])
         regions = named_regions(size_x, size_y)
-        parts = []
-        for call in data["calls"]:
-            region = call["region"]
-            rect = regions[region] if isinstance(region, str) else tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
-            parts.append(Part(Region(*rect), [Operation(call["tool"], dict(call["params"]), call.get("mode") or "set")]))
+        calls = [(call["region"], Operation(call["tool"], dict(call["params"]), call.get("mode") or "set"))
+                 for call in data["calls"]]
         seed, heightmap = int(data["seed"]), data.get("heightmap")
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"not a terrain spec document ({type(exc).__name__}: {exc}); pass a spec.json written by "
                          f"gente-generate") from None
+    if not (size_x > 0 and size_y > 0 and resolution > 0):
+        raise ValueError(f"terrain spec: size_x {size_x:g}, size_y {size_y:g} and resolution {resolution:g} must be "
+                         f"> 0 m")
+    parts = []
+    for region, operation in calls:
+        if isinstance(region, str) and region not in regions:
+            raise ValueError(f"terrain spec: region {region!r} is none of the named regions ({', '.join(regions)}); "
+                             f"or give a rectangle {{x0, y0, x1, y1}} in metres")
+        try:
+            rect = regions[region] if isinstance(region, str) else tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"terrain spec: region {region!r} is neither a named region nor a rectangle "
+                             f"{{x0, y0, x1, y1}} ({type(exc).__name__}: {exc})") from None
+        parts.append(Part(Region(*rect), [operation]))
     base = None if heightmap is None else heightmap_ground(heightmap, size_x, size_y, resolution, base_dir)
     return TileSpec(size_x, size_y, resolution, seed, parts, base)
 

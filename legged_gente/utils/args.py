@@ -109,7 +109,7 @@ def run_command(prog: str, main, args: argparse.Namespace):
         if getattr(args, "verbose", False):
             raise
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
-        print(f"{prog}: error: {message}", file=sys.stderr)
+        print(f"{prog}: error: {' '.join(str(message).splitlines())}", file=sys.stderr)  # one line
         sys.exit(2)
 
 

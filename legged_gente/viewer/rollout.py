@@ -25,12 +25,22 @@ under each foot, at the sole).
 from __future__ import annotations
 
 import dataclasses
+import zipfile
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
 from legged_gente.terrain.materials import MaterialMap
+
+
+def open_npz(path: str | Path):
+    """``np.load`` of a rollout or traces archive (never unpickling), or a one-line error naming the file."""
+    try:
+        return np.load(path)
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile):  # a text file, a truncated or foreign archive
+        raise ValueError(f"{path} is not a readable NumPy .npz archive; give a rollout written by gente-view "
+                         f"--record or a traces.npz written by gente-evaluate.") from None
 
 ROLLOUT_VERSION = 1
 FORCE_KINDS = ("buoyancy", "drag", "soil")
@@ -85,7 +95,7 @@ class Rollout:
         if not path.is_file():
             raise FileNotFoundError(f"rollout {path} does not exist; record one with `gente-view --play ... "
                                     f"--record {path.name}`.")
-        with np.load(path) as f:
+        with open_npz(path) as f:
             keys = set(f.files)
             if "version" not in keys or "qpos" not in keys:
                 hint = " (this is gente-evaluate's traces.npz: open it with --traces)" if "pos" in keys else ""

@@ -101,14 +101,22 @@ MAX_CALLS = 20
 """Most calls a photo gives (GenTe asks for 3-20)."""
 
 
+def open_image(data: bytes, name: str = "the image") -> Image.Image:
+    """The image encoded in ``data``, decoded; unreadable data is a one-line error naming ``name``."""
+    try:
+        image = Image.open(io.BytesIO(data))
+        image.load()
+        return image
+    except Exception as exc:  # Pillow raises several types for unreadable data; its text names only a buffer
+        raise ValueError(f"{name} could not be read as an image ({type(exc).__name__}); pass a PNG or JPEG "
+                         f"file.") from None
+
+
 def _load(image: str | Path | bytes | Image.Image) -> Image.Image:
     if isinstance(image, Image.Image):
         return image.convert("RGB")
     data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-    try:
-        return Image.open(io.BytesIO(data)).convert("RGB")
-    except Exception as exc:  # Pillow raises several types for unreadable data
-        raise ValueError(f"the image could not be read ({exc}); pass a PNG or JPEG file.") from None
+    return open_image(data, str(image) if isinstance(image, (str, Path)) else "the image").convert("RGB")
 
 
 def _hsv(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

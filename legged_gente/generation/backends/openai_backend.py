@@ -20,7 +20,6 @@ read into the ``openai`` package's ``ChatCompletion`` type, which checks its str
 from __future__ import annotations
 
 import base64
-import io
 import json
 import os
 import threading
@@ -31,9 +30,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from openai.types.chat import ChatCompletion
-from PIL import Image
 
 from legged_gente.generation.backends import GenerationError, GenerationResult
+from legged_gente.generation.backends.image import open_image
 from legged_gente.generation.tools import named_regions, tool_schemas
 from legged_gente.generation.validation import MAX_CALLS, ToolCall, ValidationError, check_height_stack, validate_call
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
@@ -59,10 +58,7 @@ DESCRIBE_PROMPT = (
 def image_data_url(image: str | Path | bytes) -> str:
     """A ``data:image/...;base64,`` URL of an image file or its bytes (the format is read from the data)."""
     data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-    try:
-        fmt = Image.open(io.BytesIO(data)).format or "PNG"
-    except Exception as exc:  # Pillow raises several types for unreadable data
-        raise ValueError(f"the image could not be read ({exc}); pass a PNG or JPEG file.") from None
+    fmt = open_image(data, str(image) if isinstance(image, (str, Path)) else "the image").format or "PNG"
     return f"data:image/{fmt.lower()};base64,{base64.b64encode(data).decode('ascii')}"
 
 
