@@ -32,6 +32,8 @@ def test_set_overrides_env_and_train_fields_with_their_types():
     ("terrian.num_rows=4", "terrian is not a config section"),
     ("terrain.curriculum=1", "of type bool"),
     ("env.num_envs=1.5", "of type int"),
+    ("actor.hidden_dims=[256,128", r"the field is a list; give a list literal .* e.g. actor.hidden_dims=\[512, 256\]"),
+    ("terrain.terrain_types=[a,b]", "give a list literal of numbers or quoted strings"),
 ])
 def test_set_rejects_unknown_fields_and_wrong_types(flag, message):
     env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")

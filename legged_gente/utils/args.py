@@ -163,6 +163,9 @@ def _override_value(text: str, current, name: str):
         return float(value)
     if expected in (list, tuple) and isinstance(value, (list, tuple)):
         return expected(value)
+    if expected in (list, tuple):
+        raise ValueError(f"--set {name}={text}: the field is a list; give a list literal of numbers or quoted "
+                         f"strings, e.g. {name}={list(current)[:2]!r}")
     raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; give a "
                      f"value of that type")
 
