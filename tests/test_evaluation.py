@@ -365,3 +365,13 @@ def test_the_reference_yaw_follows_the_commanded_yaw_rate_without_a_heading():
     before = float(recorder.along_cmd[0])
     recorder.record(env, torch.zeros(1, dtype=torch.bool))  # the reference turns to 1.02 rad in this step
     assert float(recorder.along_cmd[0]) - before == pytest.approx(0.6 * math.cos(0.02) * 0.02, abs=1e-6)
+
+
+def test_an_evaluation_without_moving_robots_says_so(tmp_path, capsys):
+    """All robots told to stand: no success rate over zero robots without a word on why."""
+    from legged_gente.scripts.evaluate import main
+
+    main(["--task", "gente_biped_flat", "--baseline", "zero", "--benchmark", "flat", "--robots_per_terrain", "2",
+          "--stand_fraction", "1", "--episode_s", "0.2", "--settle_s", "0.1", "--device", "cpu", "--out",
+          str(tmp_path), "--no_progress"])
+    assert "no robot had a moving command (all were told to stand still" in capsys.readouterr().out
