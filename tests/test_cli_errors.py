@@ -99,14 +99,15 @@ def test_nonsense_benchmark_flags(capsys, flags, message):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--port", "99999"], "--port 99999 must be in 0..65535"),
-    (["--play", "--policy", "zero", "--steps", "0"], "--steps 0 >= 1"),
+    (["--port", "99999"], "port 99999 must be in 0..65535"),
+    (["--host", "256.1.1.1"], "cannot serve on host '256.1.1.1'"),
+    (["--play", "--policy", "zero", "--steps", "0"], "--steps 0: roll out at least 1 policy step"),
     (["TEXT.npz"], "TEXT.npz is not a readable NumPy .npz archive"),
     (["gente100", "--traces", "TEXT.npz"], "TEXT.npz is not a readable NumPy .npz archive"),
 ])
 def test_nonsense_viewer_input(capsys, tmp_path, argv, message):
-    """A port out of range kept the viewer waiting for a server that never came; a text file named .npz showed
-    numpy's advice to unpickle it."""
+    """A port out of range or a host that is not this machine's kept the viewer waiting for a server that never
+    came; a text file named .npz showed numpy's advice to unpickle it."""
     (tmp_path / "TEXT.npz").write_text("hello")
     argv = [str(tmp_path / a) if a == "TEXT.npz" else a for a in argv]
     line = one_line_error(capsys, view_script.main, ["--task", "gente_biped_flat", "--headless", "--seconds", "0",

@@ -8,6 +8,7 @@ play/pause, and the commanded vs actual velocity of robot 0 with resets and fall
 from __future__ import annotations
 
 import dataclasses
+import socket
 import threading
 from typing import Callable
 
@@ -77,6 +78,20 @@ def legend_html(legend: list[tuple[str, tuple[int, int, int]]]) -> str:
     return f'<div style="padding:4px 0">{rows}</div>'
 
 
+def check_address(host: str, port: int) -> None:
+    """A one-line error for an address the server cannot listen on: viser's server thread would fail there and
+    leave its constructor waiting forever. (A port in use is fine: viser moves to the next free one.)"""
+    if not 0 <= port <= 65535:
+        raise ValueError(f"port {port} must be in 0..65535.")
+    try:
+        family = socket.getaddrinfo(host, None)[0][0]
+        with socket.socket(family) as probe:
+            probe.bind((host, 0))
+    except OSError as error:  # socket.gaierror too
+        raise ValueError(f"cannot serve on host {host!r} ({error.strerror or error}); use 127.0.0.1 (this machine) "
+                         f"or 0.0.0.0 (every interface).") from None
+
+
 class Viewer:
     """A viser server showing ``items`` (terrains) and, after :meth:`attach_rollout`, a rollout."""
 
@@ -89,6 +104,7 @@ class Viewer:
         if len(self.items) != len(items):
             raise ValueError("terrain items need distinct labels.")
         self._built: dict[str, object] = {}
+        check_address(host, port)
         self.server = viser.ViserServer(host=host, port=port, label="legged_gente", verbose=False)
         self.server.scene.set_up_direction("+z")
         self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows)
