@@ -42,6 +42,35 @@ def test_a_wall_across_the_line_is_its_step_and_one_along_it_is_not(tool):
     assert tool.line_step(slope, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 2.0)[0] == pytest.approx(0.03)
 
 
+def ditch(x, y):
+    """A channel 1 m deep between x = 2 m and x = 4 m: vertical walls (at 2.0 and 4.0 m), a flat bed."""
+    x = np.asarray(x) + 0.0 * np.asarray(y)
+    return np.where((x > 2.0) & (x < 4.0), -1.0, 0.0)
+
+
+def test_a_channel_across_the_line_is_a_drop_and_a_step(tool):
+    # samples every 0.1 m: the ground falls 1 m between x = 2.0 and 2.1 (the drop's low end, 2.1 m along the line)
+    # and rises 1 m between 3.9 and 4.0 m (the step's top at 4.0 m along the line)
+    down = lambda x, y: -ditch(x, y)  # noqa: E731
+    assert tool.line_step(down, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 6.0) == pytest.approx((1.0, 2.1))
+    assert tool.line_step(ditch, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 6.0) == pytest.approx((1.0, 4.0))
+    # a line that ends in the bed, 3 m long, has the drop but not the step out
+    assert tool.line_step(ditch, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 3.0) == (0.0, 0.0)
+    # walking along the bed (x = 3 m, +y) neither falls nor rises
+    assert tool.line_step(down, np.array([3.0, 0.0]), np.array([0.0, 1.0]), 6.0) == (0.0, 0.0)
+
+
+def test_reach_splits_lines_by_a_step_or_a_drop_of_045_m(tool, capsys):
+    """Four robots: (step 0.2, drop 0.1, succeeded), (0.3, 0.44, fell), (0.1, 0.45, failed up) and (0.9, 0.0,
+    succeeded): the first two lie within reach (one of two succeeds, one of two fell), the last two beyond (one of
+    two succeeds, none fell)."""
+    tool.print_reach(np.array([0.2, 0.3, 0.1, 0.9]), np.array([0.1, 0.44, 0.45, 0.0]),
+                     np.array([True, False, False, True]), np.array([False, True, False, False]))
+    assert capsys.readouterr().out.splitlines() == [
+        "lines with no step or drop of 0.45 m or more: 2 robots, success 50.0%, fell 50.0%",
+        "lines with a step or a drop beyond: 2 robots, success 50.0%, fell 0.0%"]
+
+
 def test_walls_count_how_the_robots_that_succeed_pass_them(tool, capsys):
     """Four robots on lines with a wall: one failed (not counted), one succeeded with the wall past the asked
     distance, two got past it, 1.0 m and 3.0 m off the line at most: median 2.0 m."""
@@ -97,3 +126,8 @@ def test_on_flat_ground_every_robot_has_a_line_without_a_step(tool, monkeypatch,
     assert table[0].split()[:3] == ["[0.00,", "0.10)", str(moving)]
     assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[1:6])
     assert table[6].startswith("succeed on a line rising 0.7 m or more: 0;")
+    assert table[7] == "drop on the line (m)   robots  success     fell  up, failed: stalled"
+    assert table[8].split()[:3] == ["[0.00,", "0.10)", str(moving)]
+    assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[9:14])
+    assert table[14].startswith(f"lines with no step or drop of 0.45 m or more: {moving} robots")
+    assert table[15] == "lines with a step or a drop beyond: 0 robots, -"

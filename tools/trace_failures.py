@@ -10,7 +10,9 @@ from where it respawned), with its bin's success and fall rates; of the robots t
 share that had stalled (moved less than 30 % of the commanded speed over the last 3 s). The last bin, a rise of
 0.7 m or more, is taller than the biped's knees (about 0.5 m above the ground) and the quadruped's hips (0.3 m):
 for the robots that succeed on such a line the tool says how they passed it (the rise past the distance the rule
-asks for, or the robot past the rise's distance along the line, with its largest sideways offset).
+asks for, or the robot past the rise's distance along the line, with its largest sideways offset). A second table
+bins the same robots by the line's *drop* (the largest fall of the ground over ``run``: a bank down into a channel
+or a trench), and a last pair of lines splits them by whether the line holds a step or a drop of 0.45 m or more.
 
     python tools/trace_failures.py --task gente_biped --pretrained --benchmark gente_original \
         --report docs/results/heading_tracking/gente_original_eval_biped_29219.csv
@@ -30,6 +32,7 @@ import numpy as np
 
 STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, 0.7, math.inf)  # m
 WALL = STEP_BINS[-2]  # m: the last bin's rise
+REACH = STEP_BINS[-3]  # m: taller steps (up or down) than the curriculum's 0.30 m and the lone-step benchmark's reach
 LINE_MARGIN = 0.5  # m: how far the line runs past the distance the success rule asks for
 
 
@@ -54,10 +57,11 @@ def line_step(height, start_xy: np.ndarray, direction: np.ndarray, length: float
     return (float(rise[k]), float(r[k + lag])) if rise[k] > 0.0 else (0.0, 0.0)
 
 
-def print_bins(steps: np.ndarray, success: np.ndarray, fell: np.ndarray, stalled: np.ndarray) -> None:
-    """Per bin of the line's step: robots, success and fall rates, and the stalled share of those that stayed up
-    and failed (``stalled`` is read only there)."""
-    print("step on the line (m)   robots  success     fell  up, failed: stalled")
+def print_bins(steps: np.ndarray, success: np.ndarray, fell: np.ndarray, stalled: np.ndarray,
+               what: str = "step") -> None:
+    """Per bin of the line's step (or drop, ``what``): robots, success and fall rates, and the stalled share of
+    those that stayed up and failed (``stalled`` is read only there)."""
+    print(f"{what} on the line (m)".ljust(21) + "  robots  success     fell  up, failed: stalled")
     for lo, hi in zip(STEP_BINS[:-1], STEP_BINS[1:]):
         in_bin = (steps >= lo) & (steps < hi)
         up_failed = in_bin & ~success & ~fell
@@ -75,6 +79,14 @@ def print_walls(success: np.ndarray, beyond: np.ndarray, passed: np.ndarray, sid
     offset = f", their median largest sideways offset {np.median(sideways[went_past]):.1f} m" if went_past.any() else ""
     print(f"succeed on a line rising {WALL} m or more: {n}; the rise past the asked distance: "
           f"{int((success & beyond).sum())}; past the rise's distance along the line: {int(went_past.sum())}{offset}")
+
+
+def print_reach(steps: np.ndarray, drops: np.ndarray, success: np.ndarray, fell: np.ndarray) -> None:
+    """Success and falls on the lines with neither a step nor a drop of ``REACH`` or more, and on the others."""
+    within = (steps < REACH) & (drops < REACH)
+    for label, mask in ((f"no step or drop of {REACH} m or more", within), ("a step or a drop beyond", ~within)):
+        rates = f"success {success[mask].mean():.1%}, fell {fell[mask].mean():.1%}" if mask.any() else "-"
+        print(f"lines with {label}: {int(mask.sum())} robots, {rates}")
 
 
 def failing_terrains(report: str, max_fall_rate: float = 0.2, max_success: float = 0.5) -> list[str]:
@@ -160,6 +172,10 @@ def main() -> None:
           f"{int((moving & m['fell']).sum())} fall, {int((counted & ~m['fell'] & ~success).sum())} stay up and fail")
     print_bins(steps, success[robots], fell, stalled)
     print_walls(success[robots] & (steps >= WALL), rise_at > asked[robots], along > rise_at, sideways)
+    drops = np.array([line_step(lambda x, y: -env.terrain.height_at(x, y), xy[i, start], direction[i], length[i])[0]
+                      for i in robots])
+    print_bins(drops, success[robots], fell, stalled, what="drop")
+    print_reach(steps, drops, success[robots], fell)
 
 
 if __name__ == "__main__":
