@@ -44,7 +44,7 @@ def generate_spec(
         from legged_gente.generation.backends.image import open_image
 
         image_bytes = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-        open_image(image_bytes, str(image) if isinstance(image, (str, Path)) else "the image")  # readable, or say so
+        open_image(image_bytes, image)  # readable, or an error naming the file
     if backend == "planner":
         if image_bytes is not None:
             from legged_gente.generation.backends.image import plan_image

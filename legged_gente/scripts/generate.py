@@ -18,7 +18,7 @@ from legged_gente.generation.backends import GenerationError
 from legged_gente.generation.emit import DEFAULT_BASE, emit
 from legged_gente.generation.pipeline import BACKENDS, generate_spec
 from legged_gente.generation.validation import ValidationError
-from legged_gente.utils.args import flag
+from legged_gente.utils.args import flag, one_line
 
 
 def _positive(kind):
@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"warning: {warning}", file=sys.stderr)
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
     except (ValidationError, GenerationError, ValueError) as exc:
-        print(f"gente-generate: error: {' '.join(str(exc).splitlines())}", file=sys.stderr)
+        print(f"gente-generate: error: {one_line(exc)}", file=sys.stderr)
         return 1
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0

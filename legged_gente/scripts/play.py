@@ -155,8 +155,6 @@ def build_play_parser():
 def main(argv=None) -> None:
     parser = build_play_parser()
     args = parse_args(parser, argv)
-    if args.steps < 1:
-        parser.error(f"--steps {args.steps}: roll out at least 1 policy step")
     if args.pretrained and (args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --load_run/--checkpoint")
     run_command("gente-play", play, args)

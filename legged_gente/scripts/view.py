@@ -167,8 +167,6 @@ def main(argv=None) -> None:
     source = Path(args.source) if args.source else None
     if source is not None and not source.suffix:
         source = benchmark_root(source)  # a folder, or a shipped benchmark by name (gente100)
-    if args.steps < 1:
-        parser.error(f"--steps {args.steps}: roll out at least 1 policy step")
     if args.pretrained and not args.play:
         parser.error("--pretrained plays the shipped policy: add --play")
     if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):

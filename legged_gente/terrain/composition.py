@@ -196,14 +196,17 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
                          f"> 0 m")
     parts = []
     for region, operation in calls:
-        if isinstance(region, str) and region not in regions:
-            raise ValueError(f"terrain spec: region {region!r} is none of the named regions ({', '.join(regions)}); "
-                             f"or give a rectangle {{x0, y0, x1, y1}} in metres")
-        try:
-            rect = regions[region] if isinstance(region, str) else tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ValueError(f"terrain spec: region {region!r} is neither a named region nor a rectangle "
-                             f"{{x0, y0, x1, y1}} ({type(exc).__name__}: {exc})") from None
+        if isinstance(region, str):
+            if region not in regions:
+                raise ValueError(f"terrain spec: region {region!r} is none of the named regions "
+                                 f"({', '.join(regions)}); or give a rectangle {{x0, y0, x1, y1}} in metres")
+            rect = regions[region]
+        else:
+            try:
+                rect = tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
+            except (KeyError, TypeError, ValueError) as exc:
+                raise ValueError(f"terrain spec: region {region!r} is neither a named region nor a rectangle "
+                                 f"{{x0, y0, x1, y1}} ({type(exc).__name__}: {exc})") from None
         parts.append(Part(Region(*rect), [operation]))
     base = None if heightmap is None else heightmap_ground(heightmap, size_x, size_y, resolution, base_dir)
     return TileSpec(size_x, size_y, resolution, seed, parts, base)

@@ -88,6 +88,8 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
         parser.error("--num_envs must be >= 1")
     if args.max_iterations is not None and args.max_iterations < 0:
         parser.error("--max_iterations must be >= 0")
+    if getattr(args, "steps", None) is not None and args.steps < 1:  # gente-play's and gente-view's rollouts
+        parser.error(f"--steps {args.steps}: roll out at least 1 policy step")
     for text in args.overrides:
         try:
             _parse_override(text)
@@ -100,6 +102,11 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
 USER_ERRORS = (ValueError, FileNotFoundError, KeyError)
 
 
+def one_line(message) -> str:
+    """An error's text on one line (a validation error lists one problem per line)."""
+    return " ".join(str(message).splitlines())
+
+
 def run_command(prog: str, main, args: argparse.Namespace):
     """``main(args)``, with a user's mistake reported as ``prog: error: ...`` (exit 2) instead of a traceback;
     ``--verbose`` shows the traceback."""
@@ -109,7 +116,7 @@ def run_command(prog: str, main, args: argparse.Namespace):
         if getattr(args, "verbose", False):
             raise
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
-        print(f"{prog}: error: {' '.join(str(message).splitlines())}", file=sys.stderr)  # one line
+        print(f"{prog}: error: {one_line(message)}", file=sys.stderr)
         sys.exit(2)
 
 

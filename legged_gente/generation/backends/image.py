@@ -101,8 +101,10 @@ MAX_CALLS = 20
 """Most calls a photo gives (GenTe asks for 3-20)."""
 
 
-def open_image(data: bytes, name: str = "the image") -> Image.Image:
-    """The image encoded in ``data``, decoded; unreadable data is a one-line error naming ``name``."""
+def open_image(data: bytes, source: object = None) -> Image.Image:
+    """The image encoded in ``data``, decoded; unreadable data is a one-line error naming ``source`` when it is the
+    file's path."""
+    name = str(source) if isinstance(source, (str, Path)) else "the image"
     try:
         image = Image.open(io.BytesIO(data))
         image.load()
@@ -116,7 +118,7 @@ def _load(image: str | Path | bytes | Image.Image) -> Image.Image:
     if isinstance(image, Image.Image):
         return image.convert("RGB")
     data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-    return open_image(data, str(image) if isinstance(image, (str, Path)) else "the image").convert("RGB")
+    return open_image(data, image).convert("RGB")
 
 
 def _hsv(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -58,7 +58,7 @@ DESCRIBE_PROMPT = (
 def image_data_url(image: str | Path | bytes) -> str:
     """A ``data:image/...;base64,`` URL of an image file or its bytes (the format is read from the data)."""
     data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-    fmt = open_image(data, str(image) if isinstance(image, (str, Path)) else "the image").format or "PNG"
+    fmt = open_image(data, image).format or "PNG"
     return f"data:image/{fmt.lower()};base64,{base64.b64encode(data).decode('ascii')}"
 
 
