@@ -130,6 +130,7 @@ def main(argv=None) -> None:
     p.add_argument("--limit", type=int)
     p.add_argument("--robots_per_terrain", type=int, default=16)
     p.add_argument("--episode_s", type=float, default=10.0)
+    p.add_argument("--seed", type=int, default=0, help="as gente-evaluate's --seed (commands, spawn points)")
     p.add_argument("--device", default="cpu")
     p.add_argument("--plain_launches", action="store_true", help="no CUDA graph, no torch.compile in the env step")
     p.add_argument("--no_progress", action="store_true", help="no progress bar")
@@ -137,7 +138,7 @@ def main(argv=None) -> None:
     args = p.parse_args(argv)
 
     items = load_benchmark(args.benchmark, args.items)[: args.limit]
-    evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", 0)
+    evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", args.seed)
     if args.plain_launches:
         evaluation.env._runner = StepRunner(evaluation.env, compile=False, graph=False)
     policy = load_policy(evaluation, checkpoint=args.checkpoint, pretrained=args.pretrained,
