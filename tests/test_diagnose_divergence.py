@@ -24,3 +24,25 @@ def test_a_world_given_a_runaway_joint_is_reported_with_its_reason_and_step(load
     assert summary["worlds"] == 2 and summary["steps"] == evaluation.num_steps
     assert 0 < summary["max_nacon"] <= summary["naconmax"]
     assert "diverged robots: 1" in tool.report(rows, summary)
+
+
+def test_seed_reaches_the_evaluation_as_in_gente_evaluate(load_file, monkeypatch):
+    """--seed picks the same commands and spawn points as gente-evaluate's --seed."""
+    tool = load_file("tools/diagnose_divergence.py")
+    import legged_gente.evaluation.evaluator as evaluator
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def recording_evaluation(*args):
+        seen.append(args)
+        raise Stop
+
+    monkeypatch.setattr(evaluator, "Evaluation", recording_evaluation)
+    try:
+        tool.main(["--task", "gente_biped", "--benchmark", "flat", "--seed", "7"])
+    except Stop:
+        pass
+    assert len(seen) == 1 and seen[0][-1] == 7
