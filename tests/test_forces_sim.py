@@ -3,11 +3,13 @@
 import mujoco
 import mujoco_warp as mjw
 import numpy as np
+import pytest
 import warp as wp
 
 from legged_gente.external_forces import models
 from legged_gente.external_forces.field import ForcesConfig, TerrainForces
 from legged_gente.terrain.materials import FLOW_CURRENT, FLOW_TIDE, NO_SOIL, MaterialMap
+from legged_gente.terrain.soil import register_custom_soil
 
 wp.config.quiet = True
 DEV = "cpu"
@@ -128,6 +130,44 @@ def test_tide_follows_cos_morison_and_paper_flow_term():
                    + (1000.0 * np.pi * R**2 * L + models.added_mass(1000.0, 1.0, R, L)) * du)
         np.testing.assert_allclose(f.seg_force.numpy()[:, 0, 0], morison + u, rtol=1e-3, atol=1e-4)
     f.after_substep()  # no feet: nothing to do, must not fail
+
+
+def test_paper_flow_term_acts_whole_on_a_partly_wet_segment():
+    """GenTe's flow term (a current's A = 0.5 N) is added whole to each wet segment, however deep it is wet: the
+    leg's x force with the option minus without it is 0.5 N with half the leg and a sixth of it under water."""
+    wp.set_device(DEV)
+    mjm = world(leg("x", z=1.0), option='gravity="0 0 0"')
+    on = type("C", (Cfg,), {"paper_flow_force": True})
+    for surface in (1.0, 1.0 - H / 1.5):  # the centre (half the cylinder wet), a sixth of it wet
+        force = []
+        for cfg in (Cfg, on):
+            m, d, f = make(mjm, water_map(surface=surface, kind=FLOW_CURRENT, speed=0.5), cfg())
+            mjw.step(m, d)
+            force.append(f.seg_force.numpy()[:, 0, 0])
+        np.testing.assert_allclose(force[1] - force[0], 0.5, rtol=1e-4)
+
+
+def test_foot_ball_in_the_legs_end_cap_is_not_buoyed_twice():
+    """A calf capsule (r 2 cm, 0.2 m between its cap centres) whose lower cap holds a foot sphere of the same radius,
+    both under water: Archimedes on their union, the capsule, rho g (pi r^2 0.2 + 4/3 pi r^3) = 2.794 N. The foot
+    keeps its own drag."""
+    wp.set_device(DEV)
+    r = 0.02
+    mjm = world('<body name="calf" pos="0 0 1"><joint type="slide" axis="1 0 0"/>'
+                f'<geom name="calf" type="capsule" size="{r}" fromto="0 0 0 0 0 -0.2" mass="0.25" contype="0" '
+                'conaffinity="0"/><body name="foot" pos="0 0 -0.2"><geom name="ball" type="sphere" '
+                f'size="{r}" mass="0.05" contype="0" conaffinity="0"/></body></body>')
+    cfg = type("C", (Cfg,), {"leg_geom_names": ["calf"], "foot_geom_names": ["ball"], "soil": False,
+                             "friction_from_map": False, "sole_contact": False})
+    m, d, f = make(mjm, water_map(surface=3.0), cfg(), nworld=1)
+    mjw.step(m, d)
+    lift = f.seg_force.numpy()[0, 0, 2] + f.foot_water_force.numpy()[0, 0, 2]
+    exact = 1000.0 * 9.81 * (np.pi * r * r * 0.2 + 4.0 / 3.0 * np.pi * r**3)
+    assert abs(exact - 2.794) < 5e-4
+    np.testing.assert_allclose(lift, exact, rtol=1e-4)
+    set_qvel(d, [[0.5]])
+    mjw.step(m, d)
+    assert f.foot_water_force.numpy()[0, 0, 0] < 0.0  # the ball's drag against its motion
 
 
 def test_flags_off_exactly_zero_and_dry_is_zero():
@@ -264,3 +304,66 @@ def test_benchmark_reports_a_share():
     assert 0.0 <= r["forces_share"] < 1.0 and r["step_with_forces_s"] > 0
     assert m.callback.passive is not None  # left installed
     assert np.any(d.xfrc_applied.numpy())  # the demo's legs stand in water / on sand: forces act
+
+
+def test_bulldozing_width_is_the_sole_face_across_the_motion():
+    """Bekker's bulldozing R = b (..) takes b as the width of soil the sole pushes: a 0.2 m x 0.1 m sole moved along
+    its length pushes 0.1 m, moved sideways 0.2 m, moved at 45 deg 0.2 sin 45 + 0.1 cos 45 = 0.2121 m. The three
+    worlds sink alike (a soil without scatter), so the forces stand in the ratio of those widths."""
+    wp.set_device(DEV)
+    register_custom_soil("even_mud", kc=0.0, kphi=1.0e6, n=1.0, c=2.0e3, mu=0.2, K=0.02, bulldoze_c=5.0e4,
+                         bulldoze_g=1.0e5)
+    mud = MaterialMap.rigid(SHAPE)
+    mud.soil[:] = 0
+    mud.soil_presets = ["even_mud"]
+    mjm = world('<body name="b0" pos="0 0 0.02"><joint type="slide" axis="1 0 0"/><joint type="slide" axis="0 1 0"/>'
+                '<joint type="slide" axis="0 0 1" damping="200"/><geom name="foot0" type="box" size=".1 .05 .02" '
+                'mass="20"/></body>')
+    cfg = type("C", (SoilCfg,), {"foot_geom_names": ["foot0"]})
+    m, d, f = make(mjm, mud, cfg(), nworld=3)
+    for _ in range(100):
+        mjw.step(m, d)
+        f.after_substep()
+    q = d.qvel.numpy()
+    q[:] = 0.0
+    q[0, 0] = 0.3  # along the sole's length
+    q[1, 1] = 0.3  # across it
+    q[2, 0] = q[2, 1] = 0.3 / np.sqrt(2.0)  # at 45 deg
+    set_qvel(d, q)
+    mjw.step(m, d)
+    assert np.ptp(f.foot_sinkage.numpy()[:, 0]) < 1e-7
+    force = np.linalg.norm(f.foot_force.numpy()[:, 0], axis=-1)
+    assert force[0] > 1.0
+    np.testing.assert_allclose(force[1:] / force[0], [2.0, (0.2 + 0.1) / np.sqrt(2.0) / 0.1], rtol=1e-4)
+
+
+def test_sphere_sole_sinks_as_a_circular_plate():
+    """A sphere sole's footprint is a disc: Bekker's pressure over pi r^2 and his b the plate's radius (Wong, Theory
+    of Ground Vehicles, sec. 2.4: b is the smaller side of a rectangular plate, the radius of a circular one). Dry
+    sand of Wong's Table 2.3: n 1.1, kc 0.99 kN/m^(n+1), kphi 1528.43 kN/m^(n+2). A 3 kg foot of radius 2 cm:
+    p = 3 * 9.81 / (pi 0.02^2) = 23.42 kPa, z = (p / (kc / 0.02 + kphi))^(1 / 1.1) = 2.18 cm."""
+    wp.set_device(DEV)
+    r, mass = 0.02, 3.0
+    kc, kphi, n = 0.99e3, 1528.43e3, 1.1
+    register_custom_soil("wong_dry_sand", kc=kc, kphi=kphi, n=n, c=1.04e3, mu=np.tan(np.radians(28.0)), K=0.025,
+                         bulldoze_c=0.0, bulldoze_g=0.0)
+    mjm = mujoco.MjModel.from_xml_string(f"""<mujoco><option timestep="0.005"/>
+      <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+        <body name="foot" pos="0 0 0.025"><joint type="slide" axis="0 0 1"/>
+          <geom type="box" size="0.01 0.01 0.01" pos="0 0 0.05" mass="{mass - 0.001}" contype="0" conaffinity="0"/>
+          <geom name="sole" type="sphere" size="{r}" mass="0.001" contype="0" conaffinity="0"/>
+        </body></worldbody></mujoco>""")
+    sand = MaterialMap.rigid(SHAPE)
+    sand.soil[:] = 0
+    sand.soil_presets = ["wong_dry_sand"]
+    cfg = type("C", (SoilCfg,), {"foot_geom_names": ["sole"], "sinkage_rate": 0.02, "sinkage_load_tau": 0.2})
+    m, d, f = make(mjm, sand, cfg(), nworld=1)
+    assert f.sole_area == pytest.approx(np.pi * r * r)
+    for _ in range(1200):
+        mjw.step(m, d)
+        f.after_substep()
+    p = mass * 9.81 / (np.pi * r * r)
+    z_hand = (p / (kc / r + kphi)) ** (1.0 / n)
+    assert abs(z_hand - 0.0218) < 5e-5
+    np.testing.assert_allclose(f.foot_sinkage.numpy()[0, 0], z_hand, rtol=0.02)

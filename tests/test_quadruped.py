@@ -92,7 +92,8 @@ def test_forces_resolve_against_the_quadruped_geoms():
     assert [mjm.geom(int(g)).name for g in seg] == cfg.forces.leg_geom_names
     assert forces.seg_radius.numpy() == pytest.approx([0.025, 0.02] * 4)
     assert [mjm.body(int(b)).name for b in forces.foot_body.numpy()] == [f"{leg}_foot" for leg in ("FL", "FR", "RL", "RR")]
-    assert (forces.sole_length, forces.sole_width) == pytest.approx((0.04, 0.04))
+    assert (forces.sole_length, forces.sole_width, forces.sole_disc) == (pytest.approx(0.04), pytest.approx(0.04), True)
+    assert (forces.sole_area, forces.bekker_width) == pytest.approx((3.14159265 * 0.02 ** 2, 0.02))  # Bekker: b = r
     for _ in range(10):
         obs, rew, _, _ = env.step(0.5 * torch.randn(NUM_ENVS, env.num_actions))
     assert torch.isfinite(obs["critic"]).all() and torch.isfinite(rew).all()

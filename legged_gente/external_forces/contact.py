@@ -353,7 +353,7 @@ def sole_contact_kernel(
         return
     normal = wp.vec3(res[0], res[1], res[2])
     if s_foot >= 0:
-        z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.sole_width,
+        z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
                            feet.support[w, f])
         # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
         wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + feet.sink_step))

@@ -19,6 +19,7 @@ terrain forces. Anything else that needs external pushes must change velocities 
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import mujoco
@@ -35,6 +36,44 @@ from legged_gente.terrain.materials import MaterialMap
 
 
 _ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]
+
+
+def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
+    """1 for each foot water geom, 0 for a sphere that lies wholly inside a leg capsule or cylinder welded to it
+    (the quadruped's foot ball in its calf's end cap): the leg's buoyancy already counts its volume (Archimedes on
+    the union), so the foot keeps only its drag."""
+    data = mujoco.MjData(mjm)
+    mujoco.mj_kinematics(mjm, data)
+    out = np.ones(len(foot_geoms), np.float32)
+    for k, g in enumerate(foot_geoms):
+        if mjm.geom_type[g] != int(mujoco.mjtGeom.mjGEOM_SPHERE):
+            continue
+        r = mjm.geom_size[g, 0]
+        for s in leg_geoms:
+            if not _welded(mjm, int(mjm.geom_bodyid[g]), int(mjm.geom_bodyid[s])):
+                continue
+            axis = data.geom_xmat[s].reshape(3, 3)[:, 2]
+            radius, half = mjm.geom_size[s, 0], mjm.geom_size[s, 1]
+            t = float(np.dot(data.geom_xpos[g] - data.geom_xpos[s], axis))
+            radial = np.linalg.norm(data.geom_xpos[g] - data.geom_xpos[s] - t * axis)
+            if mjm.geom_type[s] == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
+                inside = np.hypot(max(abs(t) - half, 0.0), radial) <= radius - r + 1e-9
+            else:
+                inside = abs(t) <= half - r + 1e-9 and radial <= radius - r + 1e-9
+            if inside:
+                out[k] = 0.0
+    return out
+
+
+def _welded(mjm, body_a: int, body_b: int) -> bool:
+    """Whether two bodies move as one: the same body, or one a jointless descendant of the other."""
+    for child, parent in ((body_a, body_b), (body_b, body_a)):
+        b = child
+        while b != parent and b > 0 and mjm.body_jntnum[b] == 0:
+            b = int(mjm.body_parentid[b])
+        if b == parent:
+            return True
+    return False
 
 
 def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:
@@ -158,8 +197,17 @@ class TerrainForces:
             geom_foot[g] = f
         self.geom_foot = arr(geom_foot, int)
         self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
-        self.foot_water_geom = arr(self._foot_water_geoms(mjm, groups), int)
-        self.sole_length, self.sole_width = self._sole(mjm, groups)
+        foot_water = self._foot_water_geoms(mjm, groups)
+        self.foot_water_geom = arr(foot_water, int)
+        self.foot_buoyancy = arr(_buoyancy_not_in_legs(mjm, foot_water, seg), float)
+        self.sole_length, self.sole_width, self.sole_disc = self._sole(mjm, groups)
+        # Bekker's pressure over the footprint, whose b is a rectangle's smaller side or a disc's radius (Wong,
+        # Theory of Ground Vehicles, ch. 2)
+        if self.sole_disc:
+            self.sole_area, self.bekker_width = math.pi * (0.5 * self.sole_length) ** 2, 0.5 * self.sole_length
+        else:
+            self.sole_area = self.sole_length * self.sole_width
+            self.bekker_width = min(self.sole_length, self.sole_width)
         self._setup_sole_contacts(mjm, groups)
         self._filter_key, self._filter_launches = None, []
 
@@ -265,23 +313,26 @@ class TerrainForces:
         self.pt_foot = wp.array(feet, dtype=int, device=dev)
 
     def _sole(self, mjm, groups):
-        """Sole length and width (m): from the config, else the footprint of the first foot's geoms in its
-        body's x-y plane (box: its x-y extent; sphere, capsule, cylinder: a disc of its radius)."""
+        """Sole length (along the foot body's x axis), width (along its y axis) and whether it is a disc: from the
+        config (a rectangle), else the footprint of the first foot's geoms in its body's x-y plane: a lone sphere,
+        capsule or cylinder is a disc of its radius, anything else the rectangle around its geoms (a box: its x-y
+        extent)."""
         cfg = self.cfg
         if cfg.sole_length is not None and cfg.sole_width is not None:
-            length, width = float(cfg.sole_length), float(cfg.sole_width)
+            length, width, disc = float(cfg.sole_length), float(cfg.sole_width), False
         elif not groups:
-            length = width = 1.0  # no feet: never used
+            length, width, disc = 1.0, 1.0, False  # no feet: never used
         else:
             g = groups[0]
             box = mjm.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_BOX)
             half = np.where(box[:, None], mjm.geom_size[g, :2], mjm.geom_size[g, :1])
             lo, hi = (mjm.geom_pos[g, :2] - half).min(0), (mjm.geom_pos[g, :2] + half).max(0)
-            length, width = float((hi - lo).max()), float((hi - lo).min())
+            length, width = float(hi[0] - lo[0]), float(hi[1] - lo[1])
+            disc = len(g) == 1 and not box[0]
         if not (length > 0 and width > 0):
             raise ValueError(f"sole size must be > 0 m, got length={length}, width={width}; set "
                              f"forces.sole_length / sole_width.")
-        return length, width
+        return length, width, disc
 
     # ------------------------------------------------------------------ callbacks
     def install(self):
@@ -319,7 +370,7 @@ class TerrainForces:
         feet = K.FootSoil()
         feet.friction_reference, feet.use_friction = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
         feet.use_soil = int(bool(cfg.soil) and self.nfoot > 0)
-        feet.sole_area, feet.sole_width = self.sole_length * self.sole_width, self.sole_width
+        feet.sole_area, feet.bekker_width = self.sole_area, self.bekker_width
         feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
         feet.sink_step = float(cfg.sinkage_rate) * self.dt
         feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support
@@ -369,8 +420,8 @@ class TerrainForces:
         if cfg.wading and len(self.foot_water_geom):
             wp.launch(
                 W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev,
-                inputs=[self.foot_water_geom, m.geom_type, m.geom_size, m.geom_bodyid, m.body_rootid,
-                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time, self.water,
+                inputs=[self.foot_water_geom, self.foot_buoyancy, m.geom_type, m.geom_size, m.geom_bodyid,
+                        m.body_rootid, d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time, self.water,
                         float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
                         float(cfg.sphere_drag_coefficient), self.eps, self.xi, d.xfrc_applied,
                         self.foot_water_force],
@@ -379,7 +430,8 @@ class TerrainForces:
             wp.launch(
                 K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
-                        d.cvel, d.subtree_com, self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params,
+                        d.cvel, d.subtree_com, self.sole_length, self.sole_width, int(self.sole_disc),
+                        float(cfg.bulldozing_speed_reg), self.soil_params,
                         self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_vel, self.foot_force,
                         d.xfrc_applied],
             )
@@ -388,7 +440,7 @@ class TerrainForces:
                 R.rft_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
                         d.cvel, d.subtree_com, self.hf_heights, self.hf_origin, self.hf_res, self.sole_length,
-                        self.sole_width, float(cfg.bulldozing_speed_reg), self.soil_params, self.foot_soil,
+                        self.sole_width, self.sole_area, float(cfg.bulldozing_speed_reg), self.soil_params, self.foot_soil,
                         self.foot_support, self.foot_force, d.xfrc_applied],
             )
 

@@ -104,6 +104,23 @@ def bulldozing_force_fn(bulldoze_c: float, bulldoze_g: float, width: float, sink
 
 
 @wp.func
+def bulldozing_width_fn(xm: wp.mat33, vh: wp.vec3, length: float, width: float, disc: int) -> float:
+    """Bekker's b of bulldozing: the width of the soil face the sole pushes, its footprint projected across the
+    horizontal motion vh (Bekker 1969; Wong, Theory of Ground Vehicles, ch. 2). A disc: its diameter. A rectangle (length
+    along the foot body's x axis, width along its y axis): length |x.n| + width |y.n|, n horizontal and normal to
+    vh. At rest (no force then) the smaller side."""
+    if disc != 0:
+        return length
+    speed = wp.length(vh)
+    if speed < 1.0e-9:
+        return wp.min(length, width)
+    n = wp.vec3(-vh[1], vh[0], 0.0) / speed
+    x_axis = wp.vec3(xm[0, 0], xm[1, 0], xm[2, 0])
+    y_axis = wp.vec3(xm[0, 1], xm[1, 1], xm[2, 1])
+    return length * wp.abs(wp.dot(x_axis, n)) + width * wp.abs(wp.dot(y_axis, n))
+
+
+@wp.func
 def shear_strength_fn(c: float, mu: float, area: float, normal_force: float) -> float:
     """Mohr-Coulomb: c A + F_N tan(phi)."""
     return c * area + wp.max(normal_force, 0.0) * mu
@@ -310,7 +327,7 @@ class FootSoil:
     use_friction: int
     use_soil: int
     sole_area: float
-    sole_width: float
+    bekker_width: float  # Bekker's b: a rectangle's smaller side, a disc's radius
     friction_cap: float
     min_friction: float
     sink_step: float  # sinkage_rate * dt
@@ -399,7 +416,7 @@ def contact_filter_kernel(
     s = feet.soil[w, f]
     if s < 0:
         return
-    z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s, feet.sole_width, feet.support[w, f])
+    z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s, feet.bekker_width, feet.support[w, f])
     rut = feet.sinkage[w, f]
     shown = wp.min(rut, max_rut)
     # the foot's depth counting the rut's unshown part: the rut deepens at most sink_step below it
@@ -436,7 +453,9 @@ def soil_force_kernel(
     xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
     subtree_com: wp.array2d[wp.vec3],
+    sole_length: float,
     sole_width: float,
+    sole_disc: int,
     speed_reg: float,
     soil_params: wp.array3d[float],
     foot_fn: wp.array2d[float],
@@ -462,7 +481,8 @@ def soil_force_kernel(
     s = foot_soil[w, f]
     force = wp.vec3(0.0)
     if s >= 0 and foot_fn[w, f] > 0.0:
-        fb = bulldozing_force_fn(soil_params[w, s, BULL_C], soil_params[w, s, BULL_G], sole_width, foot_sinkage[w, f])
+        face = bulldozing_width_fn(xmat[w, b], vh, sole_length, sole_width, sole_disc)
+        fb = bulldozing_force_fn(soil_params[w, s, BULL_C], soil_params[w, s, BULL_G], face, foot_sinkage[w, f])
         force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh
         apply_force(xfrc, xipos, w, b, force, p)
     foot_force[w, f] = force

@@ -92,6 +92,7 @@ def rft_force_kernel(
     hf_res: float,
     sole_length: float,
     sole_width: float,
+    sole_area: float,
     speed_reg: float,
     soil_params: wp.array3d[float],
     foot_soil: wp.array2d[int],
@@ -119,7 +120,7 @@ def rft_force_kernel(
     if s >= 0:
         if soil_params[w, s, MODEL] > 0.5:
             rft = 1
-    area = sole_length * sole_width / float(NX * NY)
+    area = sole_area / float(NX * NY)  # a disc's elements span its bounding square and share its area
     total = wp.vec3(0.0)
     support = float(0.0)
     for i in range(NX):

@@ -267,17 +267,25 @@ def segment_water_kernel(
     vb = cvel[w, b]
     omega = wp.vec3(vb[0], vb[1], vb[2])
 
+    # each slice's submerged volume, at its own surface
     pts = wp.mat33()
-    mass = wp.vec3()
+    vols = wp.vec3()
     e0 = iv[0]
     for k in range(NGAUSS):
         length = hw * GW[k]
         p = c + (mid + hw * GX[k]) * axis
         cell = water_cell(water, p)
-        z_w = water.surface[cell[0], cell[1]]
-        vol = cylinder_slice_volume_fn(r, sin_t, c[2] + e0 * a_z, c[2] + (e0 + length) * a_z, z_w, length)
+        vols[k] = cylinder_slice_volume_fn(r, sin_t, c[2] + e0 * a_z, c[2] + (e0 + length) * a_z,
+                                           water.surface[cell[0], cell[1]], length)
         e0 = e0 + length
         pts[k] = p
+    wet = vols[0] + vols[1] + vols[2]
+
+    mass = wp.vec3()
+    for k in range(NGAUSS):
+        p = pts[k]
+        cell = water_cell(water, p)
+        vol = vols[k]
         if vol <= 0.0:
             continue
         v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
@@ -298,12 +306,12 @@ def segment_water_kernel(
             f = f - ma * (avp - wp.dot(avp, axis) * axis)
             mass[k] = ma
         if paper_flow_force != 0:
-            # GenTe's flow term as a force, shared by the slices in proportion to their submerged volume
+            # GenTe's flow term as a force on the wet segment, shared by its slices by submerged volume
             i0 = cell[0]
             j0 = cell[1]
             fl = xi[w] * flow_force_fn(water.flow_kind[i0, j0], t, water.flow_speed[i0, j0],
                                        water.flow_omega[i0, j0], water.flow_phase[i0, j0])
-            share = vol / (PI * r * r * 2.0 * half)
+            share = vol / wet
             f = f + share * fl * wp.vec3(wp.cos(water.flow_dir[i0, j0]), wp.sin(water.flow_dir[i0, j0]), 0.0)
         apply_force(xfrc, xipos, w, b, f, p)
         total = total + f
@@ -336,6 +344,7 @@ def segment_water_kernel(
 @wp.kernel
 def foot_water_kernel(
     foot_geom: wp.array[int],
+    foot_buoyancy: wp.array[float],
     geom_type: wp.array[int],
     geom_size: wp.array2d[wp.vec3],
     geom_bodyid: wp.array[int],
@@ -356,7 +365,8 @@ def foot_water_kernel(
     xfrc: wp.array2d[wp.spatial_vector],
     foot_water_force: wp.array2d[wp.vec3],
 ):
-    """Buoyancy and drag of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag)."""
+    """Buoyancy and drag of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag). Buoyancy is
+    left out (``foot_buoyancy`` 0) for a sphere inside a leg segment, whose own buoyancy counts that volume."""
     w, k = wp.tid()
     gid = foot_geom[k]
     b = geom_bodyid[gid]
@@ -373,14 +383,15 @@ def foot_water_kernel(
         vol = sphere_cap_volume_fn(r, z_w - (c[2] - r))
         frac = vol / (4.0 / 3.0 * PI * r * r * r)
         if frac > 0.0:
-            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, frac, vrel) + wp.vec3(0.0, 0.0, eps[w] * rho * g * vol)
+            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, frac, vrel)
+            f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
     else:
         frac = box_submerged_fraction_fn(size, rot, c[2], z_w)
         if frac > 0.0:
             vol = 8.0 * size[0] * size[1] * size[2] * frac
             e_z = wp.abs(rot[2, 0]) * size[0] + wp.abs(rot[2, 1]) * size[1] + wp.abs(rot[2, 2]) * size[2]
             f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), vrel)
-            f = f + wp.vec3(0.0, 0.0, eps[w] * rho * g * vol)
+            f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
             p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # middle of the submerged height
     if frac > 0.0:
         apply_force(xfrc, xipos, w, b, f, p)

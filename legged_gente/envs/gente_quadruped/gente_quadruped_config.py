@@ -59,8 +59,8 @@ class GenteQuadrupedCfg(LeggedRobotCfg):
         terminate_tilt = 1.0
 
     class forces(LeggedRobotCfg.forces):
-        # wading: the thigh (r 0.025 m) and calf (r 0.02 m) capsules; soil: the foot spheres, whose sole size
-        # (0.04 x 0.04 m, the sphere's diameter) TerrainForces derives from the geom (sole_length/width None)
+        # wading: the thigh (r 0.025 m) and calf (r 0.02 m) capsules; soil: the foot spheres, whose soles
+        # TerrainForces derives from the geom (sole_length/width None): discs of radius 0.02 m
         leg_geom_names = [f"{leg}_{part}_geom" for leg in ("FL", "FR", "RL", "RR") for part in ("thigh", "calf")]
         foot_geom_names = [f"{leg}_foot_geom" for leg in ("FL", "FR", "RL", "RR")]
 
