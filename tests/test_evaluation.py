@@ -126,7 +126,9 @@ def test_one_evaluation_runs_several_times():
     for d in (0.1, 20.0):
         result = evaluation.run(still, evaluation.make_task(reach_distance=d), settle_s=0.1, progress=False)
         assert result.traces["pos"].shape[1] == round(0.2 / 0.02)
-    for settle_s in (-0.1, 0.2, 1.0):  # the episode is 0.2 s: settling through it leaves nothing to measure
+    # the episode is 0.2 s, 10 steps of 0.02 s: settling through it leaves nothing to measure, and 0.195 s rounds
+    # to the 10th step
+    for settle_s in (-0.1, 0.2, 1.0, 0.195):
         with pytest.raises(ValueError, match=f"settle_s {settle_s} s leaves nothing"):
             evaluation.run(still, progress=False, settle_s=settle_s)
     with pytest.raises(ValueError, match="speed must be > 0"):

@@ -70,13 +70,18 @@ def grid_shape(n: int) -> tuple[int, int]:
     return rows, n // rows
 
 
+def settle_steps(settle_s: float, dt: float) -> int:
+    """The policy steps at the start of an episode left out of the tracking error."""
+    return int(round(settle_s / dt))
+
+
 class Recorder:
     """Per-robot accumulators on the env's device, updated after every policy step from what the step left."""
 
     def __init__(self, env, settle_s: float, trace_robots: torch.Tensor):
         n, dev = env.num_envs, env.device
         z = lambda dtype=torch.float32: torch.zeros(n, dtype=dtype, device=dev)  # noqa: E731
-        self.dt, self.settle_steps = env.dt, int(round(settle_s / env.dt))
+        self.dt, self.settle_steps = env.dt, settle_steps(settle_s, env.dt)
         self.active = torch.ones(n, dtype=torch.bool, device=dev)
         self.fell, self.diverged = z(torch.bool), z(torch.bool)
         self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
@@ -225,9 +230,9 @@ class Evaluation:
         from tqdm import tqdm
 
         env = self.env
-        if not 0.0 <= settle_s < self.num_steps * self.dt:
+        if not (settle_s >= 0.0 and settle_steps(settle_s, self.dt) < self.num_steps):
             raise ValueError(f"settle_s {settle_s} s leaves nothing of the {self.num_steps * self.dt:g} s episode to "
-                             f"measure; give a value in [0, episode_s).")
+                             f"measure (steps of {self.dt:g} s); give a value in [0, episode_s - one step).")
         task = task or self.make_task()
         torch.manual_seed(self.seed)
         first = torch.arange(0, env.num_envs, self.robots_per_terrain, device=env.device)
