@@ -1,7 +1,8 @@
 """Roll a policy out on benchmark terrains laid out as tiles of one terrain and measure every robot.
 
 The task's env is built in terrain mode "generated" with one spec per tile (all tiles of equal size),
-``robots_per_terrain`` robots assigned to each tile, noise, pushes and domain randomisation off. The env is the
+``robots_per_terrain`` robots assigned to each tile, observation noise, pushes and friction and mass randomisation
+off (the spawn's random yaw and initial velocity stay, as in training: the settle time covers them). The env is the
 task's own class and steps as in training (on a GPU: the whole step as one CUDA graph, its torch logic compiled):
 the evaluation only reads what a step leaves (its outputs and the state after it) and commands the robots between
 steps through :meth:`LeggedRobot.set_commands`. The env's episode is set longer than the evaluated one, so no robot
