@@ -240,3 +240,54 @@ def test_cli_toolset_gente(tmp_path, capsys):
 def test_every_gente_tool_is_in_the_documented_mapping_table():
     docs = (ROOT / "docs" / "generation.md").read_text()
     assert [name for name in GENTE_TOOLS if f"`{name}(" not in docs] == []
+
+
+@pytest.mark.parametrize("name, args, param, value, reported", [
+    ("natural_ground_terrain", {"height_multiplier": -0.2}, "amplitude", 0.2,
+     [("coerced", "height_multiplier=-0.2 is negative (GenTe turns its noise upside down: relief of the same kind); "
+                  "imported as 0.2.")]),
+    ("generate_river_terrain", {"river_width": 2, "river_depth": -0.4, "bank_height": 0.2}, "depth", 0.4,
+     [("coerced", "river_depth=-0.4 is negative (GenTe would raise the river above its surroundings); imported as 0.4.")]),
+    ("discrete_obstacles_terrain", {"max_height": -0.2, "min_size": 0.5, "max_size": 1, "num_rects": 20}, "max_height", 0.2,
+     [("coerced", "max_height=-0.2 is negative (GenTe's blocks rise and sink by it either way); imported as 0.2.")]),
+    ("wave_terrain", {"num_waves": 2, "amplitude": -0.2}, "amplitude", 0.2,
+     [("coerced", "amplitude=-0.2 is negative (GenTe draws the same waves shifted by half a period); imported as 0.2.")]),
+    ("stepping_stones_terrain", {"stone_size": 0.5, "stone_distance": 0.2, "max_height": -0.05, "depth": -0.5}, "depth", 0.5,
+     [("coerced", "max_height=-0.05 is negative (GenTe declares it a height); imported as 0.05."),
+      ("coerced", "depth=-0.5 is negative (GenTe declares it a depth); imported as 0.5.")]),
+    ("gap_terrain", {"gap_size": 0.5, "depth": -200}, "depth", 1.0,
+     [("coerced", "depth=-200 is negative (GenTe would raise a wall around the platform instead of a trench); "
+                  "imported as 200.")]),
+    ("pit_terrain", {"depth": -0.5, "platform_size": 1}, "depth", 0.5,
+     [("coerced", "depth=-0.5 is negative (GenTe would raise a block instead of digging a pit); imported as 0.5.")]),
+    ("water_resistance_terrain", {"depth": -0.4}, "depth", 0.4,
+     [("coerced", "depth=-0.4 is negative (GenTe declares it a depth); imported as 0.4.")]),
+    ("random_uniform_terrain", {"min_height": 0.2, "max_height": 0.0}, "amplitude", 0.1,
+     [("clamped", "min_height=0.2 > max_height=0; imported swapped.")]),
+])
+def test_a_value_changed_in_translation_is_reported(name, args, param, value, reported):
+    t = translate_call(name, args | {"part": 1}, None)
+    assert t.calls[-1].params[param] == pytest.approx(value)
+    assert [(i.kind, i.message) for i in t.issues if i.kind in ("coerced", "clamped")] == reported
+
+
+def test_negative_step_heights_are_stairs_going_down():
+    # GenTe's stairs rise with +x and its pyramid's towards the centre; a negative step_height reverses them
+    stairs = translate_call("stairs_terrain", {"step_width": 0.3, "step_height": -0.1, "part": 1})
+    pyramid = translate_call("pyramid_stairs_terrain", {"step_width": 0.3, "step_height": -0.1, "part": 1})
+    assert not stairs.issues and not pyramid.issues
+    assert [(c.params["step_height"], c.params["direction"]) for c in stairs.calls + pyramid.calls] == [(0.1, "down"), (0.1, "up")]
+
+
+@pytest.mark.parametrize("name, args, message", [
+    ("natural_ground_terrain", {"octaves": 2.4}, "natural_ground_terrain: octaves=2.4 is not a whole number; GenTe "
+                                                 "declares it an integer."),
+    ("discrete_obstacles_terrain", {"max_height": 0.2, "min_size": 0.5, "max_size": 1, "num_rects": 20.7},
+     "discrete_obstacles_terrain: num_rects=20.7 is not a whole number; GenTe declares it an integer."),
+    ("wave_terrain", {"num_waves": 1.5}, "wave_terrain: num_waves=1.5 is not a whole number; GenTe declares it an integer."),
+])
+def test_integer_arguments_must_be_whole_numbers(name, args, message):
+    t = translate_call(name, args | {"part": 1}, None)
+    assert t.blocked and not t.calls and [(i.kind, i.message) for i in t.issues] == [("bad_value", message)]
+    whole = translate_call("natural_ground_terrain", {"octaves": 3.0, "part": 1}, None).calls[0].params["octaves"]
+    assert whole == 3 and isinstance(whole, int)

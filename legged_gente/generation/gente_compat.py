@@ -96,7 +96,14 @@ def _fit(tool: str, param: str, value: float, source: str, issues: list[Issue]) 
     if fitted != value:
         issues.append(Issue("clamped", f"{source}={value:g} gives {tool}.{param}={value:g} {p.unit}, outside our range "
                                        f"[{p.low}, {p.high}]; imported as {fitted:g}."))
-    return int(round(fitted)) if p.integer else float(fitted)
+    return float(fitted)  # validation turns a whole number into an integer parameter's int
+
+
+def _size(value: float, name: str, gente: str, issues: list[Issue]) -> float:
+    """``|value|`` for an argument our tool takes as a size; a negative value is reported with what GenTe makes of it."""
+    if value < 0:
+        issues.append(Issue("coerced", f"{name}={value:g} is negative ({gente}); imported as {-value:g}."))
+    return abs(value)
 
 
 def _ignored(args: Mapping[str, Any], names: tuple[str, ...], why: str, issues: list[Issue]) -> None:
@@ -137,9 +144,11 @@ def _natural(args, sx, sy, issues):
     # GenTe samples Perlin noise at cell / scale: features of ``scale`` cells; heights noise * height_multiplier m.
     _ignored({k: v for k, v in args.items() if k == "lacunarity" and float(v) != 2.0}, ("lacunarity",),
              "our natural_ground doubles the frequency per octave (lacunarity 2)", issues)
-    params = {"amplitude": _fit("natural_ground", "amplitude", abs(float(args.get("height_multiplier", 5.0))), "height_multiplier", issues),
+    amplitude = _size(float(args.get("height_multiplier", 5.0)), "height_multiplier",
+                      "GenTe turns its noise upside down: relief of the same kind", issues)
+    params = {"amplitude": _fit("natural_ground", "amplitude", amplitude, "height_multiplier", issues),
               "wavelength": _fit("natural_ground", "wavelength", float(args.get("scale", 10.0)) * GENTE_CELL, "scale*0.1 m", issues),
-              "octaves": _fit("natural_ground", "octaves", int(args.get("octaves", 6)), "octaves", issues),
+              "octaves": _fit("natural_ground", "octaves", float(args.get("octaves", 6)), "octaves", issues),
               "persistence": _fit("natural_ground", "persistence", float(args.get("persistence", 0.5)), "persistence", issues),
               "platform": 0.0}
     return [("natural_ground", params)]
@@ -147,8 +156,9 @@ def _natural(args, sx, sy, issues):
 
 def _river(args, sx, sy, issues):
     width = float(args["river_width"])
+    depth = _size(float(args["river_depth"]), "river_depth", "GenTe would raise the river above its surroundings", issues)
     params = {"width": _fit("river", "width", width, "river_width", issues),
-              "depth": _fit("river", "depth", abs(float(args["river_depth"])), "river_depth", issues)}
+              "depth": _fit("river", "depth", depth, "river_depth", issues)}
     params["bank_width"] = min(0.5, params["width"] / 2.0)
     path = args.get("river_path")
     if isinstance(path, str):  # some models sent the path as a string of a list
@@ -169,7 +179,10 @@ def _river(args, sx, sy, issues):
 
 
 def _uniform(args, sx, sy, issues):
-    lo, hi = sorted((float(args["min_height"]), float(args["max_height"])))
+    lo, hi = float(args["min_height"]), float(args["max_height"])
+    if lo > hi:
+        issues.append(Issue("clamped", f"min_height={lo:g} > max_height={hi:g}; imported swapped."))
+        lo, hi = hi, lo
     step = float(args.get("step", 0.1))
     # GenTe converts step with the horizontal scale: int(step / 0.1) height units of 0.005 m.
     step_m = int(step / GENTE_CELL) * GENTE_VERTICAL
@@ -186,7 +199,8 @@ def _obstacles(args, sx, sy, issues):
     if lo > hi:
         issues.append(Issue("clamped", f"min_size={lo:g} > max_size={hi:g}; imported swapped."))
         lo, hi = hi, lo
-    params = {"max_height": _fit("discrete_obstacles", "max_height", abs(float(args["max_height"])), "max_height", issues),
+    height = _size(float(args["max_height"]), "max_height", "GenTe's blocks rise and sink by it either way", issues)
+    params = {"max_height": _fit("discrete_obstacles", "max_height", height, "max_height", issues),
               "min_size": _fit("discrete_obstacles", "min_size", lo, "min_size", issues),
               "max_size": _fit("discrete_obstacles", "max_size", hi, "max_size", issues),
               "density": _fit("discrete_obstacles", "density", float(args["num_rects"]) / (sx * sy), "num_rects/area", issues),
@@ -202,7 +216,8 @@ def _waves(args, sx, sy, issues):
         issues.append(Issue("no_effect", f"num_waves={n:g}: GenTe draws no waves; nothing to import."))
         return []
     # GenTe: amplitude/2 * (cos(y) + sin(x)) with num_waves periods across the region.
-    params = {"amplitude": _fit("waves", "amplitude", abs(float(args.get("amplitude", 1.0))), "amplitude", issues),
+    amplitude = _size(float(args.get("amplitude", 1.0)), "amplitude", "GenTe draws the same waves shifted by half a period", issues)
+    params = {"amplitude": _fit("waves", "amplitude", amplitude, "amplitude", issues),
               "wavelength": _fit("waves", "wavelength", sy / n, "region side/num_waves", issues),
               "pattern": "grid", "platform": 0.0}
     return [("waves", params)]
@@ -210,9 +225,12 @@ def _waves(args, sx, sy, issues):
 
 def _stairs(args, sx, sy, issues, name):
     tool = "stairs" if name == "stairs_terrain" else "pyramid_stairs"
+    step_height = float(args["step_height"])
+    climbs = step_height >= 0  # GenTe's stairs climb with +x (our "up"), its pyramid towards the centre (our "down")
+    direction = ("up" if climbs else "down") if tool == "stairs" else ("down" if climbs else "up")
     params = {"step_width": _fit(tool, "step_width", float(args["step_width"]), "step_width", issues),
-              "step_height": _fit(tool, "step_height", abs(float(args["step_height"])), "step_height", issues),
-              "direction": "up" if tool == "stairs" else "down",  # GenTe's pyramid rises towards its centre
+              "step_height": _fit(tool, "step_height", abs(step_height), "step_height", issues),
+              "direction": direction,
               "platform": 0.0 if tool == "stairs" else _fit(tool, "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
     return [(tool, params)]
 
@@ -220,8 +238,10 @@ def _stairs(args, sx, sy, issues, name):
 def _stones(args, sx, sy, issues):
     params = {"stone_size": _fit("stepping_stones", "stone_size", float(args["stone_size"]), "stone_size", issues),
               "stone_distance": _fit("stepping_stones", "stone_distance", float(args["stone_distance"]), "stone_distance", issues),
-              "height_noise": _fit("stepping_stones", "height_noise", abs(float(args["max_height"])), "max_height", issues),
-              "depth": _fit("stepping_stones", "depth", abs(float(args.get("depth", 0.5))), "depth", issues),
+              "height_noise": _fit("stepping_stones", "height_noise", _size(float(args["max_height"]), "max_height",
+                                   "GenTe declares it a height", issues), "max_height", issues),
+              "depth": _fit("stepping_stones", "depth", _size(float(args.get("depth", 0.5)), "depth",
+                            "GenTe declares it a depth", issues), "depth", issues),
               "platform": _fit("stepping_stones", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
     return [("stepping_stones", params)]
 
@@ -240,22 +260,25 @@ def _pillars(args, sx, sy, issues):
 
 
 def _gap(args, sx, sy, issues):
-    depth = float(args.get("depth", 1000)) * GENTE_VERTICAL  # GenTe: height units, default 1000 (5 m)
+    depth = _size(float(args.get("depth", 1000)), "depth", "GenTe would raise a wall around the platform instead of a trench",
+                  issues) * GENTE_VERTICAL  # GenTe: height units, default 1000 (5 m)
     params = {"gap_width": _fit("gap", "gap_width", float(args["gap_size"]), "gap_size", issues),
-              "depth": _fit("gap", "depth", abs(depth), "depth*0.005 m", issues),
+              "depth": _fit("gap", "depth", depth, "depth*0.005 m", issues),
               "platform": _fit("gap", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
     return [("gap", params)]
 
 
 def _pit(args, sx, sy, issues):
-    params = {"depth": _fit("pit", "depth", abs(float(args["depth"])), "depth", issues),
+    depth = _size(float(args["depth"]), "depth", "GenTe would raise a block instead of digging a pit", issues)
+    params = {"depth": _fit("pit", "depth", depth, "depth", issues),
               "width": _fit("pit", "width", min(sx, sy) / 2.0, "half the region side", issues)}
     _ignored(args, ("platform_size",), "our pit has no platform; it is half the region wide", issues)
     return [("pit", params)]
 
 
 def _water(args, sx, sy, issues):
-    return [("water", {"depth": _fit("water", "depth", abs(float(args["depth"])), "depth", issues), "flow": "still"})]
+    depth = _size(float(args["depth"]), "depth", "GenTe declares it a depth", issues)
+    return [("water", {"depth": _fit("water", "depth", depth, "depth", issues), "flow": "still"})]
 
 
 WAVE_SPEEDS = {"current": 0.5, "tide": 0.3}
@@ -480,6 +503,8 @@ def translate_call(
         for n, a in tool.args.items():
             if n in args and a.type in ("number", "integer") and (isinstance(args[n], bool) or not isinstance(args[n], (int, float))):
                 raise ValueError(f"{n}={_short(args[n])} is not a number")
+            if n in args and a.type == "integer" and not float(args[n]).is_integer():  # GenTe runs range() on some
+                raise ValueError(f"{n}={_short(args[n])} is not a whole number; GenTe declares it an integer")
             if n in args and a.enum and args[n] not in a.enum:
                 raise ValueError(f"{n}={_short(args[n])} is not one of {list(a.enum)}")
         ours = tool.translate(args, size_x / (2.0 if region != "full" else 1.0), size_y / (2.0 if region != "full" else 1.0), issues)

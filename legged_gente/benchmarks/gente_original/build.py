@@ -142,7 +142,7 @@ def _markdown(s: dict) -> str:
     ]
     meaning = {
         "clamped": "a value outside our parameter's range, imported at the nearest bound",
-        "coerced": "a value of the wrong JSON type with an obvious meaning ('4' for 4)",
+        "coerced": "a value of the wrong JSON type with an obvious meaning ('4' for 4), or a negative size imported as its magnitude (what GenTe would build instead is named)",
         "defaulted": "a value GenTe leaves implicit (no part: part 1; flow speed) filled in",
         "ignored_argument": "an argument with no equivalent in our terrain, not imported",
         "simplified": "a river path imported as a straight river along its direction",
