@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from test_generation_openai import FakeServer, _completion, _png_bytes, ok
+
 from legged_gente.generation.emit import DEFAULT_BASE, class_name_for, emit, load_module
 from legged_gente.generation.pipeline import generate_spec
 from legged_gente.generation.spec import TerrainSpec
@@ -65,6 +67,70 @@ def test_cli(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["--text", "x", "--size", "-3", "--out", str(tmp_path / "x")])
     assert "must be > 0" in capsys.readouterr().err
-    # a size that is not a whole number of cells: a clear error, exit code 1
-    assert main(["--text", "hills", "--size", "10.05", "--out", str(tmp_path / "y")]) == 1
-    assert "multiples of the resolution" in capsys.readouterr().err
+
+
+def _flag_error(capsys, argv) -> str:
+    """The error line of a refused command line (exit status 2; argparse prints its usage above it)."""
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "Traceback" not in err, err
+    return err.strip().splitlines()[-1]
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--timeout", "inf"], "argument --timeout: must be > 0 and at most 86400, got inf"),
+    (["--timeout", "nan"], "argument --timeout: must be > 0 and at most 86400, got nan"),
+    (["--timeout", "1e10"], "argument --timeout: must be > 0 and at most 86400, got 1e10"),
+    (["--size", "inf"], "argument --size: must be > 0 and finite, got inf"),
+    (["--size", "nan"], "argument --size: must be > 0 and finite, got nan"),
+    (["--resolution", "nan"], "argument --resolution: must be > 0 and finite, got nan"),
+    (["--size", "1000"], "--size 1000: must be in [1, 200]."),
+    (["--resolution", "0.01"], "--resolution 0.01: must be in [0.02, 1]."),
+    (["--size", "10.05"], "--size 10.05 with --resolution 0.1: the 10.05 m x 10.05 m tile is not a whole number of "
+                          "0.1 m cells; pick sizes that are multiples of the resolution."),
+    (["--size", "200", "--resolution", "0.02"], "--size 200 with --resolution 0.02: the 200 m x 200 m tile at 0.02 m "
+                                                "has 100000000 cells; the limit is 4000000 (e.g. 200 m x 200 m at 0.1 m): "
+                                                "use a coarser resolution or a smaller tile."),
+    (["--text", "x" * 10_001], "--text: has 10001 characters; at most 10000 are allowed."),
+    (["--model", "m" * 257], "--model: has 257 characters; at most 256 are allowed."),
+    (["--name", "x" * 65], "--name: has 65 characters; at most 64 are allowed."),
+    (["--name", "caf\u00e9"], "--name: must be a letter, then letters, digits or underscores, e.g. forest_trail."),
+    (["--name", "forest\n"], "--name: must be a letter, then letters, digits or underscores, e.g. forest_trail."),
+])
+def test_flags_are_checked_against_the_spec_before_any_request(tmp_path, capsys, flags, message):
+    with FakeServer([]) as srv:
+        line = _flag_error(capsys, ["--text", "a field", "--backend", "openai", "--base-url", srv.url, "--model", "m",
+                                    "--out", str(tmp_path / "o"), *flags])
+    assert line == f"gente-generate: error: {message}"
+    assert srv.requests == [] and not (tmp_path / "o").exists()
+
+
+def test_a_malformed_api_key_is_refused_and_never_printed(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("MY_KEY", "sk-SECRET-1234567890\n")
+    with FakeServer([]) as srv:
+        code = main(["--text", "a field", "--backend", "openai", "--base-url", srv.url, "--model", "m",
+                     "--api-key-env", "MY_KEY", "--out", str(tmp_path / "o")])
+    captured = capsys.readouterr()
+    assert code == 1 and srv.requests == [] and "SECRET" not in captured.out + captured.err
+    assert captured.err == ("gente-generate: error: the API key in the environment variable MY_KEY holds whitespace, "
+                            "control or non-ASCII characters (a trailing newline?); set MY_KEY to the key alone.\n")
+
+
+def test_model_text_reaches_the_terminal_escaped(tmp_path, capsys):
+    image = tmp_path / "lake.png"
+    image.write_bytes(_png_bytes())
+    description = _completion(content="\x1b[2J\x1b]0;title\x07 a lake\nand a \u202eshore")
+    reply = _completion([{"id": "c0", "type": "function",
+                          "function": {"name": "flat", "arguments": '{"height": 0.0, "region": "full"}'}}])
+    with FakeServer([ok(description), ok(reply)]) as srv:
+        code = main(["--image", str(image), "--backend", "openai", "--base-url", srv.url, "--model", "m",
+                     "--two-phase", "--out", str(tmp_path / "o")])
+    out = capsys.readouterr().out
+    assert code == 0 and "\x1b" not in out and "\u202e" not in out
+    assert out.splitlines()[0] == r"note: image description (m): \x1b[2J\x1b]0;title\x07 a lake\nand a \u202eshore"
+
+
+def test_a_long_text_gives_a_name_the_spec_accepts(tmp_path):
+    assert main(["--text", "a " + "x" * 100, "--out", str(tmp_path / "o")]) == 0
+    assert TerrainSpec.load(tmp_path / "o" / "spec.json").name == "x" * 64

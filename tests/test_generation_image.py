@@ -166,6 +166,14 @@ def test_image_planner_is_deterministic_and_rejects_garbage():
         plan_image(b"not an image")
 
 
+def test_an_image_beyond_the_pixel_limit_says_so(monkeypatch):
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1000)  # Pillow refuses images of more than twice this
+    with pytest.raises(ValueError) as info:
+        plan_image(_png(np.zeros((64, 64, 3))))
+    assert str(info.value) == ("the image is too large to decode: Image size (4096 pixels) exceeds limit of 2000 "
+                               "pixels; downscale it (a few megapixels are plenty) and pass it again.")
+
+
 def test_greyscale_photo_warns():
     grey = _photo(*SKIES["blue"], GROUNDS["grass"]).mean(-1, keepdims=True).repeat(3, -1)
     assert any("greyscale photo" in w for w in plan_image(_png(grey)).warnings)

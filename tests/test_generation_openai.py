@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import io
 import json
+import math
 import threading
 import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -186,3 +187,28 @@ def test_timeout_is_clear():
     with FakeServer([ok(_completion(content="late"), delay=1.5)]) as srv:
         with pytest.raises(GenerationError, match="timed out after 0.3 s"):
             _backend(srv, timeout=0.3).generate(text="x")
+
+
+@pytest.mark.parametrize("key", ["sk-SECRET-1234567890\n", " sk-SECRET", "sk-SECRET\x1b[0m", "sk-SECRET\u2019"])
+def test_a_malformed_api_key_is_refused_before_the_request(monkeypatch, key):
+    monkeypatch.setenv("GENTE_API_KEY", key)
+    with FakeServer([]) as srv:
+        with pytest.raises(ValueError) as info:
+            _backend(srv).generate(text="x")
+    assert str(info.value) == ("the API key in the environment variable GENTE_API_KEY holds whitespace, control or "
+                               "non-ASCII characters (a trailing newline?); set GENTE_API_KEY to the key alone.")
+    assert srv.requests == []
+
+
+def test_the_error_text_of_the_server_is_escaped():
+    with FakeServer([(500, {"error": {"message": "internal\nboom \x1b[31mred"}}, 0.0)]) as srv:
+        with pytest.raises(GenerationError) as info:
+            _backend(srv).generate(text="x")
+    assert str(info.value) == rf"the server at {srv.url} answered HTTP 500: internal\nboom \x1b[31mred"
+
+
+@pytest.mark.parametrize("timeout", [0.0, -1.0, math.nan, math.inf, 1e10])
+def test_timeout_must_be_a_finite_positive_number(timeout):
+    with pytest.raises(ValueError) as info:
+        OpenAIBackend("http://127.0.0.1:9/v1", "m", timeout=timeout)
+    assert str(info.value) == f"timeout must be > 0 and at most 86400 seconds, got {timeout}."

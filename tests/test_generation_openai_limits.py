@@ -122,3 +122,19 @@ def test_unreachable_server():
         port = s.getsockname()[1]
     with pytest.raises(GenerationError, match="could not reach"):
         OpenAIBackend(f"http://127.0.0.1:{port}/v1", "m", timeout=2.0).generate(text="x")
+
+
+@pytest.mark.parametrize("reply, detail", [
+    (b"GARBAGE \x1b[31m\r\n\r\n", r"BadStatusLine('GARBAGE \x1b[31m\r\n')"),  # the server's bytes, escaped
+    (b"{}", "BadStatusLine('{}')"),  # HTTP/0.9: a bare body, no status line
+    (b"HTTP/1.1 200 OK\r\n" + b"X-a: b\r\n" * 200 + b"\r\n{}", "HTTPException('got more than 100 headers')"),
+    (b"HTTP/1.1 200 OK\r\nX-a: " + b"b" * 70_000 + b"\r\n\r\n{}",
+     "LineTooLong('got more than 65536 bytes when reading header line')"),
+    (b"HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\nZZZ\r\nabc\r\n", "IncompleteRead(0 bytes read)"),
+], ids=["status_line", "http09", "many_headers", "long_header", "bad_chunk"])
+def test_malformed_http_names_the_server(reply, detail):
+    with RawServer(lambda write, stop: write(reply)) as srv:
+        with pytest.raises(GenerationError) as info:
+            OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
+    assert str(info.value) == (f"the server at {srv.url} answered malformed HTTP ({detail}); point --base-url at "
+                               f"its OpenAI-compatible API, e.g. http://localhost:8000/v1.")

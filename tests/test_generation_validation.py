@@ -11,6 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from legged_gente.generation.spec import TerrainSpec
 from legged_gente.generation.tools import named_regions, tool_schemas
 from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
 from legged_gente.terrain.registry import AtomicTerrain, Param
@@ -129,3 +130,11 @@ def test_random_calls_never_crash(tool, args):
     x0, y0, x1, y1 = call.rect(20.0, 10.0)
     assert 0 <= x0 < x1 <= 20.0 and 0 <= y0 < y1 <= 10.0
     assert all(not isinstance(v, float) or math.isfinite(v) for v in call.params.values())
+
+
+@pytest.mark.parametrize("name", ["forest_trail\n", "forest\ntrail"])
+def test_a_spec_name_may_not_hold_a_newline(name):
+    document = TerrainSpec(calls=[], name=name).to_dict()
+    with pytest.raises(ValidationError) as exc:
+        TerrainSpec.from_dict(document)
+    assert exc.value.messages == [f"spec: field 'name': {name!r} does not match '^[A-Za-z][A-Za-z0-9_]*\\\\Z'."]

@@ -35,6 +35,7 @@ import numpy as np
 
 from legged_gente.generation.validation import (
     MAX_SPEC_BYTES,
+    SPEC_SCHEMA,
     SPEC_VERSION,
     ToolCall,
     ValidationError,
@@ -57,9 +58,10 @@ def image_source(data: bytes, name: str | None = None) -> dict[str, Any]:
 
 
 def spec_name(text: str, default: str = "generated_terrain") -> str:
-    """A snake_case identifier from the first words of ``text`` (used for spec and class names)."""
+    """A snake_case identifier from the first words of ``text`` (used for spec and class names), cut to the longest
+    name a spec allows."""
     words = [w for w in re.findall(r"[a-z0-9]+", text.lower()) if w not in ("a", "an", "the", "of", "with")][:4]
-    name = "_".join(words)
+    name = "_".join(words)[: SPEC_SCHEMA["properties"]["name"]["maxLength"]]
     return name if name and name[0].isalpha() else default
 
 

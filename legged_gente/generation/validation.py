@@ -66,6 +66,12 @@ def _clip_text(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     return text[: max(limit - len(tail), 0)] + tail
 
 
+def printable(text: str) -> str:
+    """``text`` with each non-printable character (newline, ESC, other controls, bidi overrides) escaped as in a
+    repr: one line that cannot move a terminal's cursor or restyle it, for model and server text."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 class ValidationError(ValueError):
     """A rejected tool call or spec; ``messages`` holds one precise sentence per problem.
 
@@ -317,7 +323,8 @@ SPEC_SCHEMA: dict[str, Any] = {
     "type": "object",
     "properties": {
         "version": {"const": SPEC_VERSION, "description": f"spec format version; this code reads {SPEC_VERSION}"},
-        "name": {"type": "string", "pattern": "^[A-Za-z][A-Za-z0-9_]*$", "maxLength": 64},
+        "name": {"type": "string", "pattern": r"^[A-Za-z][A-Za-z0-9_]*\Z", "maxLength": 64,
+                 "description": "a letter, then letters, digits or underscores, e.g. forest_trail"},
         "size_x": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile length along x [m]"},
         "size_y": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile width along y [m]"},
         "resolution": {"type": "number", "minimum": 0.02, "maximum": 1.0, "description": "cell size [m]"},
@@ -355,7 +362,7 @@ SPEC_SCHEMA: dict[str, Any] = {
 }
 
 
-def _tile_problem(size_x: float, size_y: float, resolution: float) -> str | None:
+def tile_problem(size_x: float, size_y: float, resolution: float) -> str | None:
     """Why the builder cannot make a tile of this size and resolution (None if it can)."""
     n = (size_x / resolution, size_y / resolution)
     if any(abs(v - round(v)) > 1e-6 for v in n):
@@ -366,6 +373,20 @@ def _tile_problem(size_x: float, size_y: float, resolution: float) -> str | None
         return (f"the {size_x:g} m x {size_y:g} m tile at {resolution:g} m has {cells} cells; the limit is {MAX_CELLS} "
                 f"(e.g. 200 m x 200 m at 0.1 m): use a coarser resolution or a smaller tile")
     return None
+
+
+def spec_field_problem(field: str, value: Any) -> str | None:
+    """Why ``value`` cannot be the spec's ``field`` (None if it can), by that field's rule in :data:`SPEC_SCHEMA`;
+    lets a caller refuse a value before generating (the value itself is not repeated)."""
+    rule = SPEC_SCHEMA["properties"][field]
+    error = next(Draft202012Validator(rule).iter_errors(value), None)
+    if error is None:
+        return None
+    if error.validator == "maxLength":
+        return f"has {len(value)} characters; at most {rule['maxLength']} are allowed"
+    if error.validator in ("minimum", "maximum"):
+        return f"must be in [{rule['minimum']:g}, {rule['maximum']:g}]"
+    return f"must be {rule['description']}"
 
 
 def _describe_spec_error(err: jsonschema.ValidationError) -> str:
@@ -392,7 +413,7 @@ def validate_spec_dict(
     errors = sorted(Draft202012Validator(SPEC_SCHEMA).iter_errors(data), key=lambda e: list(map(str, e.absolute_path)))
     if errors:
         raise ValidationError([_describe_spec_error(e) for e in errors[:MAX_MESSAGES]])
-    problem = _tile_problem(data["size_x"], data["size_y"], data["resolution"])
+    problem = tile_problem(data["size_x"], data["size_y"], data["resolution"])
     if problem:
         raise ValidationError([f"spec: {problem}."])
     base = None

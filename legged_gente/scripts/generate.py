@@ -11,24 +11,34 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
-from legged_gente.generation.backends import GenerationError
+from legged_gente.generation.backends import MAX_TIMEOUT, GenerationError
 from legged_gente.generation.emit import DEFAULT_BASE, emit
 from legged_gente.generation.pipeline import BACKENDS, generate_spec
-from legged_gente.generation.validation import ValidationError
+from legged_gente.generation.validation import (
+    MAX_STRING_CHARS,
+    ValidationError,
+    printable,
+    spec_field_problem,
+    tile_problem,
+)
 from legged_gente.utils.args import flag, one_line
 
 
-def _positive(kind):
-    def parse(text: str):
+def _positive(most: float = math.inf):
+    """An argparse type: a float > 0, finite and at most ``most`` (float() reads 'nan' and 'inf' too)."""
+    bound = "finite" if most == math.inf else f"at most {most:g}"
+
+    def parse(text: str) -> float:
         try:
-            value = kind(text)
+            value = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a {kind.__name__}") from None
-        if value <= 0:
-            raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not (0 < value <= most and math.isfinite(value)):
+            raise argparse.ArgumentTypeError(f"must be > 0 and {bound}, got {text}")
         return value
 
     return parse
@@ -58,11 +68,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--toolset", choices=("ours", "gente"), default="ours",
                    help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
     p.add_argument(*flag("--api-key-env"), default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
-    p.add_argument("--timeout", type=_positive(float), default=60.0, help="request timeout in seconds (default 60)")
+    p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), default=60.0, help="request timeout in seconds (default 60)")
     p.add_argument(*flag("--max-retries"), type=int, default=3, help="correction rounds for invalid tool calls (default 3)")
     p.add_argument("--seed", type=_seed, default=0, help="terrain seed (default 0)")
-    p.add_argument("--size", type=_positive(float), default=20.0, help="tile side in metres (default 20)")
-    p.add_argument("--resolution", type=_positive(float), default=0.1, help="cell size in metres (default 0.1)")
+    p.add_argument("--size", type=_positive(), default=20.0, help="tile side in metres (default 20)")
+    p.add_argument("--resolution", type=_positive(), default=0.1, help="cell size in metres (default 0.1)")
     p.add_argument("--name", help="terrain name (snake_case); default from the text or image file name")
     p.add_argument("--base", default=DEFAULT_BASE, help=f"terrain config class to subclass (default {DEFAULT_BASE})")
     p.add_argument("--mesh", choices=("obj", "glb", "ply", "stl"), help="also write the terrain as a mesh")
@@ -86,8 +96,17 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--base-url/--model/--two-phase/--toolset are for --backend openai.")
     if args.max_retries < 0:
         parser.error("--max-retries must be >= 0.")
-    if args.name is not None and not (args.name.isidentifier() and args.name[0].isalpha()):
-        parser.error(f"--name {args.name!r} must be a snake_case identifier, e.g. forest_trail.")
+    # the spec's own limits, checked before anything is generated
+    if args.text is not None and len(args.text) > MAX_STRING_CHARS:
+        parser.error(f"--text: has {len(args.text)} characters; at most {MAX_STRING_CHARS} are allowed.")
+    for option, field, value in (("--size", "size_x", args.size), ("--resolution", "resolution", args.resolution),
+                                 ("--name", "name", args.name), ("--model", "model", args.model)):
+        problem = None if value is None else spec_field_problem(field, value)
+        if problem:
+            parser.error(f"{option} {value:g}: {problem}." if isinstance(value, float) else f"{option}: {problem}.")
+    problem = tile_problem(args.size, args.size, args.resolution)
+    if problem:
+        parser.error(f"--size {args.size:g} with --resolution {args.resolution:g}: {problem}.")
     try:
         spec, result = generate_spec(
             args.text, args.image, args.backend, seed=args.seed, size_x=args.size, size_y=args.size,
@@ -95,16 +114,16 @@ def main(argv: list[str] | None = None) -> int:
             two_phase=args.two_phase, vision_model=args.vision_model, timeout=args.timeout,
             max_retries=args.max_retries, api_key_env=args.api_key_env, toolset=args.toolset,
         )
-        for note in result.notes:
-            print(f"note: {note}")
+        for note in result.notes:  # a two-phase note is the vision model's text
+            print(f"note: {printable(note)}")
         print(f"{len(spec.calls)} tool call(s):")
         for call in spec.calls:
             print(f"  {call.tool}({json.dumps(call.arguments())})")
         for warning in result.warnings:
-            print(f"warning: {warning}", file=sys.stderr)
+            print(f"warning: {printable(warning)}", file=sys.stderr)
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
     except (ValidationError, GenerationError, ValueError) as exc:
-        print(f"gente-generate: error: {one_line(exc)}", file=sys.stderr)
+        print(f"gente-generate: error: {printable(one_line(exc))}", file=sys.stderr)
         return 1
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0

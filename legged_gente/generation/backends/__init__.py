@@ -10,6 +10,9 @@ import dataclasses
 
 from legged_gente.generation.validation import ToolCall
 
+MAX_TIMEOUT = 86_400.0
+"""Longest deadline of a request to a server, in seconds (a day; the socket layer overflows near 1e10 s)."""
+
 
 class GenerationError(RuntimeError):
     """A generation that could not produce a valid terrain (server failure, calls that stayed invalid)."""

@@ -20,8 +20,10 @@ read into the ``openai`` package's ``ChatCompletion`` type, which checks its str
 from __future__ import annotations
 
 import base64
+import http.client
 import json
 import os
+import re
 import threading
 import time
 import urllib.error
@@ -31,10 +33,17 @@ from typing import Any, Mapping
 
 from openai.types.chat import ChatCompletion
 
-from legged_gente.generation.backends import GenerationError, GenerationResult
+from legged_gente.generation.backends import MAX_TIMEOUT, GenerationError, GenerationResult
 from legged_gente.generation.backends.image import open_image
 from legged_gente.generation.tools import named_regions, tool_schemas
-from legged_gente.generation.validation import MAX_CALLS, ToolCall, ValidationError, check_height_stack, validate_call
+from legged_gente.generation.validation import (
+    MAX_CALLS,
+    ToolCall,
+    ValidationError,
+    check_height_stack,
+    printable,
+    validate_call,
+)
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 DEFAULT_API_KEY_ENV = "GENTE_API_KEY"
@@ -97,8 +106,8 @@ class OpenAIBackend:
     ):
         if max_retries < 0:
             raise ValueError(f"max_retries must be >= 0, got {max_retries}.")
-        if timeout <= 0:
-            raise ValueError(f"timeout must be > 0 seconds, got {timeout}.")
+        if not 0 < timeout <= MAX_TIMEOUT:  # also refuses nan
+            raise ValueError(f"timeout must be > 0 and at most {MAX_TIMEOUT:g} seconds, got {timeout}.")
         if toolset not in TOOLSETS:
             raise ValueError(f"unknown toolset {toolset!r}; use one of {list(TOOLSETS)}.")
         if toolset == "gente" and registry is not None:
@@ -111,6 +120,9 @@ class OpenAIBackend:
         self.size_x, self.size_y = size_x, size_y
         self.registry = ATOMIC_TERRAINS if registry is None else registry
         self.api_key = os.environ.get(api_key_env, "none")
+        if not re.fullmatch(r"[!-~]*", self.api_key):  # printable ASCII without spaces, as an HTTP header carries it
+            raise ValueError(f"the API key in the environment variable {api_key_env} holds whitespace, control or "
+                             f"non-ASCII characters (a trailing newline?); set {api_key_env} to the key alone.")
 
     def _post(self, payload: dict[str, Any], deadline: float) -> tuple[int, str, bytes]:
         """(Worker thread) POST ``payload`` to ``{base_url}/chat/completions``; (status, content type, body up to the cap + 1 byte)."""
@@ -159,9 +171,12 @@ class OpenAIBackend:
             if isinstance(error.reason, TimeoutError):
                 raise timed_out
             raise GenerationError(f"could not reach {self.base_url} ({error.reason}); check --base-url and that the server runs.")
-        if isinstance(error, (OSError, ValueError)):  # connection reset, malformed HTTP, bad URL
-            raise GenerationError(f"the request to {self.base_url} failed ({type(error).__name__}: {str(error)[:200]}); "
-                                  f"check --base-url and that the server runs.")
+        if isinstance(error, http.client.HTTPException):  # a status line, headers or chunks that are not HTTP/1.x
+            raise GenerationError(f"the server at {self.base_url} answered malformed HTTP ({error!r:.200}); point "
+                                  f"--base-url at its OpenAI-compatible API, e.g. http://localhost:8000/v1.")
+        if isinstance(error, (OSError, ValueError)):  # connection reset, bad URL
+            raise GenerationError(f"the request to {self.base_url} failed ({type(error).__name__}: "
+                                  f"{printable(str(error)[:200])}); check --base-url and that the server runs.")
         if error is not None:
             raise error
         status, content_type, body = box["answer"]
@@ -175,7 +190,7 @@ class OpenAIBackend:
             data = None
         if status != 200:
             detail = data.get("error", {}).get("message") if isinstance(data, dict) and isinstance(data.get("error"), dict) else None
-            raise GenerationError(f"the server at {self.base_url} answered HTTP {status}: {str(detail or text)[:300]}")
+            raise GenerationError(f"the server at {self.base_url} answered HTTP {status}: {printable(str(detail or text)[:300])}")
         if data is None:
             raise GenerationError(
                 f"the server at {self.base_url} answered HTTP 200 with a body that is not JSON (Content-Type "
