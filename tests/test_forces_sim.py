@@ -9,7 +9,7 @@ import warp as wp
 from legged_gente.external_forces import models
 from legged_gente.external_forces.field import ForcesConfig, TerrainForces
 from legged_gente.terrain.materials import FLOW_CURRENT, FLOW_TIDE, NO_SOIL, MaterialMap
-from legged_gente.terrain.soil import register_custom_soil
+from legged_gente.terrain.soil import SOIL_PRESETS, register_custom_soil
 
 wp.config.quiet = True
 DEV = "cpu"
@@ -306,12 +306,26 @@ def test_benchmark_reports_a_share():
     assert np.any(d.xfrc_applied.numpy())  # the demo's legs stand in water / on sand: forces act
 
 
-def test_bulldozing_width_is_the_sole_face_across_the_motion():
+@pytest.fixture
+def custom_soil():
+    """register_custom_soil for one test: the soils leave SOIL_PRESETS when it ends."""
+    names = []
+
+    def register(name, **params):
+        names.append(name)
+        return register_custom_soil(name, **params)
+
+    yield register
+    for name in names:
+        SOIL_PRESETS.pop(name)
+
+
+def test_bulldozing_width_is_the_sole_face_across_the_motion(custom_soil):
     """Bekker's bulldozing R = b (..) takes b as the width of soil the sole pushes: a 0.2 m x 0.1 m sole moved along
     its length pushes 0.1 m, moved sideways 0.2 m, moved at 45 deg 0.2 sin 45 + 0.1 cos 45 = 0.2121 m. The three
     worlds sink alike (a soil without scatter), so the forces stand in the ratio of those widths."""
     wp.set_device(DEV)
-    register_custom_soil("even_mud", kc=0.0, kphi=1.0e6, n=1.0, c=2.0e3, mu=0.2, K=0.02, bulldoze_c=5.0e4,
+    custom_soil("even_mud", kc=0.0, kphi=1.0e6, n=1.0, c=2.0e3, mu=0.2, K=0.02, bulldoze_c=5.0e4,
                          bulldoze_g=1.0e5)
     mud = MaterialMap.rigid(SHAPE)
     mud.soil[:] = 0
@@ -337,7 +351,7 @@ def test_bulldozing_width_is_the_sole_face_across_the_motion():
     np.testing.assert_allclose(force[1:] / force[0], [2.0, (0.2 + 0.1) / np.sqrt(2.0) / 0.1], rtol=1e-4)
 
 
-def test_sphere_sole_sinks_as_a_circular_plate():
+def test_sphere_sole_sinks_as_a_circular_plate(custom_soil):
     """A sphere sole's footprint is a disc: Bekker's pressure over pi r^2 and his b the plate's radius (Wong, Theory
     of Ground Vehicles, sec. 2.4: b is the smaller side of a rectangular plate, the radius of a circular one). Dry
     sand of Wong's Table 2.3: n 1.1, kc 0.99 kN/m^(n+1), kphi 1528.43 kN/m^(n+2). A 3 kg foot of radius 2 cm:
@@ -345,7 +359,7 @@ def test_sphere_sole_sinks_as_a_circular_plate():
     wp.set_device(DEV)
     r, mass = 0.02, 3.0
     kc, kphi, n = 0.99e3, 1528.43e3, 1.1
-    register_custom_soil("wong_dry_sand", kc=kc, kphi=kphi, n=n, c=1.04e3, mu=np.tan(np.radians(28.0)), K=0.025,
+    custom_soil("wong_dry_sand", kc=kc, kphi=kphi, n=n, c=1.04e3, mu=np.tan(np.radians(28.0)), K=0.025,
                          bulldoze_c=0.0, bulldoze_g=0.0)
     mjm = mujoco.MjModel.from_xml_string(f"""<mujoco><option timestep="0.005"/>
       <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
