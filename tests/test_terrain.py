@@ -280,3 +280,26 @@ def test_curriculum_map_reaches_a_declared_bound_exactly():
     assert slope.params_for_difficulty(1.75)["slope"] == pytest.approx(0.4 * 1.75)
     with pytest.raises(ValueError, match="slope"):
         slope.params_for_difficulty(1.76)
+
+
+def test_an_obstacle_block_covers_the_cells_inside_its_box():
+    """A cell is inside when its point i * resolution lies in [low, high) (as Region.cells counts it): a 0.4 m x
+    0.6 m block centred at (1.23, 2.07) m on 0.1 m cells covers x in [1.03, 1.43) -> cells 11..14 and y in
+    [1.77, 2.37) -> cells 18..23."""
+    from legged_gente.terrain.atomic import _boxes
+
+    h = np.zeros((40, 40), np.float32)
+    _boxes(h, 0.1, np.array([[1.23, 2.07]]), np.array([[0.2, 0.3]]), np.array([0.5]))
+    cells = np.argwhere(h == 0.5)
+    assert (cells.min(0).tolist(), cells.max(0).tolist(), len(cells)) == ([11, 18], [14, 23], 24)
+
+
+def test_the_docs_table_is_the_one_the_registry_makes():
+    """docs/terrain.md's atomics table is generated: regenerate it (python -m legged_gente.terrain.gallery) when a
+    terrain's parameters change."""
+    from pathlib import Path
+
+    from legged_gente.terrain.gallery import END, START, atomic_table_markdown
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "terrain.md").read_text()
+    assert doc.split(START)[1].split(END)[0].strip() == atomic_table_markdown().strip()

@@ -289,8 +289,9 @@ def _count(density: float, shape, resolution) -> int:
 
 
 def _boxes(h: np.ndarray, resolution: float, centres: np.ndarray, half_sizes: np.ndarray, heights: np.ndarray):
-    """Write axis-aligned boxes (centres and half sizes in m from the region's corner) into ``h``; later win."""
-    lo = np.floor((centres - half_sizes) / resolution).astype(int).clip(0)
+    """Write axis-aligned boxes (centres and half sizes in m from the region's corner) into ``h``; later win. A cell
+    is inside when its point i * resolution lies in [low, high), as for a Region."""
+    lo = np.ceil((centres - half_sizes) / resolution).astype(int).clip(0)
     hi = np.ceil((centres + half_sizes) / resolution).astype(int)
     for (i0, j0), (i1, j1), z in zip(lo, hi, heights):
         h[i0:i1, j0:j1] = z
