@@ -340,3 +340,15 @@ def test_the_ground_friction_is_one_setting():
     cfg.forces.friction_reference = 0.9
     with pytest.raises(ValueError, match=r"friction_reference=0.9: .*static_friction \(0.8\); set that instead"):
         GenteBiped(cfg, device="cpu")
+
+
+def test_without_a_curriculum_robots_spawn_on_every_row():
+    """terrain.mode 'random' runs no curriculum (levels never move), so, as in legged_gym with the curriculum off,
+    robots are spread over all rows, not kept on rows 0..max_init_terrain_level (0..1 here, of 3)."""
+    cfg = SmallCurriculum()
+    cfg.terrain.mode = "random"
+    cfg.env.num_envs = 30
+    torch.manual_seed(0)
+    env = GenteBiped(cfg, device="cpu")
+    assert not env.terrain_curriculum
+    assert sorted(set(env.terrain_levels.tolist())) == [0, 1, 2]

@@ -339,7 +339,7 @@ class LeggedRobot(VecEnv):
         rows, cols = self.terrain_origins.shape[:2]
         self.max_terrain_level = rows
         max_init = min(self.cfg.terrain.max_init_terrain_level, rows - 1)
-        if not self.cfg.terrain.curriculum:
+        if not self.terrain_curriculum:  # levels never move: spread the robots over every row, as legged_gym does
             max_init = rows - 1
         self.terrain_levels = torch.randint(0, max_init + 1, (n,), device=dev)
         self.terrain_columns = torch.div(torch.arange(n, device=dev) * cols, n, rounding_mode="floor")
