@@ -350,6 +350,7 @@ SOIL_COLOURS = {
     "snow": (0.97, 0.98, 1.00),
     "mud": (0.40, 0.28, 0.17),
     "clay_loam": (0.62, 0.40, 0.26),
+    "poppy_seeds_rft": (0.45, 0.47, 0.52),
 }
 """Preview tint of each soil preset; other (custom) soils are drawn in CUSTOM_SOIL_COLOUR."""
 CUSTOM_SOIL_COLOUR = (0.80, 0.55, 0.75)
