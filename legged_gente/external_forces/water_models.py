@@ -17,8 +17,9 @@ weight times the half-interval) and its exactly submerged volume V_k (the surfac
 * added mass ``m_k = ca rho V_k`` across the axis. It enters the joint-space mass matrix (M += J_k^T m_k P J_k),
   i.e. implicitly, plus the explicit velocity-product part ``-m_k P (Jdot qvel)_k``; see ``water.py``.
 
-The capsule's hemispherical caps carry buoyancy only: each is half of a sphere of radius r at the cylinder's end
-(exact for a horizontal or fully wet capsule and above the caps' rim for a vertical one; the volume is continuous).
+The capsule's hemispherical caps carry buoyancy only: each gets half the submerged volume of the sphere of radius r
+at the cylinder's end (exact for a horizontal capsule and for a cap wholly wet or dry; a tilted cap cut by the surface
+is off by at most rho g pi r^3 / 3, on a vertical capsule; the volume is continuous).
 Feet (``foot_*``): a sphere gets buoyancy from its exact spherical-cap volume and sphere drag; a box gets buoyancy
 from its submerged height fraction (exact for a level box) and flat-plate drag on each face pair.
 """
