@@ -382,19 +382,27 @@ def spec_field_problem(field: str, value: Any) -> str | None:
     error = next(Draft202012Validator(rule).iter_errors(value), None)
     if error is None:
         return None
-    if error.validator == "maxLength":
-        return f"has {len(value)} characters; at most {rule['maxLength']} are allowed"
+    too_long = _too_long(error)
+    if too_long:
+        return too_long
     if error.validator in ("minimum", "maximum"):
         return f"must be in [{rule['minimum']:g}, {rule['maximum']:g}]"
     return f"must be {rule['description']}"
 
 
+def _too_long(err: jsonschema.ValidationError) -> str | None:
+    """'has N items; at most M are allowed' for a list, string or object over its schema's size limit, else None."""
+    limits = {"maxItems": "items", "maxLength": "characters", "maxProperties": "entries"}
+    if err.validator not in limits:
+        return None
+    return f"has {len(err.instance)} {limits[err.validator]}; at most {err.validator_value} are allowed"
+
+
 def _describe_spec_error(err: jsonschema.ValidationError) -> str:
     field = ".".join(map(str, err.absolute_path))[:60] or "(document)"
-    limits = {"maxItems": "items", "maxLength": "characters", "maxProperties": "entries"}
-    if err.validator in limits:
-        return (f"spec: field {field!r} has {len(err.instance)} {limits[err.validator]}; "
-                f"at most {err.validator_value} are allowed.")
+    too_long = _too_long(err)
+    if too_long:
+        return f"spec: field {field!r} {too_long}."
     return f"spec: field {field!r}: {_clip_text(err.message, 160)}."
 
 
