@@ -20,7 +20,7 @@ RES, ORIGIN, SHAPE = 0.1, (-2.0, -2.0), (41, 41)
 RHO, CD, G = 1000.0, 1.1, 9.81
 R, H = 0.04, 0.15  # leg radius and cylinder half-length: L = 0.3 m
 L = 2 * H
-DIAGONAL_M = "ignore:forces. leg geoms"  # a lone free body: MuJoCo keeps its M diagonal (warned, exact here)
+DIAGONAL_M = "ignore:forces. water geoms"  # a lone free body: MuJoCo keeps its M diagonal (warned, exact here)
 
 
 class Cfg(ForcesConfig):
@@ -208,6 +208,56 @@ def test_fixed_leg_in_tide_feels_morison_with_cm_one_plus_ca():
         assert f.seg_force.numpy()[0, 0, 0] == pytest.approx(morison, rel=1e-3, abs=1e-3)
 
 
+@pytest.mark.filterwarnings(DIAGONAL_M)
+def test_feet_released_in_still_water_start_with_their_added_mass():
+    # Released at rest deep under water, a foot starts at a = g (m - rho V) / (m + m_a) (no drag at v = 0).
+    # A sphere (density 3000): m_a = rho V / 2 (potential flow), a = g (3000 - 1000) / (3000 + 500).
+    # A box sole 0.22 x 0.09 x 0.04 m of 1 kg, level: its 0.22 x 0.09 face moves normal to itself, a thin plate's
+    # m_a = C_A rho (pi/4) a^2 b with DNV-RP-C205's C_A interpolated in a/b = 0.409 between 0.801 (a/b 0.4) and
+    # 0.757 (a/b 0.5). The same sole on its edge (turned 90 deg about x) moves its 0.22 x 0.04 face: a/b = 0.182,
+    # between 0.917 (a/b 0.16) and 0.897 (a/b 0.2).
+    r, hx, hy, hz, m_sole = 0.03, 0.11, 0.045, 0.02, 1.0
+    slide = '<joint type="slide" axis="0 0 1"/>'
+    mjm = model(f'<body pos="0 0 1">{slide}<geom name="ball" type="sphere" size="{r}" density="3000"/></body>'
+                f'<body pos="1 0 1">{slide}<geom name="sole" type="box" size="{hx} {hy} {hz}" mass="{m_sole}"/></body>'
+                f'<body pos="-1 0 1">{slide}<geom name="edge" type="box" size="{hx} {hy} {hz}" mass="{m_sole}" '
+                'euler="90 0 0"/></body>', gravity=True)
+    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["ball", "sole", "edge"]})
+    m, d, f = make(mjm, water(surface=3.0), cfg)
+    mjw.step(m, d)
+
+    def plate(a, b, ca_lo, x_lo, ca_hi, x_hi):  # DNV's C_A at a/b by linear interpolation, times rho pi/4 a^2 b
+        ca = ca_lo + (a / b - x_lo) / (x_hi - x_lo) * (ca_hi - ca_lo)
+        return ca * RHO * math.pi / 4 * a * a * b
+
+    v_ball, v_sole = 4 / 3 * math.pi * r**3, 8 * hx * hy * hz
+    m_ball = 3000.0 * v_ball
+    m_flat = plate(2 * hy, 2 * hx, 0.801, 0.4, 0.757, 0.5)
+    m_edge = plate(2 * hz, 2 * hx, 0.917, 0.16, 0.897, 0.2)
+    assert m_flat == pytest.approx(1.11, abs=0.01)  # the 1.1 kg docs/forces.md quotes for the biped's sole
+    expect = [-G * (m_ball - RHO * v_ball) / (m_ball + RHO * v_ball / 2),
+              -G * (m_sole - RHO * v_sole) / (m_sole + m_flat),
+              -G * (m_sole - RHO * v_sole) / (m_sole + m_edge)]
+    np.testing.assert_allclose(d.qacc.numpy()[0], expect, rtol=1e-4)
+
+
+def test_fixed_sphere_foot_in_tide_feels_morison_with_cm_one_and_a_half():
+    # A fixed sphere in a tide u = A cos(w t + p): drag 0.5 rho cd pi r^2 |u| u plus Froude-Krylov and added mass
+    # (rho V + rho V / 2) du/dt (Morison's cm = 1.5 for a sphere).
+    amp, om, ph, r = 0.8, 2.0, 0.4, 0.03
+    mjm = model(f'<body pos="0 0 1">{SLIDE_X}<geom name="ball" type="sphere" size="{r}" density="3000"/></body>')
+    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["ball"]})
+    m, d, f = make(mjm, water(surface=3.0, kind=FLOW_TIDE, speed=amp, omega=om, phase=ph), cfg)
+    vol = 4 / 3 * math.pi * r**3
+    for _ in range(20):
+        assign(d.qvel, [[0.0]])
+        t = float(d.time.numpy()[0])
+        mjw.step(m, d)
+        u, du = amp * math.cos(om * t + ph), -amp * om * math.sin(om * t + ph)
+        morison = 0.5 * RHO * 0.47 * math.pi * r * r * abs(u) * u + 1.5 * RHO * vol * du
+        assert f.foot_water_force.numpy()[0, 0, 0] == pytest.approx(morison, rel=1e-3, abs=1e-4)
+
+
 # -------------------------------------------------------------------------------------- item 6: buoyancy
 
 
@@ -350,14 +400,22 @@ def test_water_kernels_match_references():
                 if name == "ball":
                     r = g.size[0]
                     vol = WM.sphere_cap_volume(r, z_w - (c[2] - r))
-                    fr = WM.sphere_drag(RHO, 0.47, r, vol / (4 / 3 * math.pi * r**3), vrel)
+                    frac = vol / (4 / 3 * math.pi * r**3)
+                    fr = WM.sphere_drag(RHO, 0.47, r, frac, vrel)
                     p = c
                 else:
                     vol = WM.box_submerged_volume(g.size, rot, c[2], z_w)
+                    frac = vol / (8 * np.prod(g.size))
                     e_z = float(np.abs(rot[2]) @ g.size)
                     fr = WM.plate_drag(RHO, 1.17, g.size, rot, z_w - (c[2] - e_z), vrel)
-                    p = c - np.array([0, 0, e_z * (1 - vol / (8 * np.prod(g.size)))])
+                    p = c - np.array([0, 0, e_z * (1 - frac)])
+                # the wet fraction of the foot's added mass tensor, along its geom's axes
+                added = frac * rot @ np.diag(WM.foot_added_mass("sphere" if name == "ball" else "box", g.size,
+                                                                RHO)) @ rot.T
+                fr = fr + WM.foot_inertia_force(RHO, vol, added, flow_accel_at(c), jacdot(p) @ md.qvel)
                 loads = [(p, fr + np.array([0, 0, RHO * G * vol]))] if vol > 0 else []
+                if vol > 0:
+                    ref_m += jac(p).T @ added @ jac(p)
             for p, fk in loads:
                 ref_x[b, :3] += fk
                 ref_x[b, 3:] += np.cross(p - md.xipos[b], fk)
@@ -425,6 +483,13 @@ def test_water_functions_match_references():
 
 def test_water_references_textbook_values():
     r = 0.05
+    # added mass: a sphere's is half its displaced mass; a square plate's C_A is 0.579 (DNV-RP-C205); a long strip
+    # of width a tends to rho pi (a/2)^2 per length
+    assert WM.foot_added_mass("sphere", [r], RHO) == pytest.approx(np.full(3, 0.5 * RHO * 4 / 3 * math.pi * r**3))
+    assert WM.plate_added_mass(RHO, 0.1, 0.1) == pytest.approx(0.579 * RHO * math.pi / 4 * 0.1**3)
+    assert WM.plate_added_mass(RHO, 0.01, 2.0) == pytest.approx(RHO * math.pi * 0.005**2 * 2.0, rel=0.01)
+    # a box 0.2 x 0.1 x 0.1 along x moves its 0.1 x 0.1 face pair (a square plate)
+    assert WM.foot_added_mass("box", [0.1, 0.05, 0.05], RHO)[0] == pytest.approx(WM.plate_added_mass(RHO, 0.1, 0.1))
     # a chord through the centre halves the circle; a sphere wet to its centre is a hemisphere
     assert WM.circle_wet_area(r, 0.0) == pytest.approx(math.pi * r * r / 2)
     assert WM.sphere_cap_volume(r, r) == pytest.approx(2 / 3 * math.pi * r**3)

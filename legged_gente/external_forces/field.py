@@ -30,6 +30,7 @@ from legged_gente.external_forces import contact as C
 from legged_gente.external_forces import kernels as K
 from legged_gente.external_forces import rft as R
 from legged_gente.external_forces import water as W
+from legged_gente.external_forces import water_models as WM
 from legged_gente.external_forces.config import ForcesConfig
 from legged_gente.terrain.soil import preset_table
 from legged_gente.terrain.materials import MaterialMap
@@ -179,7 +180,6 @@ class TerrainForces:
         self.seg_radius = arr(mjm.geom_size[seg, 0].astype(np.float32), float)
         self.seg_halflen = arr(mjm.geom_size[seg, 1].astype(np.float32), float)  # cylinder part's half-length
         self.seg_caps = arr((mjm.geom_type[seg] == int(mujoco.mjtGeom.mjGEOM_CAPSULE)).astype(np.int32), int)
-        self._check_diagonal_mass(mjm, seg)
 
         bodies, groups = foot_groups(mjm, cfg.foot_geom_names)
         self.nfoot = len(bodies)
@@ -200,6 +200,12 @@ class TerrainForces:
         foot_water = self._foot_water_geoms(mjm, groups)
         self.foot_water_geom = arr(foot_water, int)
         self.foot_buoyancy = arr(_buoyancy_not_in_legs(mjm, foot_water, seg), float)
+        self._check_diagonal_mass(mjm, np.concatenate([seg, foot_water]).astype(int))
+        sphere = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+        self.foot_added_mass = arr(np.asarray(
+            [WM.foot_added_mass("sphere" if mjm.geom_type[g] == sphere else "box", mjm.geom_size[g],
+                                float(cfg.water_density)) for g in foot_water] or np.zeros((1, 3)), np.float32),
+            wp.vec3)
         self.sole_length, self.sole_width, self.sole_disc = self._sole(mjm, groups)
         # Bekker's pressure over the footprint, whose b is a rectangle's smaller side or a disc's radius (Wong,
         # Theory of Ground Vehicles, ch. 2)
@@ -246,9 +252,10 @@ class TerrainForces:
                 if isinstance(a, wp.array) and a.shape[0] == self.nworld and a.ptr != self.obs.ptr]
 
     # ------------------------------------------------------------------ setup helpers
-    def _check_diagonal_mass(self, mjm, seg):
+    def _check_diagonal_mass(self, mjm, geoms):
         """MuJoCo stores only the diagonal of M for "simple" bodies (children of the world with a diagonal inertia,
-        e.g. a lone free body or slide joints): the added mass of legs on them loses its coupling between dofs."""
+        e.g. a lone free body or slide joints): the added mass of legs and feet on them loses its coupling between
+        dofs."""
         if not self.cfg.wading or self.cfg.paper_added_mass:
             return
         depth = np.zeros(mjm.nv, int)
@@ -264,11 +271,12 @@ class TerrainForces:
                 dof = mjm.dof_parentid[dof]
             return dof >= 0
 
-        legs = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in seg if chain_cut(mjm.geom_bodyid[g])]
-        if legs:
-            warnings.warn(f"forces: leg geoms {legs} are on bodies whose mass matrix MuJoCo keeps diagonal; their "
-                          f"added mass enters per dof, without the coupling between dofs (exact only for a leg "
-                          f"across its slide axes). Put such a body under another body to get the full matrix.",
+        cut_geoms = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in geoms
+                     if chain_cut(mjm.geom_bodyid[g])]
+        if cut_geoms:
+            warnings.warn(f"forces: water geoms {cut_geoms} are on bodies whose mass matrix MuJoCo keeps diagonal; "
+                          f"their added mass enters per dof, without the coupling between dofs (exact only for "
+                          f"motion along slide axes). Put such a body under another body to get the full matrix.",
                           stacklevel=3)
 
     def _foot_water_geoms(self, mjm, groups) -> np.ndarray:
@@ -420,11 +428,13 @@ class TerrainForces:
         if cfg.wading and len(self.foot_water_geom):
             wp.launch(
                 W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev,
-                inputs=[self.foot_water_geom, self.foot_buoyancy, m.geom_type, m.geom_size, m.geom_bodyid,
-                        m.body_rootid, d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.subtree_com, d.time, self.water,
+                inputs=[self.foot_water_geom, self.foot_buoyancy, self.foot_added_mass, m.geom_type, m.geom_size,
+                        m.geom_bodyid, m.body_rootid, m.body_parentid, m.body_dofnum, m.body_dofadr, m.dof_parentid,
+                        m.M_rownnz, m.M_rowadr, d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof, d.cdof_dot,
+                        d.qvel, d.subtree_com, d.time, self.water,
                         float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
-                        float(cfg.sphere_drag_coefficient), self.eps, self.xi, d.xfrc_applied,
-                        self.foot_water_force],
+                        float(cfg.sphere_drag_coefficient), int(bool(cfg.paper_added_mass)), self.eps, self.xi,
+                        d.xfrc_applied, d.M, self.foot_water_force],
             )
         if cfg.soil and self.nfoot:
             wp.launch(

@@ -2,7 +2,7 @@
 
 ``segment_water_kernel`` (worlds x leg segments) writes drag, buoyancy and the flow's inertia force to
 ``xfrc_applied`` at each slice's Gauss point, and adds each slice's added mass to the joint-space mass matrix
-``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each
+``d.M``; ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot with its added mass tensor. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each
 substep), calls the passive callback in ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and
 builds the constraint solver's Hessian and the implicit integrators' matrices from it, so an addition made here is
 seen by the whole step: the added mass is implicit, acts in the same substep and cannot destabilise a light body
@@ -173,6 +173,44 @@ def dof_jac(cdof: wp.array2d[wp.spatial_vector], w: int, i: int, r: wp.vec3) -> 
     return wp.cross(wp.vec3(c[0], c[1], c[2]), r) + wp.vec3(c[3], c[4], c[5])
 
 
+@wp.func
+def velocity_product_accel(cdof_dot: wp.array2d[wp.spatial_vector], qvel: wp.array2d[float],
+                           dof_parentid: wp.array[int], w: int, top: int) -> wp.spatial_vector:
+    """The body's spatial acceleration at qacc = 0 (Jdot qvel: centripetal and Coriolis terms), down its dof chain
+    from ``top`` (its last dof)."""
+    sacc = wp.spatial_vector()
+    i = top
+    while i >= 0:
+        sacc = sacc + cdof_dot[w, i] * qvel[w, i]
+        i = dof_parentid[i]
+    return sacc
+
+
+@wp.func
+def point_vp_accel(sacc: wp.spatial_vector, omega: wp.vec3, rp: wp.vec3, v: wp.vec3) -> wp.vec3:
+    """A point's acceleration at qacc = 0, at rp from the tree's subtree_com moving at v: a + alpha x rp + omega x v."""
+    return wp.spatial_bottom(sacc) + wp.cross(wp.spatial_top(sacc), rp) + wp.cross(omega, v)
+
+
+@wp.func
+def add_added_mass_fn(M: wp.array2d[float], cdof: wp.array2d[wp.spatial_vector], dof_parentid: wp.array[int],
+                      M_rowadr: wp.array[int], M_rownnz: wp.array[int], w: int, top: int, rp: wp.vec3,
+                      added: wp.mat33):
+    """M[i, j] += J_i(p) . A J_j(p) for a point at rp from the tree's subtree_com carrying the (symmetric) added mass
+    tensor A, over the dofs moving its body (j an ancestor of i, or i itself)."""
+    i = top
+    while i >= 0:
+        aji = added * dof_jac(cdof, w, i, rp)
+        rowadr = M_rowadr[i]
+        adr = rowadr + M_rownnz[i] - 1
+        j = i
+        while j >= 0 and adr >= rowadr:
+            wp.atomic_add(M, w, adr, wp.dot(aji, dof_jac(cdof, w, j, rp)))
+            adr = adr - 1
+            j = dof_parentid[j]
+        i = dof_parentid[i]
+
+
 # --------------------------------------------------------------------------------------------------------
 # Kernels
 
@@ -259,11 +297,7 @@ def segment_water_kernel(
 
     # spatial acceleration of the body at qacc = 0 (velocity-product terms), for the explicit part of the added mass
     top = last_dof(body_parentid, body_dofnum, body_dofadr, b)
-    sacc = wp.spatial_vector()
-    i = top
-    while i >= 0:
-        sacc = sacc + cdof_dot[w, i] * qvel[w, i]
-        i = dof_parentid[i]
+    sacc = velocity_product_accel(cdof_dot, qvel, dof_parentid, w, top)
     vb = cvel[w, b]
     omega = wp.vec3(vb[0], vb[1], vb[2])
 
@@ -301,8 +335,7 @@ def segment_water_kernel(
         else:
             f = f + inertia_force_fn(rho, ca, vol, flow_accel(water, cell, t, xi[w]), axis)
             # explicit velocity-product part of -m_a P a_p: a_p(qacc = 0) = a_lin + alpha x rp + omega x v_p
-            rp = p - com
-            avp = wp.spatial_bottom(sacc) + wp.cross(wp.spatial_top(sacc), rp) + wp.cross(omega, v)
+            avp = point_vp_accel(sacc, omega, p - com, v)
             f = f - ma * (avp - wp.dot(avp, axis) * axis)
             mass[k] = ma
         if paper_flow_force != 0:
@@ -319,40 +352,35 @@ def segment_water_kernel(
 
     if paper_added_mass != 0 or top < 0 or mass[0] + mass[1] + mass[2] <= 0.0:
         return
-    # implicit added mass: M[i, j] += sum_k m_k J_i(p_k) . P J_j(p_k), j ancestor of i (or i itself)
-    i = top
-    while i >= 0:
-        ji0 = dof_jac(cdof, w, i, pts[0] - com)
-        ji1 = dof_jac(cdof, w, i, pts[1] - com)
-        ji2 = dof_jac(cdof, w, i, pts[2] - com)
-        rowadr = M_rowadr[i]
-        adr = rowadr + M_rownnz[i] - 1
-        j = i
-        while j >= 0 and adr >= rowadr:
-            jj0 = dof_jac(cdof, w, j, pts[0] - com)
-            jj1 = dof_jac(cdof, w, j, pts[1] - com)
-            jj2 = dof_jac(cdof, w, j, pts[2] - com)
-            mij = (mass[0] * (wp.dot(ji0, jj0) - wp.dot(ji0, axis) * wp.dot(jj0, axis))
-                   + mass[1] * (wp.dot(ji1, jj1) - wp.dot(ji1, axis) * wp.dot(jj1, axis))
-                   + mass[2] * (wp.dot(ji2, jj2) - wp.dot(ji2, axis) * wp.dot(jj2, axis)))
-            wp.atomic_add(M, w, adr, mij)
-            adr = adr - 1
-            j = dof_parentid[j]
-        i = dof_parentid[i]
+    # implicit added mass: M[i, j] += sum_k J_i(p_k) . m_k P J_j(p_k), P = 1 - a a^T (across the axis only)
+    across = wp.identity(n=3, dtype=float) - wp.outer(axis, axis)
+    for k in range(NGAUSS):
+        if mass[k] > 0.0:
+            add_added_mass_fn(M, cdof, dof_parentid, M_rowadr, M_rownnz, w, top, pts[k] - com, mass[k] * across)
 
 
 @wp.kernel
 def foot_water_kernel(
     foot_geom: wp.array[int],
     foot_buoyancy: wp.array[float],
+    foot_added_mass: wp.array[wp.vec3],
     geom_type: wp.array[int],
     geom_size: wp.array2d[wp.vec3],
     geom_bodyid: wp.array[int],
     body_rootid: wp.array[int],
+    body_parentid: wp.array[int],
+    body_dofnum: wp.array[int],
+    body_dofadr: wp.array[int],
+    dof_parentid: wp.array[int],
+    M_rownnz: wp.array[int],
+    M_rowadr: wp.array[int],
     geom_xpos: wp.array2d[wp.vec3],
     geom_xmat: wp.array2d[wp.mat33],
     xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
+    cdof: wp.array2d[wp.spatial_vector],
+    cdof_dot: wp.array2d[wp.spatial_vector],
+    qvel: wp.array2d[float],
     subtree_com: wp.array2d[wp.vec3],
     time: wp.array[float],
     water: WaterMap,
@@ -360,13 +388,17 @@ def foot_water_kernel(
     g: float,
     cd_plate: float,
     cd_sphere: float,
+    paper_added_mass: int,
     eps: wp.array[float],
     xi: wp.array[float],
     xfrc: wp.array2d[wp.spatial_vector],
+    M: wp.array2d[float],
     foot_water_force: wp.array2d[wp.vec3],
 ):
-    """Buoyancy and drag of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag). Buoyancy is
-    left out (``foot_buoyancy`` 0) for a sphere inside a leg segment, whose own buoyancy counts that volume."""
+    """Buoyancy, drag and added mass of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag).
+    Buoyancy is left out (``foot_buoyancy`` 0) for a sphere inside a leg segment, whose own buoyancy counts that
+    volume. The added mass tensor (``foot_added_mass``: wholly submerged, along the geom's axes) times the wet
+    fraction enters M implicitly, as the legs' does (not with ``paper_added_mass``, whose GenTe model has no feet)."""
     w, k = wp.tid()
     gid = foot_geom[k]
     b = geom_bodyid[gid]
@@ -375,9 +407,12 @@ def foot_water_kernel(
     size = geom_size[w % geom_size.shape[0], gid]
     cell = water_cell(water, c)
     z_w = water.surface[cell[0], cell[1]]
-    vrel = point_velocity(cvel, subtree_com, body_rootid, w, b, c) - water_flow(water, cell, time[w], xi[w])
+    t = time[w]
+    vrel = point_velocity(cvel, subtree_com, body_rootid, w, b, c) - water_flow(water, cell, t, xi[w])
     f = wp.vec3(0.0)
     p = c
+    vol = float(0.0)
+    frac = float(0.0)
     if geom_type[gid] == GEOM_SPHERE:
         r = size[0]
         vol = sphere_cap_volume_fn(r, z_w - (c[2] - r))
@@ -393,6 +428,21 @@ def foot_water_kernel(
             f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), vrel)
             f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
             p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # middle of the submerged height
+    top = last_dof(body_parentid, body_dofnum, body_dofadr, b)
+    added = wp.mat33(0.0)
+    com = subtree_com[w, body_rootid[b]]
+    if frac > 0.0 and paper_added_mass == 0:
+        m3 = foot_added_mass[k]
+        added = frac * (rot * wp.diag(m3) * wp.transpose(rot))
+        # Froude-Krylov and added mass in accelerating flow, and the explicit velocity-product part of -A a_p
+        sacc = velocity_product_accel(cdof_dot, qvel, dof_parentid, w, top)
+        vb = cvel[w, b]
+        v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+        avp = point_vp_accel(sacc, wp.vec3(vb[0], vb[1], vb[2]), p - com, v)
+        du = flow_accel(water, cell, t, xi[w])
+        f = f + rho * vol * du + added * (du - avp)
     if frac > 0.0:
         apply_force(xfrc, xipos, w, b, f, p)
     foot_water_force[w, k] = f
+    if frac > 0.0 and paper_added_mass == 0 and top >= 0:
+        add_added_mass_fn(M, cdof, dof_parentid, M_rowadr, M_rownnz, w, top, p - com, added)

@@ -21,7 +21,10 @@ The capsule's hemispherical caps carry buoyancy only: each gets half the submerg
 at the cylinder's end (exact for a horizontal capsule and for a cap wholly wet or dry; a tilted cap cut by the surface
 is off by at most rho g pi r^3 / 3, on a vertical capsule; the volume is continuous).
 Feet (``foot_*``): a sphere gets buoyancy from its exact spherical-cap volume and sphere drag; a box gets buoyancy
-from its submerged height fraction (exact for a level box) and flat-plate drag on each face pair.
+from its submerged height fraction (exact for a level box) and flat-plate drag on each face pair. Both get an added
+mass tensor (``foot_added_mass``: a sphere's half its displaced mass, a box's faces as thin plates), scaled by the
+wet fraction, entering M implicitly as the legs' does, and the Froude-Krylov plus added-mass force of an
+accelerating flow.
 """
 
 from __future__ import annotations
@@ -164,6 +167,45 @@ def plate_drag(rho, cd, half, rot, depth, v_rel):
         area = 4.0 * half[(i + 1) % 3] * half[(i + 2) % 3]
         f -= 0.5 * cd * rho * area * wet * abs(vi) * vi * n
     return f
+
+
+# DNV-RP-C205 (2010), Table A-2: added mass coefficient C_A of a thin rectangular plate, sides a <= b, moving normal
+# to itself: m_a = C_A rho (pi / 4) a^2 b. Tabulated against b / a; as b / a grows the plate becomes a 2-D strip,
+# whose added mass per length is rho pi (a / 2)^2 (C_A -> 1).
+PLATE_B_OVER_A = (1.0, 1.25, 1.5, 1.59, 2.0, 2.5, 3.0, 4.0, 5.0, 6.25, 8.0, 10.0)
+PLATE_CA = (0.579, 0.642, 0.690, 0.704, 0.757, 0.801, 0.830, 0.871, 0.897, 0.917, 0.934, 0.947)
+
+
+def plate_added_mass(rho, side_1, side_2):
+    """Added mass of a thin rectangular plate moving normal to itself (kg): C_A rho (pi/4) a^2 b, C_A from DNV's table
+    interpolated linearly in a / b (0: the strip's 1, 1: the square's 0.579)."""
+    a, b = sorted((float(side_1), float(side_2)))
+    a_over_b = [0.0] + [1.0 / x for x in reversed(PLATE_B_OVER_A)]
+    ca = np.interp(a / b, a_over_b, [1.0] + list(reversed(PLATE_CA)))
+    return ca * rho * np.pi / 4.0 * a * a * b
+
+
+def foot_added_mass(geom_type, size, rho):
+    """Added masses of a wholly submerged foot geom along its own axes x, y, z (kg, array of 3).
+
+    A sphere: half its displaced mass in every direction, (2/3) rho pi r^3 (potential flow; Newman, *Marine Hydrodynamics*
+    1977, ch. 4). A box (half sizes h): moving along axis i, its face pair
+    normal to i as a thin plate of sides 2 h_j x 2 h_k (``plate_added_mass``): right for a sole (thin against its
+    width), short for a thick box (a cube gets about two thirds of its potential-flow added mass). Rotational added
+    inertia is left out.
+    """
+    if geom_type == "sphere":
+        return np.full(3, 2.0 / 3.0 * rho * np.pi * float(size[0]) ** 3)
+    h = np.asarray(size, float)[:3]
+    return np.array([plate_added_mass(rho, 2 * h[(i + 1) % 3], 2 * h[(i + 2) % 3]) for i in range(3)])
+
+
+def foot_inertia_force(rho, volume, added_mass, du, vp_accel):
+    """Froude-Krylov and added-mass force of a foot in a flow accelerating at du (N, vector), with the explicit
+    velocity-product part of its added-mass reaction: rho V du + A (du - a_vp); ``added_mass`` the 3 x 3 tensor A
+    (world frame, wet fraction included), a_vp the foot point's acceleration at zero joint acceleration."""
+    du = np.asarray(du, float)
+    return rho * volume * du + np.asarray(added_mass, float) @ (du - np.asarray(vp_accel, float))
 
 
 def sphere_drag(rho, cd, r, frac, v_rel):
