@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
-import warnings
 from datetime import datetime
 from pathlib import Path
 
@@ -16,7 +14,6 @@ from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRob
 from legged_gente.envs.terrain_arg import apply_terrain_arg
 from legged_gente.utils.args import apply_overrides
 
-BUILTIN_TASKS = ("gente_biped", "gente_biped_flat", "gente_quadruped", "gente_quadruped_flat")
 CPU_MANY_ENVS = 64  # more robots than this on the CPU: say that it will be slow, and how to make it fast
 
 
@@ -24,17 +21,6 @@ def default_log_root() -> Path:
     """Where runs go: ``$GENTE_LOG_ROOT``, else ``logs/`` in the current working directory (legged_gym's habit:
     a project's runs land in the project's folder, never in the installed package)."""
     return Path(os.environ.get("GENTE_LOG_ROOT") or "logs").absolute()
-
-
-@contextlib.contextmanager
-def shipped_task_warnings_quiet(task: str, verbose: bool):
-    """Hide the shipped tasks' own known construction warnings unless ``verbose``: the quadruped's light legs
-    (their added mass in deep water reaches their mass; docs/forces.md) are not news to a user of that task. A
-    user's own robot still gets the warning."""
-    with warnings.catch_warnings():
-        if task in BUILTIN_TASKS and not verbose:
-            warnings.filterwarnings("ignore", message=r"forces: the added mass of leg geoms")
-        yield
 
 
 # PPO's settings outside which rsl-rl trains on without complaint but learns nothing sensible: (field, test, bound)
@@ -140,8 +126,7 @@ class TaskRegistry:
                   f"is sized for a GPU and will be slow here; pass e.g. --num_envs 4 for a quick CPU run", flush=True)
         # seed before the env draws anything (spawn yaw, commands, domain randomisation); one seed per rank
         torch.manual_seed(int(train_cfg.seed) + int(os.environ.get("RANK", "0")))
-        with shipped_task_warnings_quiet(name, getattr(args, "verbose", True)):
-            env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
+        env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
         return env, env_cfg
 
     def make_alg_runner(self, env, name: str, args=None, train_cfg: LeggedRobotCfgPPO | None = None,

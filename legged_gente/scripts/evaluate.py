@@ -56,7 +56,6 @@ def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
     from legged_gente.evaluation.report import build_report, check_success_rule, write_reports
-    from legged_gente.envs.task_registry import shipped_task_warnings_quiet
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built
@@ -71,8 +70,7 @@ def evaluate(args) -> dict:
         items = items[: args.limit]
     device = resolve_device(args.device)
     episode_s = args.episode_s if args.episode_s is not None else (20.0 if args.mode == "waypoints" else 10.0)
-    with shipped_task_warnings_quiet(args.task, args.verbose):
-        evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
+    evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
                                                args.pretrained)
     task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
