@@ -168,6 +168,19 @@ def test_heading_commands_turn_towards_the_heading(env):
     assert torch.allclose(env.commands[:, 2], expected.clamp(low, high), atol=1e-5)
 
 
+def test_reset_turns_headings_into_yaw_rates(env):
+    """The first observation after reset() (the one rsl-rl's runner starts from) carries the heading controller's
+    yaw rate, as every step's does, not the raw yaw-rate sample."""
+    from legged_gente.utils.torch_math import wrap_to_pi, yaw_of
+
+    torch.manual_seed(3)
+    env.reset()
+    stiffness, (low, high) = env.cfg.commands.heading_stiffness, env.cfg.commands.ranges.ang_vel_yaw
+    expected = (stiffness * wrap_to_pi(env.commands[:, 3] - yaw_of(env.base_quat))).clamp(low, high)
+    expected = torch.where(env.standing_still, 0.0, expected)
+    assert torch.allclose(env.commands[:, 2], expected, atol=1e-5)
+
+
 def test_pushes_change_base_velocity_only_in_the_plane(env):
     before = env.sim.qvel.clone()
     env._push_robots()

@@ -164,6 +164,18 @@ def test_run_time_settings_live_in_device_tensors(env):
     assert env.reward_scale_vec[i].item() == pytest.approx(2.0 * env.dt)
     env.set_param("rewards.tracking_sigma", 0.5)
     assert env.params.rewards.tracking_sigma.item() == 0.5
+    # the soft joint limits follow their setting: the left knee's 0..2 rad range shrunk to half is 0.5..1.5 rad,
+    # so a knee at 1.7 rad (the other joints mid-range) is penalised 0.2
+    knee = env.layout.joint_names.index("left_knee")
+    env.set_param("rewards.soft_dof_pos_limit", 0.5)
+    try:
+        assert env.soft_dof_limits[knee].tolist() == pytest.approx([0.5, 1.5])
+        env.sim.qpos[:, env.qpos_adr] = env.dof_mid
+        env.sim.qpos[:, env.qpos_adr[knee]] = 1.7
+        env._update_state()
+        assert env._reward_dof_pos_limits() == pytest.approx(torch.full((N,), 0.2), abs=1e-5)
+    finally:
+        env.set_param("rewards.soft_dof_pos_limit", 0.9)
     with pytest.raises(ValueError, match="not a reward term of this env"):
         env.set_param("rewards.scales.feet_air_time", 1.0)
     with pytest.raises(ValueError, match="not a setting the step reads"):

@@ -230,6 +230,14 @@ def test_checkpoints_keep_the_terrain_curriculum(env, tmp_path):
     runner.load(str(tmp_path / "model_0.pt"))
     assert torch.equal(env.terrain_levels, saved) and "restored" in runner.curriculum_message
     assert torch.equal(env.env_origins, env.terrain_origins[saved, env.terrain_columns])
+    # the robots start their episodes at the restored origins: an episode that ends at once (standing still)
+    # walked nowhere, so no robot is promoted (it was, by the distance from its old spawn, before)
+    torch.testing.assert_close(env.base_pos[:, :2], env.env_origins[:, :2] + env.init_base_state[:2], atol=1e-4,
+                               rtol=0)
+    env.commands[:] = 0.0
+    env.episode_length_buf[:] = env.max_episode_length - 1
+    env.step(torch.zeros(env.num_envs, env.num_actions))
+    assert torch.equal(env.terrain_levels, saved)
     # levels saved for another number of robots leave the curriculum as it is, and say so
     message = env.load_curriculum_state({"terrain_levels": torch.zeros(7, dtype=torch.long)})
     assert "restarts" in message and torch.equal(env.terrain_levels, saved)

@@ -257,10 +257,8 @@ class LeggedRobot(VecEnv):
         self.default_dof_pos = t(lay.default_joint_pos)[None, :]
         self.dof_limits = t(lay.joint_limits)  # (-inf, inf) for an unlimited joint
         limited = torch.isfinite(self.dof_limits).all(1)
-        mid = torch.where(limited, self.dof_limits.mean(1), 0.0)
-        half = torch.where(limited, 0.5 * (self.dof_limits[:, 1] - self.dof_limits[:, 0]), math.inf)
-        soft = self.cfg.rewards.soft_dof_pos_limit
-        self.soft_dof_limits = torch.stack([mid - soft * half, mid + soft * half], dim=1)
+        self.dof_mid = torch.where(limited, self.dof_limits.mean(1), 0.0)
+        self.dof_half_range = torch.where(limited, 0.5 * (self.dof_limits[:, 1] - self.dof_limits[:, 0]), math.inf)
         self.torque_limits = t(lay.torque_limits)  # N*m (inf: none)
         self.base = lay.base_body
         self.root_body = int(self.mjm.body_rootid[self.base])
@@ -408,6 +406,7 @@ class LeggedRobot(VecEnv):
         self._resample_commands(all_envs)
         self.sim.forward(all_envs)
         self._update_state()
+        self._update_heading_commands()
         self._compute_observations()
         return self.obs_buf.clone()
 
@@ -538,8 +537,10 @@ class LeggedRobot(VecEnv):
                     f"{int(levels.max())}) do not fit {self.num_envs} robots on {self.max_terrain_level} levels")
         self.terrain_levels.copy_(levels)
         self.env_origins.copy_(self.terrain_origins[self.terrain_levels, self.terrain_columns])
-        return (f"terrain curriculum restored: mean level {levels.float().mean():.2f} (robots move there at their "
-                f"next reset)")
+        # every robot starts a new episode at its level's origin: the curriculum measures each episode's walk from
+        # that origin, and a robot left where the fresh env spawned it would be promoted for the distance between
+        self.reset()
+        return f"terrain curriculum restored: mean level {levels.float().mean():.2f}"
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
         """Up a level after walking more than half a tile; down after less than half the commanded distance
@@ -780,6 +781,13 @@ class LeggedRobot(VecEnv):
         """Torque above soft_torque_limit times the actuator's force limit (legged_gym)."""
         excess = self.torques.abs() - self.torque_limits * self.params.rewards.soft_torque_limit
         return torch.sum(excess.clamp(min=0.0), dim=1)
+
+    @property
+    def soft_dof_limits(self) -> torch.Tensor:
+        """(num_dofs, 2) the joint ranges shrunk about their middles to ``rewards.soft_dof_pos_limit`` (read from
+        its tensor, so that ``set_param`` changes it)."""
+        half = self.params.rewards.soft_dof_pos_limit * self.dof_half_range
+        return torch.stack([self.dof_mid - half, self.dof_mid + half], dim=1)
 
     def _reward_dof_pos_limits(self):
         below = (self.soft_dof_limits[:, 0] - self.dof_pos).clamp(min=0.0)
