@@ -89,6 +89,24 @@ def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:
     return np.asarray(ids, np.int32)
 
 
+def _dof_chains(mjm: mujoco.MjModel, bodies: np.ndarray) -> np.ndarray:
+    """(len(bodies), longest chain) dofs moving each body, its last dof first, then up to the root; -1 pads (a
+    row of -1: a body fixed to the world). At least one row and one column."""
+    chains = []
+    for body in bodies:
+        while body > 0 and mjm.body_dofnum[body] == 0:
+            body = mjm.body_parentid[body]
+        dof, chain = (mjm.body_dofadr[body] + mjm.body_dofnum[body] - 1 if body > 0 else -1), []
+        while dof >= 0:
+            chain.append(dof)
+            dof = mjm.dof_parentid[dof]
+        chains.append(chain)
+    out = np.full((max(len(chains), 1), max([len(c) for c in chains] + [1])), -1, np.int32)
+    for row, chain in zip(out, chains):
+        row[:len(chain)] = chain
+    return out
+
+
 def foot_groups(mjm: mujoco.MjModel, names) -> tuple[list[int], list[np.ndarray]]:
     """The feet of ``forces.foot_geom_names``: the listed geoms grouped by body, one foot per body (a box sole,
     or the spheres at its corners), as (foot bodies, geom ids per foot) in the order listed."""
@@ -225,6 +243,12 @@ class TerrainForces:
         self.soil_params = z((n, npreset, K.NSOILPARAM), float)
         self.seg_force = z((n, ns), wp.vec3)
         self.foot_water_force = z((n, max(len(self.foot_water_geom), 1)), wp.vec3)
+        # the water points that carry added mass (each leg slice's Gauss point, then each foot) and the dofs moving
+        # each; the water kernels write each point's tensor and offset every substep, added_mass_kernel reads them
+        self.point_dofs = arr(_dof_chains(mjm, np.concatenate(
+            [np.repeat(mjm.geom_bodyid[seg], W.NGAUSS), mjm.geom_bodyid[foot_water]]).astype(int)), int)
+        self.point_added_mass = z((n, self.point_dofs.shape[0]), wp.mat33)
+        self.point_offset = z((n, self.point_dofs.shape[0]), wp.vec3)
         self.foot_fn = z((n, nf), float)
         self.foot_vel = z((n, nf), wp.vec3)
         self.foot_slip = z((n, nf), float)
@@ -246,10 +270,12 @@ class TerrainForces:
         self.new_policy_step()
 
     def per_world_state(self) -> list[wp.array]:
-        """Every per-world array of the fields but the observation: what the callbacks and hooks carry from one
-        substep to the next (ruts, slip, loads, forces, ...), which a physics-neutral forward puts back."""
+        """Every per-world array of the fields but the observation and the added-mass points (written afresh by each
+        substep's passive callback before they are read): what the callbacks and hooks carry from one substep to
+        the next (ruts, slip, loads, forces, ...), which a physics-neutral forward puts back."""
+        scratch = {self.obs.ptr, self.point_added_mass.ptr, self.point_offset.ptr}
         return [a for a in vars(self).values()
-                if isinstance(a, wp.array) and a.shape[0] == self.nworld and a.ptr != self.obs.ptr]
+                if isinstance(a, wp.array) and a.shape[0] == self.nworld and a.ptr not in scratch]
 
     # ------------------------------------------------------------------ setup helpers
     def _check_diagonal_mass(self, mjm, geoms):
@@ -261,18 +287,9 @@ class TerrainForces:
         depth = np.zeros(mjm.nv, int)
         for i in range(mjm.nv):
             depth[i] = 1 + (depth[mjm.dof_parentid[i]] if mjm.dof_parentid[i] >= 0 else 0)
-        cut = depth > mjm.M_rownnz
-
-        def chain_cut(body):  # any dof moving the body (its own or its ancestors') with a shortened row
-            while body > 0 and mjm.body_dofnum[body] == 0:
-                body = mjm.body_parentid[body]
-            dof = mjm.body_dofadr[body] + mjm.body_dofnum[body] - 1 if body > 0 else -1
-            while dof >= 0 and not cut[dof]:
-                dof = mjm.dof_parentid[dof]
-            return dof >= 0
-
-        cut_geoms = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in geoms
-                     if chain_cut(mjm.geom_bodyid[g])]
+        cut = depth > mjm.M_rownnz  # a dof whose row of M is shortened
+        cut_geoms = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, g)
+                     for g, chain in zip(geoms, _dof_chains(mjm, mjm.geom_bodyid[geoms])) if cut[chain[chain >= 0]].any()]
         if cut_geoms:
             warnings.warn(f"forces: water geoms {cut_geoms} are on bodies whose mass matrix MuJoCo keeps diagonal; "
                           f"their added mass enters per dof, without the coupling between dofs (exact only for "
@@ -417,24 +434,29 @@ class TerrainForces:
                 W.segment_water_kernel, dim=(self.nworld, self.nseg), device=dev,
                 inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, self.seg_caps,
                         m.body_rootid, m.body_parentid, m.body_dofnum, m.body_dofadr, m.dof_parentid,
-                        m.M_rownnz, m.M_rowadr,
-                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof, d.cdof_dot, d.qvel, d.subtree_com,
+                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com,
                         d.time, self.water,
                         float(cfg.water_density), float(cfg.drag_coefficient), float(cfg.added_mass_coefficient),
                         self.g, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
-                        d.xfrc_applied, d.M, self.seg_force],
+                        d.xfrc_applied, self.seg_force, self.point_added_mass, self.point_offset],
             )
         if cfg.wading and len(self.foot_water_geom):
             wp.launch(
                 W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev,
                 inputs=[self.foot_water_geom, self.foot_buoyancy, self.foot_added_mass, m.geom_type, m.geom_size,
                         m.geom_bodyid, m.body_rootid, m.body_parentid, m.body_dofnum, m.body_dofadr, m.dof_parentid,
-                        m.M_rownnz, m.M_rowadr, d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof, d.cdof_dot,
-                        d.qvel, d.subtree_com, d.time, self.water,
-                        float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
+                        d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com, d.time,
+                        self.water, float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
                         float(cfg.sphere_drag_coefficient), int(bool(cfg.paper_added_mass)), self.eps, self.xi,
-                        d.xfrc_applied, d.M, self.foot_water_force],
+                        d.xfrc_applied, self.foot_water_force, self.point_added_mass, self.point_offset,
+                        W.NGAUSS * self.nseg],
+            )
+        if cfg.wading and not cfg.paper_added_mass and (self.nseg or len(self.foot_water_geom)):
+            wp.launch(
+                W.added_mass_kernel, dim=(self.nworld, *self.point_dofs.shape), device=dev,
+                inputs=[self.point_dofs, m.dof_parentid, m.M_rownnz, m.M_rowadr, d.cdof, self.point_added_mass,
+                        self.point_offset, d.M],
             )
         if cfg.soil and self.nfoot:
             wp.launch(

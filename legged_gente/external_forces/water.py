@@ -1,8 +1,9 @@
 """Warp kernels of the strip-theory water forces (twins of ``water_models.py``), launched from the passive callback.
 
 ``segment_water_kernel`` (worlds x leg segments) writes drag, buoyancy and the flow's inertia force to
-``xfrc_applied`` at each slice's Gauss point, and adds each slice's added mass to the joint-space mass matrix
-``d.M``; ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot with its added mass tensor. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each
+``xfrc_applied`` at each slice's Gauss point and each slice's added mass tensor at its point;
+``foot_water_kernel`` (worlds x foot geoms) does the same for each foot; ``added_mass_kernel`` (worlds x points x
+dofs) then adds every point's added mass to the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each
 substep), calls the passive callback in ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and
 builds the constraint solver's Hessian and the implicit integrators' matrices from it, so an addition made here is
 seen by the whole step: the added mass is implicit, acts in the same substep and cannot destabilise a light body
@@ -192,25 +193,6 @@ def point_vp_accel(sacc: wp.spatial_vector, omega: wp.vec3, rp: wp.vec3, v: wp.v
     return wp.spatial_bottom(sacc) + wp.cross(wp.spatial_top(sacc), rp) + wp.cross(omega, v)
 
 
-@wp.func
-def add_added_mass_fn(M: wp.array2d[float], cdof: wp.array2d[wp.spatial_vector], dof_parentid: wp.array[int],
-                      M_rowadr: wp.array[int], M_rownnz: wp.array[int], w: int, top: int, rp: wp.vec3,
-                      added: wp.mat33):
-    """M[i, j] += J_i(p) . A J_j(p) for a point at rp from the tree's subtree_com carrying the (symmetric) added mass
-    tensor A, over the dofs moving its body (j an ancestor of i, or i itself)."""
-    i = top
-    while i >= 0:
-        aji = added * dof_jac(cdof, w, i, rp)
-        rowadr = M_rowadr[i]
-        adr = rowadr + M_rownnz[i] - 1
-        j = i
-        while j >= 0 and adr >= rowadr:
-            wp.atomic_add(M, w, adr, wp.dot(aji, dof_jac(cdof, w, j, rp)))
-            adr = adr - 1
-            j = dof_parentid[j]
-        i = dof_parentid[i]
-
-
 # --------------------------------------------------------------------------------------------------------
 # Kernels
 
@@ -229,14 +211,11 @@ def segment_water_kernel(
     body_dofnum: wp.array[int],
     body_dofadr: wp.array[int],
     dof_parentid: wp.array[int],
-    M_rownnz: wp.array[int],
-    M_rowadr: wp.array[int],
     # sim state
     geom_xpos: wp.array2d[wp.vec3],
     geom_xmat: wp.array2d[wp.mat33],
     xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
-    cdof: wp.array2d[wp.spatial_vector],
     cdof_dot: wp.array2d[wp.spatial_vector],
     qvel: wp.array2d[float],
     subtree_com: wp.array2d[wp.vec3],
@@ -255,8 +234,9 @@ def segment_water_kernel(
     xi: wp.array[float],
     # out
     xfrc: wp.array2d[wp.spatial_vector],
-    M: wp.array2d[float],
     seg_force: wp.array2d[wp.vec3],
+    point_added: wp.array2d[wp.mat33],
+    point_offset: wp.array2d[wp.vec3],
 ):
     """Strip-theory water forces on one leg segment (3 Gauss slices along its wet part, see water_models.py)."""
     w, s = wp.tid()
@@ -272,6 +252,9 @@ def segment_water_kernel(
     t = time[w]
     com = subtree_com[w, body_rootid[b]]
     total = wp.vec3(0.0)
+
+    for k in range(NGAUSS):
+        point_added[w, NGAUSS * s + k] = wp.mat33(0.0)  # dry or paper_added_mass: no added mass at the point
 
     # hemispherical caps: buoyancy of half a sphere at each end
     if seg_caps[s] != 0:
@@ -350,13 +333,11 @@ def segment_water_kernel(
         total = total + f
     seg_force[w, s] = total
 
-    if paper_added_mass != 0 or top < 0 or mass[0] + mass[1] + mass[2] <= 0.0:
-        return
-    # implicit added mass: M[i, j] += sum_k J_i(p_k) . m_k P J_j(p_k), P = 1 - a a^T (across the axis only)
+    # each slice's added mass across the axis, m_k (1 - a a^T), at its point, for added_mass_kernel
     across = wp.identity(n=3, dtype=float) - wp.outer(axis, axis)
     for k in range(NGAUSS):
-        if mass[k] > 0.0:
-            add_added_mass_fn(M, cdof, dof_parentid, M_rowadr, M_rownnz, w, top, pts[k] - com, mass[k] * across)
+        point_added[w, NGAUSS * s + k] = mass[k] * across
+        point_offset[w, NGAUSS * s + k] = pts[k] - com
 
 
 @wp.kernel
@@ -372,13 +353,10 @@ def foot_water_kernel(
     body_dofnum: wp.array[int],
     body_dofadr: wp.array[int],
     dof_parentid: wp.array[int],
-    M_rownnz: wp.array[int],
-    M_rowadr: wp.array[int],
     geom_xpos: wp.array2d[wp.vec3],
     geom_xmat: wp.array2d[wp.mat33],
     xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
-    cdof: wp.array2d[wp.spatial_vector],
     cdof_dot: wp.array2d[wp.spatial_vector],
     qvel: wp.array2d[float],
     subtree_com: wp.array2d[wp.vec3],
@@ -392,13 +370,16 @@ def foot_water_kernel(
     eps: wp.array[float],
     xi: wp.array[float],
     xfrc: wp.array2d[wp.spatial_vector],
-    M: wp.array2d[float],
     foot_water_force: wp.array2d[wp.vec3],
+    point_added: wp.array2d[wp.mat33],
+    point_offset: wp.array2d[wp.vec3],
+    first_point: int,
 ):
     """Buoyancy, drag and added mass of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag).
     Buoyancy is left out (``foot_buoyancy`` 0) for a sphere inside a leg segment, whose own buoyancy counts that
     volume. The added mass tensor (``foot_added_mass``: wholly submerged, along the geom's axes) times the wet
-    fraction enters M implicitly, as the legs' does (not with ``paper_added_mass``, whose GenTe model has no feet)."""
+    fraction goes to ``added_mass_kernel`` (point ``first_point + k``), as the legs' does (not with
+    ``paper_added_mass``, whose GenTe model has no feet)."""
     w, k = wp.tid()
     gid = foot_geom[k]
     b = geom_bodyid[gid]
@@ -444,5 +425,37 @@ def foot_water_kernel(
     if frac > 0.0:
         apply_force(xfrc, xipos, w, b, f, p)
     foot_water_force[w, k] = f
-    if frac > 0.0 and paper_added_mass == 0 and top >= 0:
-        add_added_mass_fn(M, cdof, dof_parentid, M_rowadr, M_rownnz, w, top, p - com, added)
+    point_added[w, first_point + k] = added
+    point_offset[w, first_point + k] = p - com
+
+
+@wp.kernel
+def added_mass_kernel(
+    point_dofs: wp.array2d[int],
+    dof_parentid: wp.array[int],
+    M_rownnz: wp.array[int],
+    M_rowadr: wp.array[int],
+    cdof: wp.array2d[wp.spatial_vector],
+    point_added: wp.array2d[wp.mat33],
+    point_offset: wp.array2d[wp.vec3],
+    M: wp.array2d[float],
+):
+    """Implicit added mass: M[i, j] += J_i(p) . A J_j(p) for each water point p (a leg slice's Gauss point, a foot)
+    carrying the symmetric tensor A, i one of the dofs moving its body (``point_dofs[pt, n]``, -1 past the chain)
+    and j each ancestor of i (or i itself). One thread per (world, point, dof) keeps the chains' loops short."""
+    w, pt, n = wp.tid()
+    i = point_dofs[pt, n]
+    if i < 0:
+        return
+    added = point_added[w, pt]
+    if added[0, 0] + added[1, 1] + added[2, 2] <= 0.0:
+        return
+    rp = point_offset[w, pt]
+    aji = added * dof_jac(cdof, w, i, rp)
+    rowadr = M_rowadr[i]
+    adr = rowadr + M_rownnz[i] - 1
+    j = i
+    while j >= 0 and adr >= rowadr:
+        wp.atomic_add(M, w, adr, wp.dot(aji, dof_jac(cdof, w, j, rp)))
+        adr = adr - 1
+        j = dof_parentid[j]
