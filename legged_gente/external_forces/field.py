@@ -220,10 +220,10 @@ class TerrainForces:
         self.foot_buoyancy = arr(_buoyancy_not_in_legs(mjm, foot_water, seg), float)
         self._check_diagonal_mass(mjm, np.concatenate([seg, foot_water]).astype(int))
         sphere = int(mujoco.mjtGeom.mjGEOM_SPHERE)
-        self.foot_added_mass = arr(np.asarray(
-            [WM.foot_added_mass("sphere" if mjm.geom_type[g] == sphere else "box", mjm.geom_size[g],
-                                float(cfg.water_density)) for g in foot_water] or np.zeros((1, 3)), np.float32),
-            wp.vec3)
+        foot_added_mass = np.asarray([WM.foot_added_mass("sphere" if mjm.geom_type[g] == sphere else "box",
+                                                         mjm.geom_size[g], float(cfg.water_density))
+                                      for g in foot_water], np.float32).reshape(-1, 3)
+        self.foot_added_mass = arr(foot_added_mass if len(foot_added_mass) else np.zeros((1, 3), np.float32), wp.vec3)
         self.sole_length, self.sole_width, self.sole_disc = self._sole(mjm, groups)
         # Bekker's pressure over the footprint, whose b is a rectangle's smaller side or a disc's radius (Wong,
         # Theory of Ground Vehicles, ch. 2)
@@ -243,12 +243,17 @@ class TerrainForces:
         self.soil_params = z((n, npreset, K.NSOILPARAM), float)
         self.seg_force = z((n, ns), wp.vec3)
         self.foot_water_force = z((n, max(len(self.foot_water_geom), 1)), wp.vec3)
-        # the water points that carry added mass (each leg slice's Gauss point, then each foot) and the dofs moving
-        # each; the water kernels write each point's tensor and offset every substep, added_mass_kernel reads them
-        self.point_dofs = arr(_dof_chains(mjm, np.concatenate(
-            [np.repeat(mjm.geom_bodyid[seg], W.NGAUSS), mjm.geom_bodyid[foot_water]]).astype(int)), int)
-        self.point_added_mass = z((n, self.point_dofs.shape[0]), wp.mat33)
-        self.point_offset = z((n, self.point_dofs.shape[0]), wp.vec3)
+        # the water points that carry added mass (each leg slice's Gauss point, then each foot): their geoms, their
+        # added masses along the geom's axes (per kg of a slice: across its axis; a wholly wet foot's), the dofs
+        # moving each; every substep the water kernels write each point's scale and offset from the tree's centre
+        # of mass (points x worlds), added_mass_kernel reads them
+        point_geom = np.concatenate([np.repeat(seg, W.NGAUSS), foot_water]).astype(np.int32)
+        axes = np.concatenate([np.tile([1.0, 1.0, 0.0], (W.NGAUSS * len(seg), 1)), foot_added_mass])
+        self.point_geom = arr(point_geom if len(point_geom) else np.zeros(1, np.int32), int)
+        self.point_axes = arr(axes.astype(np.float32) if len(axes) else np.zeros((1, 3), np.float32), wp.vec3)
+        self.point_dofs = arr(_dof_chains(mjm, mjm.geom_bodyid[point_geom]), int)
+        self.point_mass = z((self.point_dofs.shape[0], n), float)
+        self.point_offset = z((self.point_dofs.shape[0], n), wp.vec3)
         self.foot_fn = z((n, nf), float)
         self.foot_vel = z((n, nf), wp.vec3)
         self.foot_slip = z((n, nf), float)
@@ -273,7 +278,7 @@ class TerrainForces:
         """Every per-world array of the fields but the observation and the added-mass points (written afresh by each
         substep's passive callback before they are read): what the callbacks and hooks carry from one substep to
         the next (ruts, slip, loads, forces, ...), which a physics-neutral forward puts back."""
-        scratch = {self.obs.ptr, self.point_added_mass.ptr, self.point_offset.ptr}
+        scratch = {self.obs.ptr, self.point_mass.ptr, self.point_offset.ptr}
         return [a for a in vars(self).values()
                 if isinstance(a, wp.array) and a.shape[0] == self.nworld and a.ptr not in scratch]
 
@@ -433,30 +438,30 @@ class TerrainForces:
             wp.launch(
                 W.segment_water_kernel, dim=(self.nworld, self.nseg), device=dev,
                 inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, self.seg_caps,
-                        m.body_rootid, m.body_parentid, m.body_dofnum, m.body_dofadr, m.dof_parentid,
+                        m.body_rootid, self.point_dofs,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com,
                         d.time, self.water,
                         float(cfg.water_density), float(cfg.drag_coefficient), float(cfg.added_mass_coefficient),
                         self.g, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
-                        d.xfrc_applied, self.seg_force, self.point_added_mass, self.point_offset],
+                        d.xfrc_applied, self.seg_force, self.point_mass, self.point_offset],
             )
         if cfg.wading and len(self.foot_water_geom):
             wp.launch(
                 W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev,
                 inputs=[self.foot_water_geom, self.foot_buoyancy, self.foot_added_mass, m.geom_type, m.geom_size,
-                        m.geom_bodyid, m.body_rootid, m.body_parentid, m.body_dofnum, m.body_dofadr, m.dof_parentid,
+                        m.geom_bodyid, m.body_rootid, self.point_dofs,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com, d.time,
                         self.water, float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
                         float(cfg.sphere_drag_coefficient), int(bool(cfg.paper_added_mass)), self.eps, self.xi,
-                        d.xfrc_applied, self.foot_water_force, self.point_added_mass, self.point_offset,
+                        d.xfrc_applied, self.foot_water_force, self.point_mass, self.point_offset,
                         W.NGAUSS * self.nseg],
             )
         if cfg.wading and not cfg.paper_added_mass and (self.nseg or len(self.foot_water_geom)):
             wp.launch(
                 W.added_mass_kernel, dim=(self.nworld, *self.point_dofs.shape), device=dev,
-                inputs=[self.point_dofs, m.dof_parentid, m.M_rownnz, m.M_rowadr, d.cdof, self.point_added_mass,
-                        self.point_offset, d.M],
+                inputs=[self.point_dofs, self.point_geom, self.point_axes, m.dof_parentid, m.M_rownnz, m.M_rowadr,
+                        d.geom_xmat, d.cdof, self.point_mass, self.point_offset, d.M],
             )
         if cfg.soil and self.nfoot:
             wp.launch(

@@ -1,10 +1,11 @@
 """Warp kernels of the strip-theory water forces (twins of ``water_models.py``), launched from the passive callback.
 
 ``segment_water_kernel`` (worlds x leg segments) writes drag, buoyancy and the flow's inertia force to
-``xfrc_applied`` at each slice's Gauss point and each slice's added mass tensor at its point;
-``foot_water_kernel`` (worlds x foot geoms) does the same for each foot; ``added_mass_kernel`` (worlds x points x
-dofs) then adds every point's added mass to the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each
-substep), calls the passive callback in ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and
+``xfrc_applied`` at each slice's Gauss point and each slice's added mass (a scale and the point's offset from the
+tree's centre of mass); ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot;
+``added_mass_kernel`` (worlds x points x dofs) then builds each point's tensor from its geom's axes and adds it to
+the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which
+rebuilds it from scratch each substep), calls the passive callback in ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and
 builds the constraint solver's Hessian and the implicit integrators' matrices from it, so an addition made here is
 seen by the whole step: the added mass is implicit, acts in the same substep and cannot destabilise a light body
 (an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a exceeds the body's mass, and
@@ -157,17 +158,6 @@ def flow_accel(water: WaterMap, cell: wp.vec2i, t: float, xi: float) -> wp.vec3:
 
 
 @wp.func
-def last_dof(body_parentid: wp.array[int], body_dofnum: wp.array[int], body_dofadr: wp.array[int], b: int) -> int:
-    """The last dof moving body b (its own, else its nearest moving ancestor's); -1 if fixed to the world."""
-    bb = b
-    while bb > 0 and body_dofnum[bb] == 0:
-        bb = body_parentid[bb]
-    if bb <= 0:
-        return -1
-    return body_dofadr[bb] + body_dofnum[bb] - 1
-
-
-@wp.func
 def dof_jac(cdof: wp.array2d[wp.spatial_vector], w: int, i: int, r: wp.vec3) -> wp.vec3:
     """Column i of the translational Jacobian of a point at r from the tree's subtree_com."""
     c = cdof[w, i]
@@ -176,14 +166,15 @@ def dof_jac(cdof: wp.array2d[wp.spatial_vector], w: int, i: int, r: wp.vec3) -> 
 
 @wp.func
 def velocity_product_accel(cdof_dot: wp.array2d[wp.spatial_vector], qvel: wp.array2d[float],
-                           dof_parentid: wp.array[int], w: int, top: int) -> wp.spatial_vector:
-    """The body's spatial acceleration at qacc = 0 (Jdot qvel: centripetal and Coriolis terms), down its dof chain
-    from ``top`` (its last dof)."""
+                           point_dofs: wp.array2d[int], pt: int, w: int) -> wp.spatial_vector:
+    """The spatial acceleration at qacc = 0 (Jdot qvel: centripetal and Coriolis terms) of the body carrying water
+    point ``pt``, summed over the dofs moving it (its row of ``point_dofs``: independent loads, no walk up the
+    tree)."""
     sacc = wp.spatial_vector()
-    i = top
-    while i >= 0:
-        sacc = sacc + cdof_dot[w, i] * qvel[w, i]
-        i = dof_parentid[i]
+    for n in range(point_dofs.shape[1]):
+        i = point_dofs[pt, n]
+        if i >= 0:
+            sacc = sacc + cdof_dot[w, i] * qvel[w, i]
     return sacc
 
 
@@ -207,10 +198,7 @@ def segment_water_kernel(
     seg_caps: wp.array[int],
     # model
     body_rootid: wp.array[int],
-    body_parentid: wp.array[int],
-    body_dofnum: wp.array[int],
-    body_dofadr: wp.array[int],
-    dof_parentid: wp.array[int],
+    point_dofs: wp.array2d[int],
     # sim state
     geom_xpos: wp.array2d[wp.vec3],
     geom_xmat: wp.array2d[wp.mat33],
@@ -235,7 +223,7 @@ def segment_water_kernel(
     # out
     xfrc: wp.array2d[wp.spatial_vector],
     seg_force: wp.array2d[wp.vec3],
-    point_added: wp.array2d[wp.mat33],
+    point_mass: wp.array2d[float],
     point_offset: wp.array2d[wp.vec3],
 ):
     """Strip-theory water forces on one leg segment (3 Gauss slices along its wet part, see water_models.py)."""
@@ -252,9 +240,6 @@ def segment_water_kernel(
     t = time[w]
     com = subtree_com[w, body_rootid[b]]
     total = wp.vec3(0.0)
-
-    for k in range(NGAUSS):
-        point_added[w, NGAUSS * s + k] = wp.mat33(0.0)  # dry or paper_added_mass: no added mass at the point
 
     # hemispherical caps: buoyancy of half a sphere at each end
     if seg_caps[s] != 0:
@@ -274,13 +259,14 @@ def segment_water_kernel(
     iv = wet_interval_fn(c[2], a_z, sin_t, r, half, z_ref)
     if iv[1] <= iv[0]:
         seg_force[w, s] = total
+        for k in range(NGAUSS):
+            point_mass[NGAUSS * s + k, w] = 0.0  # dry: no added mass at its points
         return
     mid = 0.5 * (iv[0] + iv[1])
     hw = 0.5 * (iv[1] - iv[0])
 
     # spatial acceleration of the body at qacc = 0 (velocity-product terms), for the explicit part of the added mass
-    top = last_dof(body_parentid, body_dofnum, body_dofadr, b)
-    sacc = velocity_product_accel(cdof_dot, qvel, dof_parentid, w, top)
+    sacc = velocity_product_accel(cdof_dot, qvel, point_dofs, NGAUSS * s, w)
     vb = cvel[w, b]
     omega = wp.vec3(vb[0], vb[1], vb[2])
 
@@ -333,11 +319,10 @@ def segment_water_kernel(
         total = total + f
     seg_force[w, s] = total
 
-    # each slice's added mass across the axis, m_k (1 - a a^T), at its point, for added_mass_kernel
-    across = wp.identity(n=3, dtype=float) - wp.outer(axis, axis)
+    # each slice's added mass (across the axis) at its point, for added_mass_kernel (0 with paper_added_mass)
     for k in range(NGAUSS):
-        point_added[w, NGAUSS * s + k] = mass[k] * across
-        point_offset[w, NGAUSS * s + k] = pts[k] - com
+        point_mass[NGAUSS * s + k, w] = mass[k]
+        point_offset[NGAUSS * s + k, w] = pts[k] - com
 
 
 @wp.kernel
@@ -349,10 +334,7 @@ def foot_water_kernel(
     geom_size: wp.array2d[wp.vec3],
     geom_bodyid: wp.array[int],
     body_rootid: wp.array[int],
-    body_parentid: wp.array[int],
-    body_dofnum: wp.array[int],
-    body_dofadr: wp.array[int],
-    dof_parentid: wp.array[int],
+    point_dofs: wp.array2d[int],
     geom_xpos: wp.array2d[wp.vec3],
     geom_xmat: wp.array2d[wp.mat33],
     xipos: wp.array2d[wp.vec3],
@@ -371,15 +353,15 @@ def foot_water_kernel(
     xi: wp.array[float],
     xfrc: wp.array2d[wp.spatial_vector],
     foot_water_force: wp.array2d[wp.vec3],
-    point_added: wp.array2d[wp.mat33],
+    point_mass: wp.array2d[float],
     point_offset: wp.array2d[wp.vec3],
     first_point: int,
 ):
     """Buoyancy, drag and added mass of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag).
     Buoyancy is left out (``foot_buoyancy`` 0) for a sphere inside a leg segment, whose own buoyancy counts that
     volume. The added mass tensor (``foot_added_mass``: wholly submerged, along the geom's axes) times the wet
-    fraction goes to ``added_mass_kernel`` (point ``first_point + k``), as the legs' does (not with
-    ``paper_added_mass``, whose GenTe model has no feet)."""
+    fraction goes into M through ``added_mass_kernel`` (point ``first_point + k``, its scale the wet fraction), as
+    the legs' does (not with ``paper_added_mass``, whose GenTe model has no feet)."""
     w, k = wp.tid()
     gid = foot_geom[k]
     b = geom_bodyid[gid]
@@ -409,48 +391,54 @@ def foot_water_kernel(
             f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), vrel)
             f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
             p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # middle of the submerged height
-    top = last_dof(body_parentid, body_dofnum, body_dofadr, b)
-    added = wp.mat33(0.0)
-    com = subtree_com[w, body_rootid[b]]
+    scale = float(0.0)
     if frac > 0.0 and paper_added_mass == 0:
-        m3 = foot_added_mass[k]
-        added = frac * (rot * wp.diag(m3) * wp.transpose(rot))
+        scale = frac
+        added = frac * (rot * wp.diag(foot_added_mass[k]) * wp.transpose(rot))
         # Froude-Krylov and added mass in accelerating flow, and the explicit velocity-product part of -A a_p
-        sacc = velocity_product_accel(cdof_dot, qvel, dof_parentid, w, top)
+        com = subtree_com[w, body_rootid[b]]
+        sacc = velocity_product_accel(cdof_dot, qvel, point_dofs, first_point + k, w)
         vb = cvel[w, b]
         v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
         avp = point_vp_accel(sacc, wp.vec3(vb[0], vb[1], vb[2]), p - com, v)
         du = flow_accel(water, cell, t, xi[w])
         f = f + rho * vol * du + added * (du - avp)
+        point_offset[first_point + k, w] = p - com
     if frac > 0.0:
         apply_force(xfrc, xipos, w, b, f, p)
     foot_water_force[w, k] = f
-    point_added[w, first_point + k] = added
-    point_offset[w, first_point + k] = p - com
+    point_mass[first_point + k, w] = scale
 
 
 @wp.kernel
 def added_mass_kernel(
     point_dofs: wp.array2d[int],
+    point_geom: wp.array[int],
+    point_axes: wp.array[wp.vec3],
     dof_parentid: wp.array[int],
     M_rownnz: wp.array[int],
     M_rowadr: wp.array[int],
+    geom_xmat: wp.array2d[wp.mat33],
     cdof: wp.array2d[wp.spatial_vector],
-    point_added: wp.array2d[wp.mat33],
+    point_mass: wp.array2d[float],
     point_offset: wp.array2d[wp.vec3],
     M: wp.array2d[float],
 ):
-    """Implicit added mass: M[i, j] += J_i(p) . A J_j(p) for each water point p (a leg slice's Gauss point, a foot)
-    carrying the symmetric tensor A, i one of the dofs moving its body (``point_dofs[pt, n]``, -1 past the chain)
-    and j each ancestor of i (or i itself). One thread per (world, point, dof) keeps the chains' loops short."""
+    """Implicit added mass: M[i, j] += J_i(p) . A J_j(p) for each water point p (a leg slice's Gauss point, a foot),
+    i one of the dofs moving its body (``point_dofs[pt, n]``, -1 past the chain) and j each ancestor of i (or i
+    itself). A = s R diag(point_axes) R^T, R its geom's axes, s = ``point_mass`` (a slice's m_k with axes (1, 1, 0):
+    across the axis only; a foot's wet fraction with its added masses along its axes). One thread per (world,
+    point, dof) keeps the chains' loops short; the water kernels write only a scale and an offset per point."""
     w, pt, n = wp.tid()
     i = point_dofs[pt, n]
     if i < 0:
         return
-    added = point_added[w, pt]
-    if added[0, 0] + added[1, 1] + added[2, 2] <= 0.0:
+    scale = point_mass[pt, w]
+    if scale <= 0.0:
         return
-    rp = point_offset[w, pt]
+    rot = geom_xmat[w, point_geom[pt]]
+    added = scale * (rot * wp.diag(point_axes[pt]) * wp.transpose(rot))
+    rp = point_offset[pt, w]
     aji = added * dof_jac(cdof, w, i, rp)
     rowadr = M_rowadr[i]
     adr = rowadr + M_rownnz[i] - 1
