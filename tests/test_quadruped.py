@@ -68,6 +68,26 @@ def test_every_reward_is_finite_and_steps_stay_bounded(env):
     assert env.sim.qvel.abs().max().item() < 50.0
 
 
+def test_standing_feet_carry_the_robot_and_no_calf_touches():
+    """The calves' contacts are watched (penalize_contacts_on) but only their upper part collides: a robot
+    standing still on flat ground stands on its feet, and the collision penalty stays 0 (the calf capsule's end cap
+    holds the foot ball, so a whole colliding calf touched the ground with every standing foot)."""
+    cfg = GenteQuadrupedFlatCfg()
+    cfg.env.num_envs = NUM_ENVS
+    cfg.domain_rand.push_robots = False
+    cfg.domain_rand.init_lin_vel_xy_noise = 0.0
+    env = LeggedRobot(cfg, device="cpu")
+    for _ in range(25):
+        env.step(torch.zeros(NUM_ENVS, env.num_actions))
+    calves = [env.mjm.body(f"{leg}_calf").id for leg in LEGS]
+    assert torch.norm(env.contact_forces[:, calves], dim=-1).max() == 0.0
+    assert (env._reward_collision() == 0).all()
+    # the feet carry the whole weight, m g with m the robot's mass
+    weight = float(env.mjm.body_subtreemass[env.base]) * 9.81
+    feet_z = env.contact_forces[:, env.feet, 2].sum(1)
+    assert torch.allclose(feet_z, torch.full_like(feet_z, weight), rtol=0.15)
+
+
 def test_curriculum_water_is_wading_depth():
     """Every water cell of the full quadruped curriculum is shallower than the trunk height."""
     terrain = Terrain(GenteQuadrupedCfg().terrain, NUM_ENVS)

@@ -18,6 +18,7 @@ import numpy as np
 PACKAGE_ROOT = Path(str(importlib.resources.files("legged_gente")))  # shipped data: resources/robots/...
 TERRAIN_GEOM = "terrain"  # the plane; a heightfield's pieces are terrain, terrain_1, terrain_2, ...
 ROBOT_CONTYPE, TERRAIN_CONTYPE, TERRAIN_CONAFFINITY = 2, 1, 2
+COLLISION_GROUP = 3  # geoms of a watched body that collide in its stead (MuJoCo models' usual collision group)
 
 
 def resolve_path(path: str) -> Path:
@@ -91,13 +92,17 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     collide = match_names(cfg.asset.penalize_contacts_on + cfg.asset.terminate_after_contacts_on, bodies, "body") if (
         cfg.asset.penalize_contacts_on or cfg.asset.terminate_after_contacts_on) else []
     # Robot geoms collide with the terrain only (contype 2 vs the terrain's conaffinity 2), never with each
-    # other: the geoms the MJCF makes collide (feet) plus those of bodies whose contacts the task watches
-    # but that have no colliding geom (a body with collision geoms keeps its visual meshes non-colliding).
+    # other: the geoms the MJCF makes collide (feet) plus, on the bodies whose contacts the task watches but
+    # that have no colliding geom, their collision geoms (group 3, MuJoCo's usual collision group) if they
+    # have any, else all their geoms (a body with collision geoms keeps its visual meshes non-colliding).
     robot_geoms = [g for g in spec.geoms if g.parent.name != spec.worldbody.name]
     has_collider = {g.parent.name for g in robot_geoms if g.contype or g.conaffinity}
+    has_collision_group = {g.parent.name for g in robot_geoms if g.group == COLLISION_GROUP}
     for geom in robot_geoms:
-        collides = geom.contype or geom.conaffinity or (geom.parent.name in collide and
-                                                        geom.parent.name not in has_collider)
+        body = geom.parent.name
+        switched_on = (body in collide and body not in has_collider
+                       and (geom.group == COLLISION_GROUP or body not in has_collision_group))
+        collides = geom.contype or geom.conaffinity or switched_on
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
     if owns_sole_contacts(cfg, terrain):
         # the terrain force fields collide sphere / capsule soles with the heightfield analytically
