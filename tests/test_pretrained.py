@@ -99,3 +99,31 @@ def test_resuming_from_a_policy_only_checkpoint_is_a_one_line_error(tmp_path, ca
     assert exit_info.value.code == 2
     line = capsys.readouterr().err.strip().splitlines()[-1]
     assert "holds only the policy" in line and "model_7.pt" in line, line
+
+
+def test_train_pretrained_starts_from_the_shipped_actor(tmp_path, capsys):
+    """gente-train --pretrained fine-tunes the shipped policy: its actor (weights, observation normaliser, action
+    noise) at iteration 0 of a new run, with a fresh critic; one iteration later the actor has moved from it."""
+    from legged_gente.scripts import train as train_script
+
+    args = parse_args(train_script.build_train_parser(), [
+        "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained", "--max_iterations", "1"])
+    env, _ = task_registry.make_env(args.task, args)
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
+    assert "Starting from the policy shipped for gente_biped_flat" in capsys.readouterr().out
+    shipped = load_checkpoint(policies_root() / SHIPPED / "model.pt")["actor_state_dict"]
+    actor = runner.alg.get_policy().state_dict()
+    assert actor.keys() == shipped.keys() and all(torch.equal(actor[k], shipped[k]) for k in shipped)
+    assert runner.current_learning_iteration == 0
+    runner.learn(1)
+    moved = runner.alg.get_policy().state_dict()
+    assert not torch.equal(moved["mlp.0.weight"], shipped["mlp.0.weight"])
+
+
+def test_train_pretrained_and_resume_exclude_each_other(capsys):
+    from legged_gente.scripts import train as train_script
+
+    with pytest.raises(SystemExit) as exit_info:
+        train_script.main(["--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--pretrained", "--resume"])
+    assert exit_info.value.code == 2
+    assert "--pretrained starts a new run from the shipped policy" in capsys.readouterr().err

@@ -134,10 +134,14 @@ class TaskRegistry:
         """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default; an
         unreadable latest checkpoint falls back to the newest readable one). ``log_root``: where runs are
         ("default": ``default_log_root()``; None: no run folder)."""
+        from legged_gente.utils.checkpoints import pretrained_policy
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 
+        pretrained = pretrained_policy(name)[0] if getattr(args, "pretrained", False) else None
         if train_cfg is None:
             _, train_cfg = self.get_cfgs(name)
+            if pretrained is not None:
+                network_sizes_from(pretrained, train_cfg)  # before the flags: a --set that does not fit is an error
             if args is not None:
                 apply_args(args, None, train_cfg)
         validate_cfgs(None, train_cfg)
@@ -159,6 +163,13 @@ class TaskRegistry:
             print(runner.curriculum_message)
             # a checkpoint stores the last *finished* iteration; continue with the next one
             runner.current_learning_iteration += 1
+        elif pretrained is not None:
+            # fine-tuning: the shipped actor (weights, observation normaliser, action noise); a shipped policy has
+            # no critic, optimiser state or curriculum, so those start afresh, at iteration 0
+            runner.load(str(pretrained), load_cfg={"actor": True}, map_location=env.device)
+            runner.loaded_checkpoint = pretrained
+            print(f"Starting from the policy shipped for {name} ({pretrained}): its actor; the critic, optimiser "
+                  f"and curriculum start afresh")
         return runner, train_cfg, log_dir
 
     def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):
@@ -173,20 +184,26 @@ class TaskRegistry:
         """A runner (no run folder) with the actor of ``checkpoint`` loaded, for playing or evaluating it: a run's
         ``model_<N>.pt`` or a shipped, actor-only ``model.pt``. The network sizes come from the ``config.json``
         beside it when there is one (a run folder or a shipped policy's folder), else from ``train_cfg``."""
-        from legged_gente.envs.base.base_config import update_from_dict
-
         train_cfg = train_cfg or self.get_cfgs(name)[1]
         train_cfg.runner.resume = False
-        config_path = Path(checkpoint).parent / "config.json"
-        if config_path.is_file():
-            train = json.loads(config_path.read_text()).get("train", {})
-            for section in ("actor", "critic"):
-                if section in train:
-                    update_from_dict(getattr(train_cfg, section), train[section], section)
+        network_sizes_from(checkpoint, train_cfg)
         runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
         runner.load(str(checkpoint), load_cfg={"actor": True}, map_location=env.device)
         runner.loaded_checkpoint = Path(checkpoint)
         return runner
+
+
+def network_sizes_from(checkpoint: Path, train_cfg: LeggedRobotCfgPPO) -> None:
+    """The actor and critic settings (network sizes) recorded in the ``config.json`` beside ``checkpoint`` (a run
+    folder or a shipped policy's folder), if there is one."""
+    from legged_gente.envs.base.base_config import update_from_dict
+
+    config_path = Path(checkpoint).parent / "config.json"
+    if config_path.is_file():
+        train = json.loads(config_path.read_text()).get("train", {})
+        for section in ("actor", "critic"):
+            if section in train:
+                update_from_dict(getattr(train_cfg, section), train[section], section)
 
 
 def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) -> Path:

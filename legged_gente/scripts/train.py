@@ -104,6 +104,9 @@ def build_train_parser():
     parser.add_argument(*flag("--max_minutes"), type=float,
                         help="stop after the iteration that passes this much wall-clock time, saving a checkpoint "
                              "to continue with --resume (for time-limited jobs; no signal needed)")
+    parser.add_argument("--pretrained", action="store_true",
+                        help="start from the policy shipped for --task (its actor; the critic, optimiser and "
+                             "curriculum start afresh): fine-tune it on changed physics, terrain or rewards")
     return parser
 
 
@@ -115,6 +118,9 @@ def main(argv=None) -> None:
     if not args.resume and (args.load_run is not None or args.checkpoint is not None):
         parser.error("--load_run/--checkpoint pick the checkpoint to resume from: add --resume (without it "
                      "training starts from scratch)")
+    if args.pretrained and args.resume:
+        parser.error("--pretrained starts a new run from the shipped policy; --resume continues a run of your own: "
+                     "pick one")
     run_command("gente-train", train, args)
 
 

@@ -195,7 +195,8 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         if "critic_state_dict" not in loaded and (load_cfg is None or load_cfg.get("critic", False)):
             raise CheckpointError(
                 f"checkpoint {path} holds only the policy (a shipped model.pt): play or evaluate it (gente-play "
-                f"--pretrained, gente-evaluate --checkpoint); resuming training needs a run's model_<N>.pt.")
+                f"--pretrained, gente-evaluate --checkpoint) or fine-tune it (gente-train --pretrained); resuming "
+                f"training needs a run's model_<N>.pt.")
         if self.alg.load(loaded, load_cfg, strict):
             self.current_learning_iteration = loaded["iter"]
         infos = loaded["infos"]
