@@ -5,13 +5,13 @@
 tree's centre of mass); ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot;
 ``added_mass_kernel`` (worlds x points x dofs) then builds each point's tensor from its geom's axes and adds it to
 the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which
-rebuilds it from scratch each substep), calls the passive callback in ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and
-builds the constraint solver's Hessian and the implicit integrators' matrices from it, so an addition made here is
-seen by the whole step: the added mass is implicit, acts in the same substep and cannot destabilise a light body
-(an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a exceeds the body's mass, and
-its finite-difference acceleration also sees contact impulses). The velocity-product part of the point's
-acceleration (Jdot qvel: centripetal and Coriolis terms) is applied explicitly. ``mjw.step1``/``step2`` factorise
-M before the callback and are not supported.
+rebuilds it from scratch each substep), calls the passive callback in ``fwd_velocity`` and only then factorises M
+(``fwd_acceleration``) and builds the constraint solver's Hessian and the implicit integrators' matrices from it,
+so an addition made here is seen by the whole step: the added mass is implicit, acts in the same substep and cannot
+destabilise a light body (an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a
+exceeds the body's mass, and its finite-difference acceleration also sees contact impulses). The velocity-product
+part of the point's acceleration (Jdot qvel: centripetal and Coriolis terms) is applied explicitly.
+``mjw.step1``/``step2`` factorise M before the callback and are not supported.
 
 M is stored by rows of ancestor dofs (``M_rowadr``, ``M_rownnz``, diagonal last). MuJoCo stores only the diagonal
 of "simple" bodies (bodies of the world with a diagonal inertia, e.g. a lone free body or slide joints): there the
