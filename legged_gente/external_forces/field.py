@@ -157,6 +157,10 @@ class TerrainForces:
         def arr(x, dtype):
             return wp.array(np.ascontiguousarray(x), dtype=dtype, device=dev)
 
+        def one_row_if_empty(x: np.ndarray) -> np.ndarray:
+            """``x``, or one row of zeros in its place when it has none (a robot without water points)."""
+            return x if len(x) else np.zeros((1, *x.shape[1:]), x.dtype)
+
         self.heights = arr(heights, float)
         # the contacts' heightfield: a plane's (1, 1) grid as one wide constant cell
         if min(heights.shape) < 2:
@@ -223,7 +227,7 @@ class TerrainForces:
         foot_added_mass = np.asarray([WM.foot_added_mass("sphere" if mjm.geom_type[g] == sphere else "box",
                                                          mjm.geom_size[g], float(cfg.water_density))
                                       for g in foot_water], np.float32).reshape(-1, 3)
-        self.foot_added_mass = arr(foot_added_mass if len(foot_added_mass) else np.zeros((1, 3), np.float32), wp.vec3)
+        self.foot_added_mass = arr(one_row_if_empty(foot_added_mass), wp.vec3)
         self.sole_length, self.sole_width, self.sole_disc = self._sole(mjm, groups)
         # Bekker's pressure over the footprint, whose b is a rectangle's smaller side or a disc's radius (Wong,
         # Theory of Ground Vehicles, ch. 2)
@@ -249,8 +253,8 @@ class TerrainForces:
         # of mass (points x worlds), added_mass_kernel reads them
         point_geom = np.concatenate([np.repeat(seg, W.NGAUSS), foot_water]).astype(np.int32)
         axes = np.concatenate([np.tile([1.0, 1.0, 0.0], (W.NGAUSS * len(seg), 1)), foot_added_mass])
-        self.point_geom = arr(point_geom if len(point_geom) else np.zeros(1, np.int32), int)
-        self.point_axes = arr(axes.astype(np.float32) if len(axes) else np.zeros((1, 3), np.float32), wp.vec3)
+        self.point_geom = arr(one_row_if_empty(point_geom), int)
+        self.point_axes = arr(one_row_if_empty(axes.astype(np.float32)), wp.vec3)
         self.point_dofs = arr(_dof_chains(mjm, mjm.geom_bodyid[point_geom]), int)
         self.point_mass = z((self.point_dofs.shape[0], n), float)
         self.point_offset = z((self.point_dofs.shape[0], n), wp.vec3)
