@@ -159,3 +159,44 @@ def test_the_same_mini_batches_give_rsl_rls_losses_gradients_and_learning_rate(m
     for mine, theirs in zip(gradients, reference_gradients):
         assert torch.allclose(mine, theirs, rtol=1e-4, atol=1e-7)
     assert lr == pytest.approx(reference_lr, rel=1e-6) and lr > 1e-3  # adapted
+
+
+def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it():
+    """freeze_actor(2): two updates change the critic and leave the actor (weights, action noise, observation
+    normaliser) bit for bit as it was; the third update trains both."""
+    generator = torch.Generator().manual_seed(0)
+    cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
+    cfg["num_steps_per_env"] = STEPS
+    cfg["multi_gpu"] = None
+    cfg["algorithm"].update(num_mini_batches=2, num_learning_epochs=3)
+    torch.manual_seed(0)
+    alg = PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
+                                  cfg, "cpu")
+    assert isinstance(alg, GentePPO)
+
+    def state(model):
+        return {k: v.clone() for k, v in model.state_dict().items()}
+
+    def one_update():
+        obs = observations(generator)
+        for _ in range(STEPS):
+            alg.act(obs)
+            obs = observations(generator)
+            alg.process_env_step(obs, torch.randn(NUM_ENVS, generator=generator), torch.zeros(NUM_ENVS, dtype=bool),
+                                 {"time_outs": torch.zeros(NUM_ENVS, dtype=bool)})
+        alg.compute_returns(obs)
+        alg.update()
+
+    alg.freeze_actor(2)
+    actor_before = state(alg.actor)
+    assert any("std" in k for k in actor_before) and any("normalizer" in k for k in actor_before)
+    for _ in range(2):
+        critic_before = state(alg.critic)
+        one_update()
+        assert all(torch.equal(actor_before[k], v) for k, v in alg.actor.state_dict().items())
+        assert not all(torch.equal(critic_before[k], v) for k, v in alg.critic.state_dict().items())
+    one_update()
+    changed = [k for k, v in alg.actor.state_dict().items() if not torch.equal(actor_before[k], v)]
+    assert any("normalizer" in k for k in changed) and any(k.startswith("mlp") for k in changed)
+    with pytest.raises(ValueError, match="critic_warmup_iterations=-1"):
+        alg.freeze_actor(-1)

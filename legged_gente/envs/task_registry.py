@@ -168,8 +168,16 @@ class TaskRegistry:
             # no critic, optimiser state or curriculum, so those start afresh, at iteration 0
             runner.load(str(pretrained), load_cfg={"actor": True}, map_location=env.device)
             runner.loaded_checkpoint = pretrained
+            warmup = runner_cfg.critic_warmup_iterations
+            if warmup:
+                if not hasattr(runner.alg, "freeze_actor"):
+                    raise ValueError(f"runner.critic_warmup_iterations={warmup} needs algorithm.class_name "
+                                     f"legged_gente.utils.ppo:GentePPO, not {train_cfg.algorithm.class_name}; "
+                                     f"set it to 0")
+                runner.alg.freeze_actor(warmup)
             print(f"Starting from the policy shipped for {name} ({pretrained}): its actor; the critic, optimiser "
-                  f"and curriculum start afresh")
+                  f"and curriculum start afresh" + (f"; the first {warmup} iterations train the critic alone"
+                                                     if warmup else ""))
         return runner, train_cfg, log_dir
 
     def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):

@@ -67,6 +67,9 @@ class GentePPO(PPO):
             self._gradient_views = [view.view_as(parameter) for parameter, view in
                                     zip(self._parameters, self._gradients[:-1].split(sizes))]
             self._loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
+            self._actor_size = sum(parameter.numel() for parameter in self.actor.parameters())
+            self._actor_gradient_scale = torch.ones((), device=self.device)  # 0 while the actor is held fixed
+            self._frozen_actor_updates = 0
             self._batch: RolloutStorage.Batch | None = None  # the mini-batch _minibatch_gradients reads
             self._graphed = cuda
             if not cuda:
@@ -93,6 +96,21 @@ class GentePPO(PPO):
         self._act_graph()
         vars(self.transition).update(self._act_transition)
         return self.transition.actions
+
+    def freeze_actor(self, updates: int) -> None:
+        """Train the critic alone for the next ``updates`` updates: the actor's gradients are zeroed, so Adam
+        (whose moments start at zero) leaves the actor and its action noise exactly as they are. For fine-tuning
+        a trained actor with a fresh critic: an untrained critic's advantages would otherwise pull the actor off
+        its gait in the first updates."""
+        if updates < 0:
+            raise ValueError(f"runner.critic_warmup_iterations={updates}: the number of critic-only updates "
+                             f"must be >= 0")
+        if updates and not self.device_side_update:
+            raise ValueError("a critic warm-up needs GentePPO's own update (Adam, feed-forward models, no RND or "
+                             "symmetry); set runner.critic_warmup_iterations = 0")
+        self._frozen_actor_updates = updates
+        if self.device_side_update:
+            self._actor_gradient_scale.fill_(0.0 if updates else 1.0)  # a device write, no host wait
 
     def _act_step(self) -> None:
         super().act(self._act_observations)
@@ -184,6 +202,7 @@ class GentePPO(PPO):
             self._gradients /= self.gpu_world_size
         if self._adaptive_learning_rate:  # every rank has the same mean KL, so the same learning rate
             self._adapt_learning_rate(self._learning_rate_tensor(), self._gradients[-1])
+        self._gradients[:self._actor_size] *= self._actor_gradient_scale
         nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
         nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
         self.optimizer.step()
@@ -193,10 +212,11 @@ class GentePPO(PPO):
         return self.desired_kl is not None and self.schedule == "adaptive"
 
     def _update_normalization(self) -> None:
-        """The models' observation statistics from this rollout. rsl-rl's normaliser assigns a new std tensor;
-        it is copied back into the one the mini-batch graph reads."""
+        """The models' observation statistics from this rollout (the critic's only while the actor is held
+        fixed). rsl-rl's normaliser assigns a new std tensor; it is copied back into the one the mini-batch graph
+        reads."""
         observations = self.storage.observations.flatten(0, 1)
-        for model in (self.actor, self.critic):
+        for model in (self.critic,) if self._frozen_actor_updates else (self.actor, self.critic):
             before = dict(model.named_buffers())
             model.update_normalization(observations)
             for name, buffer in list(model.named_buffers()):
@@ -231,6 +251,8 @@ class GentePPO(PPO):
                 stage()
         self._update_normalization()
         self.storage.clear()
+        if self._frozen_actor_updates:
+            self.freeze_actor(self._frozen_actor_updates - 1)
         num_updates = self.num_learning_epochs * self.num_mini_batches
         means = self._loss_sums / num_updates
         finite = self._parameters_finite().float().reshape(1)

@@ -245,6 +245,9 @@ class LeggedRobotCfgPPO(BaseConfig):
         # accumulation); "highest" keeps full fp32. Applied on CUDA devices only.
         matmul_precision = "high"
         obs_groups = {"actor": ["policy"], "critic": ["critic"]}
+        # fine-tuning a shipped policy (gente-train --pretrained): its critic is not shipped, so the first
+        # iterations train the fresh critic alone, the actor held fixed (GentePPO.freeze_actor)
+        critic_warmup_iterations = 0
         resume = False
         load_run = -1  # -1: the latest run
         checkpoint = -1  # -1: the latest checkpoint
