@@ -161,9 +161,11 @@ def test_the_same_mini_batches_give_rsl_rls_losses_gradients_and_learning_rate(m
     assert lr == pytest.approx(reference_lr, rel=1e-6) and lr > 1e-3  # adapted
 
 
-def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it():
+def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch):
     """freeze_actor(2): two updates change the critic and leave the actor (weights, action noise, observation
-    normaliser) bit for bit as it was; the third update trains both."""
+    normaliser) and the learning rate as they were, even when rounding makes the held actor's KL positive (TF32 on
+    a GPU); the next update trains both, and its first Adam step on the actor is a fresh Adam's (every element
+    moves by at most the learning rate, the largest by about that much), not one scaled by the frozen steps."""
     generator = torch.Generator().manual_seed(0)
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
     cfg["num_steps_per_env"] = STEPS
@@ -173,6 +175,7 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it():
     alg = PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
                                   cfg, "cpu")
     assert isinstance(alg, GentePPO)
+    learning_rate = alg.learning_rate
 
     def state(model):
         return {k: v.clone() for k, v in model.state_dict().items()}
@@ -190,13 +193,20 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it():
     alg.freeze_actor(2)
     actor_before = state(alg.actor)
     assert any("std" in k for k in actor_before) and any("normalizer" in k for k in actor_before)
-    for _ in range(2):
-        critic_before = state(alg.critic)
-        one_update()
-        assert all(torch.equal(actor_before[k], v) for k, v in alg.actor.state_dict().items())
-        assert not all(torch.equal(critic_before[k], v) for k, v in alg.critic.state_dict().items())
+    with monkeypatch.context() as patch:  # below half the desired KL: an adapting rate would grow 1.5x per step
+        patch.setattr(alg.actor, "get_kl_divergence", lambda old, new: torch.full((NUM_ENVS,), 1e-4))
+        for _ in range(2):
+            critic_before = state(alg.critic)
+            one_update()
+            assert all(torch.equal(actor_before[k], v) for k, v in alg.actor.state_dict().items())
+            assert not all(torch.equal(critic_before[k], v) for k, v in alg.critic.state_dict().items())
+            assert alg.learning_rate == pytest.approx(learning_rate, rel=1e-6)
+    alg.num_learning_epochs = alg.num_mini_batches = 1  # one Adam step
     one_update()
     changed = [k for k, v in alg.actor.state_dict().items() if not torch.equal(actor_before[k], v)]
     assert any("normalizer" in k for k in changed) and any(k.startswith("mlp") for k in changed)
+    steps = torch.cat([(v - actor_before[k]).abs().flatten() for k, v in alg.actor.state_dict().items()
+                       if k.startswith("mlp")])
+    assert float(steps.max()) == pytest.approx(learning_rate, rel=0.02)  # Adam's first step: lr * g / |g|
     with pytest.raises(ValueError, match="critic_warmup_iterations=-1"):
         alg.freeze_actor(-1)

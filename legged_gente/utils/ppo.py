@@ -109,8 +109,14 @@ class GentePPO(PPO):
             raise ValueError("a critic warm-up needs GentePPO's own update (Adam, feed-forward models, no RND or "
                              "symmetry); set runner.critic_warmup_iterations = 0")
         self._frozen_actor_updates = updates
-        if self.device_side_update:
-            self._actor_gradient_scale.fill_(0.0 if updates else 1.0)  # a device write, no host wait
+        if not self.device_side_update:
+            return
+        self._actor_gradient_scale.fill_(0.0 if updates else 1.0)  # device writes, no host wait
+        if not updates:  # released: the actor's Adam moments are still zero; restart its bias correction too, or
+            for parameter in self.actor.parameters():  # its first steps would be scaled by the frozen steps' count
+                state = self.optimizer.state.get(parameter)
+                if state:
+                    state["step"].zero_()
 
     def _act_step(self) -> None:
         super().act(self._act_observations)
@@ -201,7 +207,8 @@ class GentePPO(PPO):
         if self.is_multi_gpu:
             self._gradients /= self.gpu_world_size
         if self._adaptive_learning_rate:  # every rank has the same mean KL, so the same learning rate
-            self._adapt_learning_rate(self._learning_rate_tensor(), self._gradients[-1])
+            # a held actor's KL is rounding noise (TF32), not a policy change: the rate must not adapt to it
+            self._adapt_learning_rate(self._learning_rate_tensor(), self._gradients[-1] * self._actor_gradient_scale)
         self._gradients[:self._actor_size] *= self._actor_gradient_scale
         nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
         nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
