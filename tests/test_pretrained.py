@@ -103,18 +103,27 @@ def test_resuming_from_a_policy_only_checkpoint_is_a_one_line_error(tmp_path, ca
 
 def test_train_pretrained_starts_from_the_shipped_actor(tmp_path, capsys):
     """gente-train --pretrained fine-tunes the shipped policy: its actor (weights, observation normaliser, action
-    noise) at iteration 0 of a new run, with a fresh critic; one iteration later the actor has moved from it."""
+    noise) at iteration 0 of a new run, with a fresh critic that trains alone for the warm-up's iterations (here
+    one); one iteration after the warm-up the actor has moved from it."""
     from legged_gente.scripts import train as train_script
 
     args = parse_args(train_script.build_train_parser(), [
-        "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained", "--max_iterations", "1"])
+        "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained", "--max_iterations", "1",
+        "--set", "runner.critic_warmup_iterations=1"])
     env, _ = task_registry.make_env(args.task, args)
     runner, _, _ = task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
-    assert "Starting from the policy shipped for gente_biped_flat" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Starting from the policy shipped for gente_biped_flat" in out
+    assert "the first 1 iterations train the critic alone" in out
     shipped = load_checkpoint(policies_root() / SHIPPED / "model.pt")["actor_state_dict"]
     actor = runner.alg.get_policy().state_dict()
     assert actor.keys() == shipped.keys() and all(torch.equal(actor[k], shipped[k]) for k in shipped)
     assert runner.current_learning_iteration == 0
+    critic = {k: v.clone() for k, v in runner.alg.critic.state_dict().items()}
+    runner.learn(1)
+    held = runner.alg.get_policy().state_dict()
+    assert all(torch.equal(held[k], shipped[k]) for k in shipped)
+    assert not torch.equal(runner.alg.critic.state_dict()["mlp.0.weight"], critic["mlp.0.weight"])
     runner.learn(1)
     moved = runner.alg.get_policy().state_dict()
     assert not torch.equal(moved["mlp.0.weight"], shipped["mlp.0.weight"])
