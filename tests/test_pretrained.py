@@ -136,3 +136,22 @@ def test_train_pretrained_and_resume_exclude_each_other(capsys):
         train_script.main(["--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--pretrained", "--resume"])
     assert exit_info.value.code == 2
     assert "--pretrained starts a new run from the shipped policy" in capsys.readouterr().err
+
+
+def test_train_pretrained_with_rsl_rls_ppo_names_the_warmup_setting(tmp_path):
+    """The critic warm-up needs GentePPO's update: with rsl-rl's own PPO, --pretrained's default warm-up is a
+    one-line error that names the setting to change."""
+    from legged_gente.scripts import train as train_script
+
+    args = parse_args(train_script.build_train_parser(), [
+        "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained",
+        "--set", "algorithm.class_name=PPO"])
+    env, _ = task_registry.make_env(args.task, args)
+    with pytest.raises(ValueError, match=r"runner.critic_warmup_iterations=50 needs algorithm.class_name "
+                                         r"legged_gente.utils.ppo:GentePPO, not PPO; set it to 0"):
+        task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
+    args = parse_args(train_script.build_train_parser(), [
+        "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained",
+        "--set", "algorithm.class_name=PPO", "--set", "runner.critic_warmup_iterations=0"])
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
+    assert type(runner.alg).__name__ == "PPO"
