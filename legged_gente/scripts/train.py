@@ -106,7 +106,9 @@ def build_train_parser():
                              "to continue with --resume (for time-limited jobs; no signal needed)")
     parser.add_argument("--pretrained", action="store_true",
                         help="start from the policy shipped for --task (its actor; the critic, optimiser and "
-                             "curriculum start afresh): fine-tune it on changed physics, terrain or rewards")
+                             "curriculum start afresh, and the critic trains alone for the first "
+                             "runner.critic_warmup_iterations, 50 by default): fine-tune it on changed physics, "
+                             "terrain or rewards")
     return parser
 
 
