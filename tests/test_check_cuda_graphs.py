@@ -55,9 +55,9 @@ def test_evaluations_agree_only_with_the_same_diverged_robots_and_close_means(to
     assert not tool.compare_evaluations({"graph": evaluation_metrics(tracking=math.nan), "plain": ref}, "plain")
 
 
-@pytest.mark.parametrize("failing", ["check_ppo", "env_steps", "evaluation_agrees"])
+@pytest.mark.parametrize("failing", ["check_ppo", "check_critic_warmup", "env_steps", "evaluation_agrees"])
 def test_any_mismatch_exits_with_1(tool, monkeypatch, failing):
-    for name in ("check_ppo", "env_steps", "evaluation_agrees"):
+    for name in ("check_ppo", "check_critic_warmup", "env_steps", "evaluation_agrees"):
         monkeypatch.setattr(tool, name, lambda *args, verdict=(name != failing), **kwargs: verdict)
     monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--device", "cpu"])
     with pytest.raises(SystemExit) as exit_info:
@@ -66,7 +66,7 @@ def test_any_mismatch_exits_with_1(tool, monkeypatch, failing):
 
 
 def test_all_agreeing_exits_with_0(tool, monkeypatch, capsys):
-    for name in ("check_ppo", "env_steps", "evaluation_agrees"):
+    for name in ("check_ppo", "check_critic_warmup", "env_steps", "evaluation_agrees"):
         monkeypatch.setattr(tool, name, lambda *args, **kwargs: True)
     monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--device", "cpu"])
     tool.main()
@@ -76,3 +76,9 @@ def test_all_agreeing_exits_with_0(tool, monkeypatch, capsys):
 def test_the_evaluation_check_runs(tool):
     """The GPU check's evaluation part end to end on the CPU (where every run steps plainly, so they agree)."""
     assert tool.evaluation_agrees("gente_biped", robots_per_terrain=2, episode_s=0.2, device="cpu")
+
+
+def test_the_critic_warmup_check_runs(tool):
+    """The GPU check's critic warm-up part on the CPU: two held updates leave the actor and the learning rate
+    alone, the third moves the actor."""
+    assert tool.check_critic_warmup("cpu", 64)

@@ -23,6 +23,10 @@ the adaptive learning rate are compared after each update (a mismatch: more than
 GentePPO's two graphs is compared with rsl-rl's (with --device cpu: the same update without graphs, over gloo;
 the CPU tests run it that way).
 
+Critic warm-up: GentePPO with its actor held for two updates (``freeze_actor``, what ``gente-train --pretrained``
+does first), through the same graphs: the actor and the learning rate must stay exactly as they were (TF32 rounding
+makes the held actor's KL nonzero), and the update after the release must move the actor.
+
 PPO act: GentePPO's act graph against rsl-rl's act on the same observations: values and distribution
 parameters equal, the graph's sampled actions standard normal around the mean.
 """
@@ -87,9 +91,10 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     return PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
 
 
-def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24):
-    """``updates`` PPO updates on seeded synthetic rollouts (each rank its own); the actor's parameters and
-    losses after each."""
+def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24, frozen_actor: int = 0):
+    """``updates`` PPO updates on seeded synthetic rollouts (each rank its own), the first ``frozen_actor`` of them
+    with the actor held (GentePPO only); the actor's parameters, losses and learning rate before the first and after
+    each."""
     rank = torch.distributed.get_rank() if torch.distributed.is_initialized() else 0
     generator = torch.Generator(device=device).manual_seed(rank)
 
@@ -99,7 +104,9 @@ def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: 
     alg = ppo_algorithm(alg_class, device, num_envs, steps, observations)
     if hasattr(alg, "_act_graph"):
         alg._act_graph = None  # the same sampled actions as rsl-rl's act; the act graph is checked apart
-    history = []
+    if frozen_actor:
+        alg.freeze_actor(frozen_actor)
+    history = [(torch.cat([p.detach().flatten() for p in alg.actor.parameters()]).clone(), {}, alg.learning_rate)]
     for update in range(updates):
         torch.manual_seed(100 + 10 * rank + update)  # the same sampled actions whatever the update drew before
         with torch.inference_mode():  # as rsl-rl's runner collects
@@ -129,13 +136,28 @@ def check_ppo(device: str, num_envs: int, tolerance: float) -> bool:
     graphs = [stage.graph is not None for stage in ours._minibatch_stages if hasattr(stage, "graph")]
     print(f"{rank}PPO update: GentePPO's mini-batch stages {len(ours._minibatch_stages)}, graphs captured {graphs}")
     agree = True
-    for i, ((p, losses, lr), (q, ref_losses, ref_lr)) in enumerate(zip(mine, theirs)):
+    for i, ((p, losses, lr), (q, ref_losses, ref_lr)) in enumerate(zip(mine[1:], theirs[1:])):
         difference = float((p - q).abs().max())
         loss_difference = largest([abs(losses[k] - ref_losses[k]) / max(abs(ref_losses[k]), 1e-3) for k in ref_losses
                                     if k in losses])
         agree &= difference <= tolerance and loss_difference <= tolerance and abs(lr - ref_lr) <= 1e-6 * ref_lr
         print(f"{rank}update {i + 1}: max |diff| actor parameters {difference:.2e} (largest {q.abs().max():.2f}), "
               f"largest relative loss difference {loss_difference:.1e}, learning rate {lr:.3e} vs {ref_lr:.3e}")
+    return agree
+
+
+def check_critic_warmup(device: str, num_envs: int) -> bool:
+    """GentePPO's update with the actor held for two updates, then released; True when the held updates left
+    the actor and the learning rate exactly as they were and the third moved the actor (finite)."""
+    from legged_gente.utils.ppo import GentePPO
+
+    _, history = ppo_updates(GentePPO, device, num_envs, frozen_actor=2)
+    (start, _, rate), held, released = history[0], history[1:3], history[3]
+    held_still = all(torch.equal(actor, start) and abs(lr - rate) <= 1e-6 * rate for actor, _, lr in held)  # float32
+    moved = float((released[0] - start).abs().max())
+    agree = held_still and 0.0 < moved < math.inf
+    print(f"critic warm-up: actor and learning rate unchanged over the 2 held updates: {held_still} (rate "
+          f"{rate:.3e} -> {held[-1][2]:.3e}); after the release the actor moved by up to {moved:.2e}")
     return agree
 
 
@@ -189,12 +211,14 @@ def main() -> None:
         device = rank_device(args.device, launch)
         init_process_group(launch, device)
     agree = check_ppo(device, args.ppo_envs, args.tolerance)
+    agree &= check_critic_warmup(device, args.ppo_envs)
     if device.startswith("cuda") and launch is None:
         agree &= check_act(device, args.ppo_envs)
     if agree:
         print("GentePPO agrees with rsl-rl's PPO")
     else:
-        print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance}")
+        print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance}, or its critic "
+              f"warm-up did not hold the actor")
     if not args.ppo_only:
         if env_steps(args.task, args.num_envs, args.steps, args.seed):
             print("the env step agrees across graph and compile modes")
