@@ -210,3 +210,20 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch):
     assert float(steps.max()) == pytest.approx(learning_rate, rel=0.02)  # Adam's first step: lr * g / |g|
     with pytest.raises(ValueError, match="critic_warmup_iterations=-1"):
         alg.freeze_actor(-1)
+
+
+def test_a_run_saved_during_its_critic_warmup_resumes_it():
+    """A checkpoint written during the warm-up records the updates left; loading it (with the optimizer, as
+    --resume does) holds the actor for those, so the actor's Adam bias correction still restarts at the release.
+    A checkpoint written after it holds nothing."""
+    held, _ = updated(GentePPO, 1e-3)
+    held.freeze_actor(3)
+    saved = held.save()
+    assert saved["frozen_actor_updates"] == 3
+    resumed, _ = updated(GentePPO, 1e-3)
+    resumed.load(saved, None, True)
+    assert resumed._frozen_actor_updates == 3 and float(resumed._actor_gradient_scale) == 0.0
+    released, _ = updated(GentePPO, 1e-3)
+    assert "frozen_actor_updates" not in released.save()
+    released.load(released.save(), None, True)
+    assert released._frozen_actor_updates == 0 and float(released._actor_gradient_scale) == 1.0

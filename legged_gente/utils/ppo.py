@@ -118,6 +118,20 @@ class GentePPO(PPO):
                 if state:
                     state["step"].zero_()
 
+    def save(self) -> dict:
+        """rsl-rl's checkpoint, plus the critic warm-up's remaining updates when it is still running."""
+        saved = super().save()
+        if getattr(self, "_frozen_actor_updates", 0):
+            saved["frozen_actor_updates"] = self._frozen_actor_updates
+        return saved
+
+    def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
+        """rsl-rl's load; a run saved during its critic warm-up (with its optimizer state) resumes the warm-up."""
+        iteration = super().load(loaded_dict, load_cfg, strict)
+        if (load_cfg is None or load_cfg.get("optimizer")) and loaded_dict.get("frozen_actor_updates", 0):
+            self.freeze_actor(int(loaded_dict["frozen_actor_updates"]))
+        return iteration
+
     def _act_step(self) -> None:
         super().act(self._act_observations)
         self._act_transition = dict(vars(self.transition))
