@@ -19,17 +19,20 @@ def observations(generator):
                        "critic": torch.randn(NUM_ENVS, 7, generator=generator)}, batch_size=[NUM_ENVS])
 
 
-def updated(alg_class, learning_rate):
-    """Build the algorithm from the default train config, fill one rollout with seeded data, update once."""
-    generator = torch.Generator().manual_seed(0)
+def algorithm(alg_class, learning_rate, generator):
+    """The algorithm built from the default train config (2 mini-batches, 3 epochs), seeded."""
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
     cfg["num_steps_per_env"] = STEPS
     cfg["multi_gpu"] = None
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=2, num_learning_epochs=3,
                             learning_rate=learning_rate)
     torch.manual_seed(0)
-    alg = PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
-                                  cfg, "cpu")
+    return PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
+                                   cfg, "cpu")
+
+
+def rollout_and_update(alg, generator):
+    """Fill one rollout with seeded data and update once; the losses."""
     obs = observations(generator)
     for _ in range(STEPS):
         alg.act(obs)
@@ -38,8 +41,14 @@ def updated(alg_class, learning_rate):
         alg.process_env_step(obs, torch.randn(NUM_ENVS, generator=generator), dones,
                              {"time_outs": dones & (torch.rand(NUM_ENVS, generator=generator) < 0.5)})
     alg.compute_returns(obs)
-    losses = alg.update()
-    return alg, losses
+    return alg.update()
+
+
+def updated(alg_class, learning_rate):
+    """Build the algorithm, fill one rollout with seeded data, update once."""
+    generator = torch.Generator().manual_seed(0)
+    alg = algorithm(alg_class, learning_rate, generator)
+    return alg, rollout_and_update(alg, generator)
 
 
 @pytest.mark.parametrize("learning_rate", [1e-3, 5e-2])  # 5e-2: large steps, the adaptive rate must come down
@@ -167,28 +176,11 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch):
     a GPU); the next update trains both, and its first Adam step on the actor is a fresh Adam's (every element
     moves by at most the learning rate, the largest by about that much), not one scaled by the frozen steps."""
     generator = torch.Generator().manual_seed(0)
-    cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
-    cfg["num_steps_per_env"] = STEPS
-    cfg["multi_gpu"] = None
-    cfg["algorithm"].update(num_mini_batches=2, num_learning_epochs=3)
-    torch.manual_seed(0)
-    alg = PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
-                                  cfg, "cpu")
-    assert isinstance(alg, GentePPO)
-    learning_rate = alg.learning_rate
+    learning_rate = 1e-3
+    alg = algorithm(GentePPO, learning_rate, generator)
 
     def state(model):
         return {k: v.clone() for k, v in model.state_dict().items()}
-
-    def one_update():
-        obs = observations(generator)
-        for _ in range(STEPS):
-            alg.act(obs)
-            obs = observations(generator)
-            alg.process_env_step(obs, torch.randn(NUM_ENVS, generator=generator), torch.zeros(NUM_ENVS, dtype=bool),
-                                 {"time_outs": torch.zeros(NUM_ENVS, dtype=bool)})
-        alg.compute_returns(obs)
-        alg.update()
 
     alg.freeze_actor(2)
     actor_before = state(alg.actor)
@@ -197,12 +189,12 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch):
         patch.setattr(alg.actor, "get_kl_divergence", lambda old, new: torch.full((NUM_ENVS,), 1e-4))
         for _ in range(2):
             critic_before = state(alg.critic)
-            one_update()
+            rollout_and_update(alg, generator)
             assert all(torch.equal(actor_before[k], v) for k, v in alg.actor.state_dict().items())
             assert not all(torch.equal(critic_before[k], v) for k, v in alg.critic.state_dict().items())
             assert alg.learning_rate == pytest.approx(learning_rate, rel=1e-6)
     alg.num_learning_epochs = alg.num_mini_batches = 1  # one Adam step
-    one_update()
+    rollout_and_update(alg, generator)
     changed = [k for k, v in alg.actor.state_dict().items() if not torch.equal(actor_before[k], v)]
     assert any("normalizer" in k for k in changed) and any(k.startswith("mlp") for k in changed)
     steps = torch.cat([(v - actor_before[k]).abs().flatten() for k, v in alg.actor.state_dict().items()

@@ -106,7 +106,7 @@ def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: 
         alg._act_graph = None  # the same sampled actions as rsl-rl's act; the act graph is checked apart
     if frozen_actor:
         alg.freeze_actor(frozen_actor)
-    history = [(torch.cat([p.detach().flatten() for p in alg.actor.parameters()]).clone(), {}, alg.learning_rate)]
+    history = [(torch.cat([p.detach().flatten() for p in alg.actor.parameters()]), {}, alg.learning_rate)]
     for update in range(updates):
         torch.manual_seed(100 + 10 * rank + update)  # the same sampled actions whatever the update drew before
         with torch.inference_mode():  # as rsl-rl's runner collects

@@ -56,6 +56,7 @@ class GentePPO(PPO):
         self.device_side_update = (optimizer == "adam" and self.rnd is None and self.symmetry is None
                                    and not (actor.is_recurrent or critic.is_recurrent))
         self._act_graph = None
+        self._frozen_actor_updates = 0  # the critic warm-up's updates left (freeze_actor)
         if self.device_side_update:
             # Adam reading its learning rate from a tensor: the adaptive schedule changes it on the device
             cuda = torch.device(self.device).type == "cuda"
@@ -69,7 +70,6 @@ class GentePPO(PPO):
             self._loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
             self._actor_size = sum(parameter.numel() for parameter in self.actor.parameters())
             self._actor_gradient_scale = torch.ones((), device=self.device)  # 0 while the actor is held fixed
-            self._frozen_actor_updates = 0
             self._batch: RolloutStorage.Batch | None = None  # the mini-batch _minibatch_gradients reads
             self._graphed = cuda
             if not cuda:
@@ -105,12 +105,12 @@ class GentePPO(PPO):
         if updates < 0:
             raise ValueError(f"runner.critic_warmup_iterations={updates}: the number of critic-only updates "
                              f"must be >= 0")
-        if updates and not self.device_side_update:
-            raise ValueError("a critic warm-up needs GentePPO's own update (Adam, feed-forward models, no RND or "
-                             "symmetry); set runner.critic_warmup_iterations = 0")
-        self._frozen_actor_updates = updates
         if not self.device_side_update:
+            if updates:
+                raise ValueError("a critic warm-up needs GentePPO's own update (Adam, feed-forward models, no RND "
+                                 "or symmetry); set runner.critic_warmup_iterations = 0")
             return
+        self._frozen_actor_updates = updates
         self._actor_gradient_scale.fill_(0.0 if updates else 1.0)  # device writes, no host wait
         if not updates:  # released: the actor's Adam moments are still zero; restart its bias correction too, or
             for parameter in self.actor.parameters():  # its first steps would be scaled by the frozen steps' count
@@ -121,7 +121,7 @@ class GentePPO(PPO):
     def save(self) -> dict:
         """rsl-rl's checkpoint, plus the critic warm-up's remaining updates when it is still running."""
         saved = super().save()
-        if getattr(self, "_frozen_actor_updates", 0):
+        if self._frozen_actor_updates:
             saved["frozen_actor_updates"] = self._frozen_actor_updates
         return saved
 
