@@ -170,14 +170,18 @@ def test_the_same_mini_batches_give_rsl_rls_losses_gradients_and_learning_rate(m
     assert lr == pytest.approx(reference_lr, rel=1e-6) and lr > 1e-3  # adapted
 
 
-def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch):
+@pytest.mark.parametrize("schedule", ["adaptive", "fixed"])
+def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch, schedule):
     """freeze_actor(2): two updates change the critic and leave the actor (weights, action noise, observation
     normaliser) and the learning rate as they were, even when rounding makes the held actor's KL positive (TF32 on
     a GPU); the next update trains both, and its first Adam step on the actor is a fresh Adam's (every element
-    moves by at most the learning rate, the largest by about that much), not one scaled by the frozen steps."""
+    moves by at most the learning rate, the largest by about that much), not one scaled by the frozen steps.
+    With the adaptive schedule that rate is the floor, 1e-5 (a fresh Adam moves every weight by about the rate),
+    and it climbs 1.5x per mini-batch while the KL stays below half the target; a fixed rate stays as set."""
     generator = torch.Generator().manual_seed(0)
     learning_rate = 1e-3
     alg = algorithm(GentePPO, learning_rate, generator)
+    alg.schedule = schedule
 
     def state(model):
         return {k: v.clone() for k, v in model.state_dict().items()}
@@ -185,23 +189,42 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch):
     alg.freeze_actor(2)
     actor_before = state(alg.actor)
     assert any("std" in k for k in actor_before) and any("normalizer" in k for k in actor_before)
-    with monkeypatch.context() as patch:  # below half the desired KL: an adapting rate would grow 1.5x per step
-        patch.setattr(alg.actor, "get_kl_divergence", lambda old, new: torch.full((NUM_ENVS,), 1e-4))
+    def small_kl(old, new):  # below half the desired KL
+        return torch.full((NUM_ENVS,), 1e-4)
+
+    with monkeypatch.context() as patch:  # an adapting rate would grow 1.5x per mini-batch
+        patch.setattr(alg.actor, "get_kl_divergence", small_kl)
         for _ in range(2):
             critic_before = state(alg.critic)
             rollout_and_update(alg, generator)
             assert all(torch.equal(actor_before[k], v) for k, v in alg.actor.state_dict().items())
             assert not all(torch.equal(critic_before[k], v) for k, v in alg.critic.state_dict().items())
-            assert alg.learning_rate == pytest.approx(learning_rate, rel=1e-6)
+            assert alg.learning_rate == pytest.approx(learning_rate, rel=1e-6)  # the rate these updates used
+    released_rate = 1e-5 if schedule == "adaptive" else learning_rate
     alg.num_learning_epochs = alg.num_mini_batches = 1  # one Adam step
-    rollout_and_update(alg, generator)
+    rollout_and_update(alg, generator)  # on the CPU the first mini-batch's KL is exactly 0: the rate stays
     changed = [k for k, v in alg.actor.state_dict().items() if not torch.equal(actor_before[k], v)]
     assert any("normalizer" in k for k in changed) and any(k.startswith("mlp") for k in changed)
     steps = torch.cat([(v - actor_before[k]).abs().flatten() for k, v in alg.actor.state_dict().items()
                        if k.startswith("mlp")])
-    assert float(steps.max()) == pytest.approx(learning_rate, rel=0.02)  # Adam's first step: lr * g / |g|
+    assert float(steps.max()) == pytest.approx(released_rate, rel=0.02)  # Adam's first step: lr * g / |g|
+    with monkeypatch.context() as patch:
+        patch.setattr(alg.actor, "get_kl_divergence", small_kl)
+        rollout_and_update(alg, generator)
+    assert alg.learning_rate == pytest.approx(released_rate * (1.5 if schedule == "adaptive" else 1.0), rel=1e-6)
     with pytest.raises(ValueError, match="critic_warmup_iterations=-1"):
         alg.freeze_actor(-1)
+
+
+def test_freeze_actor_0_on_an_actor_that_is_not_held_changes_nothing():
+    """Only a release restarts the actor's Adam: freeze_actor(0) in the middle of training keeps its step count
+    and the learning rate."""
+    alg, _ = updated(GentePPO, 1e-3)
+    steps = [alg.optimizer.state[p]["step"].clone() for p in alg.actor.parameters()]
+    rate = alg.learning_rate
+    alg.freeze_actor(0)
+    assert all(torch.equal(s, alg.optimizer.state[p]["step"]) for s, p in zip(steps, alg.actor.parameters()))
+    assert float(alg._learning_rate_tensor()) == pytest.approx(rate, rel=1e-6)
 
 
 def test_a_run_saved_during_its_critic_warmup_resumes_it():

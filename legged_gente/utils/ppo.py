@@ -51,6 +51,9 @@ class SyncFreeGaussianDistribution(GaussianDistribution):
 
 
 class GentePPO(PPO):
+    MIN_LEARNING_RATE, MAX_LEARNING_RATE = 1e-5, 1e-2
+    """The adaptive schedule's bounds (rsl-rl's)."""
+
     def __init__(self, actor, critic, storage, *args, optimizer: str = "adam", **kwargs):
         super().__init__(actor, critic, storage, *args, optimizer=optimizer, **kwargs)
         self.device_side_update = (optimizer == "adam" and self.rnd is None and self.symmetry is None
@@ -101,7 +104,15 @@ class GentePPO(PPO):
         """Train the critic alone for the next ``updates`` updates: the actor's gradients are zeroed, so Adam
         (whose moments start at zero) leaves the actor and its action noise exactly as they are. For fine-tuning
         a trained actor with a fresh critic: an untrained critic's advantages would otherwise pull the actor off
-        its gait in the first updates."""
+        its gait in the first updates.
+
+        At the release (``updates`` reaching 0) the actor's Adam starts afresh: its bias correction restarts, and
+        with the adaptive schedule the learning rate restarts at its floor. A fresh Adam's first steps move every
+        weight by about the learning rate whatever its gradient (m / sqrt(v) = sign(g)), which at the rate the
+        critic trained with threw the trained actor far off (KL above twice the target at once: the rate fell
+        to its floor within the first iteration); from the floor the KL rule raises it 1.5x per mini-batch while
+        the policy changes little (Liu et al. 2020, "On the Variance of the Adaptive Learning Rate and
+        Beyond": Adam's early steps want a warm-up)."""
         if updates < 0:
             raise ValueError(f"runner.critic_warmup_iterations={updates}: the number of critic-only updates "
                              f"must be >= 0")
@@ -110,13 +121,16 @@ class GentePPO(PPO):
                 raise ValueError("a critic warm-up needs GentePPO's own update (Adam, feed-forward models, no RND "
                                  "or symmetry); set runner.critic_warmup_iterations = 0")
             return
+        released = self._frozen_actor_updates > 0 and not updates
         self._frozen_actor_updates = updates
         self._actor_gradient_scale.fill_(0.0 if updates else 1.0)  # device writes, no host wait
-        if not updates:  # released: the actor's Adam moments are still zero; restart its bias correction too, or
-            for parameter in self.actor.parameters():  # its first steps would be scaled by the frozen steps' count
+        if released:  # the actor's Adam moments are still zero; restart its bias correction too, or its first
+            for parameter in self.actor.parameters():  # steps would be scaled by the frozen steps' count
                 state = self.optimizer.state.get(parameter)
                 if state:
                     state["step"].zero_()
+            if self._adaptive_learning_rate:
+                self._learning_rate_tensor().fill_(self.MIN_LEARNING_RATE)
 
     def save(self) -> dict:
         """rsl-rl's checkpoint, plus the critic warm-up's remaining updates when it is still running."""
@@ -145,8 +159,8 @@ class GentePPO(PPO):
 
     def _adapt_learning_rate(self, lr: torch.Tensor, kl: torch.Tensor) -> None:
         """rsl-rl's adaptive rule, in place on the device: /1.5 above 2 x desired KL, x1.5 below half of it."""
-        lower = torch.clamp(lr / 1.5, min=1e-5)
-        higher = torch.clamp(lr * 1.5, max=1e-2)
+        lower = torch.clamp(lr / 1.5, min=self.MIN_LEARNING_RATE)
+        higher = torch.clamp(lr * 1.5, max=self.MAX_LEARNING_RATE)
         lr.copy_(torch.where(kl > 2.0 * self.desired_kl, lower,
                              torch.where((kl < 0.5 * self.desired_kl) & (kl > 0.0), higher, lr)))
 
@@ -272,14 +286,14 @@ class GentePPO(PPO):
                 stage()
         self._update_normalization()
         self.storage.clear()
-        if self._frozen_actor_updates:
-            self.freeze_actor(self._frozen_actor_updates - 1)
         num_updates = self.num_learning_epochs * self.num_mini_batches
         means = self._loss_sums / num_updates
         finite = self._parameters_finite().float().reshape(1)
         value, surrogate, entropy, learning_rate, finite = torch.cat(
             [means, self._learning_rate_tensor().reshape(1), finite]).tolist()  # the update's one host read
-        self.learning_rate = learning_rate  # a float for the logger
+        self.learning_rate = learning_rate  # a float for the logger: the rate this update ended with
+        if self._frozen_actor_updates:
+            self.freeze_actor(self._frozen_actor_updates - 1)
         losses = {"value": value, "surrogate": surrogate, "entropy": entropy}
         self._check_finite(losses, finite == 1.0)
         return losses
