@@ -19,12 +19,12 @@ def observations(generator):
                        "critic": torch.randn(NUM_ENVS, 7, generator=generator)}, batch_size=[NUM_ENVS])
 
 
-def algorithm(alg_class, learning_rate, generator):
-    """The algorithm built from the default train config (2 mini-batches, 3 epochs), seeded."""
+def algorithm(alg_class, learning_rate, generator, mini_batches=2, epochs=3):
+    """The algorithm built from the default train config, seeded."""
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
     cfg["num_steps_per_env"] = STEPS
     cfg["multi_gpu"] = None
-    cfg["algorithm"].update(class_name=alg_class, num_mini_batches=2, num_learning_epochs=3,
+    cfg["algorithm"].update(class_name=alg_class, num_mini_batches=mini_batches, num_learning_epochs=epochs,
                             learning_rate=learning_rate)
     torch.manual_seed(0)
     return PPO.construct_algorithm(observations(generator), SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS),
@@ -140,12 +140,7 @@ def test_the_same_mini_batches_give_rsl_rls_losses_gradients_and_learning_rate(m
 
     def one_batch(alg_class):
         generator = torch.Generator().manual_seed(0)
-        cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
-        cfg["num_steps_per_env"], cfg["multi_gpu"] = STEPS, None
-        cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=2, learning_rate=1e-3)
-        torch.manual_seed(0)
-        alg = PPO.construct_algorithm(observations(generator),
-                                      SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS), cfg, "cpu")
+        alg = algorithm(alg_class, 1e-3, generator, mini_batches=1, epochs=2)
         obs = observations(generator)
         for _ in range(STEPS):
             alg.act(obs)
@@ -189,6 +184,7 @@ def test_a_critic_warmup_holds_the_actor_fixed_then_releases_it(monkeypatch, sch
     alg.freeze_actor(2)
     actor_before = state(alg.actor)
     assert any("std" in k for k in actor_before) and any("normalizer" in k for k in actor_before)
+
     def small_kl(old, new):  # below half the desired KL
         return torch.full((NUM_ENVS,), 1e-4)
 
