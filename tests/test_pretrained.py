@@ -147,7 +147,9 @@ def test_train_pretrained_with_rsl_rls_ppo_names_the_warmup_setting(tmp_path):
         "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained",
         "--set", "algorithm.class_name=PPO"])
     env, _ = task_registry.make_env(args.task, args)
-    with pytest.raises(ValueError, match=r"runner.critic_warmup_iterations=50 needs algorithm.class_name "
+    default = task_registry.get_cfgs(SHIPPED)[1].runner.critic_warmup_iterations
+    assert default > 0
+    with pytest.raises(ValueError, match=rf"runner.critic_warmup_iterations={default} needs algorithm.class_name "
                                          r"legged_gente.utils.ppo:GentePPO, not PPO; set it to 0"):
         task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
     args = parse_args(train_script.build_train_parser(), [

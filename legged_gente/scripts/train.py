@@ -107,7 +107,7 @@ def build_train_parser():
     parser.add_argument("--pretrained", action="store_true",
                         help="start from the policy shipped for --task (its actor; the critic, optimiser and "
                              "curriculum start afresh, and the critic trains alone for the first "
-                             "runner.critic_warmup_iterations, 50 by default): fine-tune it on changed physics, "
+                             "runner.critic_warmup_iterations, 800 by default): fine-tune it on changed physics, "
                              "terrain or rewards")
     return parser
 

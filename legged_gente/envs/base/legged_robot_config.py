@@ -246,10 +246,11 @@ class LeggedRobotCfgPPO(BaseConfig):
         matmul_precision = "high"
         obs_groups = {"actor": ["policy"], "critic": ["critic"]}
         # fine-tuning a shipped policy (gente-train --pretrained): its critic is not shipped, so the first
-        # iterations train the fresh critic alone, the actor held fixed (GentePPO.freeze_actor); without this the
-        # fresh critic's first updates cost the shipped biped 17 % of its reward for ~150 iterations
+        # iterations train the fresh critic alone, the actor held fixed (GentePPO.freeze_actor). Meanwhile the
+        # shipped actor carries the restarted curriculum up (to level ~10 of the biped's 0-15 by iteration 800):
+        # an actor released on the bottom levels specialises to them and lost 3x more on gente_original
         # (docs/performance.md). Ignored when training from scratch or resuming.
-        critic_warmup_iterations = 50
+        critic_warmup_iterations = 800
         resume = False
         load_run = -1  # -1: the latest run
         checkpoint = -1  # -1: the latest checkpoint
