@@ -115,6 +115,7 @@ def test_train_pretrained_starts_from_the_shipped_actor(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "Starting from the policy shipped for gente_biped_flat" in out
     assert "the first 1 iterations train the critic alone" in out
+    assert "Note: --max_iterations 1 ends inside that warm-up, so this run leaves the actor as shipped" in out
     shipped = load_checkpoint(policies_root() / SHIPPED / "model.pt")["actor_state_dict"]
     actor = runner.alg.get_policy().state_dict()
     assert actor.keys() == shipped.keys() and all(torch.equal(actor[k], shipped[k]) for k in shipped)
@@ -127,6 +128,23 @@ def test_train_pretrained_starts_from_the_shipped_actor(tmp_path, capsys):
     runner.learn(1)
     moved = runner.alg.get_policy().state_dict()
     assert not torch.equal(moved["mlp.0.weight"], shipped["mlp.0.weight"])
+
+
+def test_train_pretrained_notes_a_run_that_ends_inside_the_warmup_only(tmp_path, capsys):
+    """A --pretrained run no longer than the critic warm-up would leave the actor as shipped: the start message
+    says so; a longer one gets no note."""
+    from legged_gente.scripts import train as train_script
+
+    def start_message(max_iterations: int) -> str:
+        args = parse_args(train_script.build_train_parser(), [
+            "--task", SHIPPED, "--device", "cpu", "--num_envs", "2", "--headless", "--pretrained",
+            "--max_iterations", str(max_iterations), "--set", "runner.critic_warmup_iterations=3"])
+        env, _ = task_registry.make_env(args.task, args)
+        task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
+        return capsys.readouterr().out
+
+    assert "Note: --max_iterations 3 ends inside that warm-up" in start_message(3)
+    assert "Note:" not in start_message(4)
 
 
 def test_train_pretrained_and_resume_exclude_each_other(capsys):
