@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -98,6 +99,35 @@ def test_resume_falls_back_to_the_newest_readable_checkpoint(runner, tmp_path, c
     # a checkpoint named explicitly is loaded or refused, never replaced by another
     with pytest.raises(UnreadableCheckpoint):
         load_newest_readable(runner, root, load_run=newer.name, checkpoint=9)
+
+
+def saved_as_on_a_gpu(path: Path) -> None:
+    """Rewrite a CPU checkpoint as ``torch.save`` writes one from a GPU: every storage's location tag reads
+    cuda:0, so a plain ``torch.load`` on a machine without CUDA refuses it."""
+    with zipfile.ZipFile(path) as source:
+        entries = {info: source.read(info) for info in source.infolist()}
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as target:
+        for info, data in entries.items():
+            if info.filename.endswith("/data.pkl"):
+                data = data.replace(b"X\x03\x00\x00\x00cpu", b"X\x06\x00\x00\x00cuda:0")
+            target.writestr(info, data)
+
+
+def test_resume_reads_a_checkpoint_saved_on_a_gpu(runner, tmp_path):
+    """A run trained on a GPU continues on a machine without one (--resume maps the tensors to the env's
+    device, as --pretrained and gente-play do)."""
+    run = tmp_path / "gente_biped_flat" / "2026-01-01_00-00-00"
+    run.mkdir(parents=True)
+    runner.current_learning_iteration = 5
+    runner.save(str(run / "model_5.pt"))
+    saved_as_on_a_gpu(run / "model_5.pt")
+    if not torch.cuda.is_available():
+        with pytest.raises(RuntimeError, match="CUDA"):
+            torch.load(run / "model_5.pt", weights_only=True)
+    runner.current_learning_iteration = 0
+    assert load_newest_readable(runner, tmp_path / "gente_biped_flat") == run / "model_5.pt"
+    assert runner.current_learning_iteration == 5
+    assert all(p.device == torch.device(runner.device) for p in runner.alg.get_policy().parameters())
 
 
 @pytest.fixture(scope="module")
