@@ -227,7 +227,7 @@ def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) ->
     skipped = []
     for path in candidates:
         try:
-            runner.load(str(path), map_location=runner.device)  # a GPU run continues on the CPU, cuda:1 from cuda:0
+            runner.load(str(path))
         except UnreadableCheckpoint as error:
             if len(candidates) == 1:
                 raise

@@ -187,10 +187,11 @@ class GenteOnPolicyRunner(OnPolicyRunner):
     def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
         """rsl-rl's load, but safe (``torch.load(weights_only=True)``) and with a one-line error for a checkpoint
         of another task; also restores the env's curriculum when the checkpoint has one that fits
-        (``self.curriculum_message`` says what happened)."""
+        (``self.curriculum_message`` says what happened). The tensors go to ``map_location``, by default the
+        runner's device: a run trained on a GPU continues on the CPU, or on cuda:1 from cuda:0."""
         from legged_gente.utils.checkpoints import CheckpointError, check_checkpoint_fits, load_checkpoint
 
-        loaded = load_checkpoint(path, map_location)
+        loaded = load_checkpoint(path, map_location or self.device)
         check_checkpoint_fits(loaded, path, self.task_name, self.env.num_actions, self.alg.get_policy().state_dict())
         if "critic_state_dict" not in loaded and (load_cfg is None or load_cfg.get("critic", False)):
             raise CheckpointError(
