@@ -175,13 +175,15 @@ class TaskRegistry:
                                      f"legged_gente.utils.ppo:GentePPO, not {train_cfg.algorithm.class_name}; "
                                      f"set it to 0")
                 runner.alg.freeze_actor(warmup)
-            iterations = runner_cfg.max_iterations
-            print(f"Starting from the policy shipped for {name} ({pretrained}): its actor; the critic, optimiser "
-                  f"and curriculum start afresh" + (f"; the first {warmup} iterations train the critic alone"
-                                                     if warmup else "")
-                  + (f". Note: --max_iterations {iterations} ends inside that warm-up, so this run leaves the actor "
-                     f"as shipped (continue with --resume, or lower runner.critic_warmup_iterations)"
-                     if 0 < iterations <= warmup else ""))
+            message = (f"Starting from the policy shipped for {name} ({pretrained}): its actor; the critic, "
+                       f"optimiser and curriculum start afresh")
+            if warmup:
+                message += f"; the first {warmup} iterations train the critic alone"
+                if 0 < runner_cfg.max_iterations <= warmup:
+                    message += (f". Note: --max_iterations {runner_cfg.max_iterations} ends inside that warm-up, so "
+                                f"this run leaves the actor as shipped (continue with --resume, or lower "
+                                f"runner.critic_warmup_iterations)")
+            print(message)
         return runner, train_cfg, log_dir
 
     def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):
