@@ -71,6 +71,18 @@ def grid_shape(n: int) -> tuple[int, int]:
     return rows, n // rows
 
 
+def lay_out_items(terrain_cfg, items: list[Item]) -> tuple[int, int]:
+    """Set ``terrain_cfg`` (a task's terrain config) to the benchmark layout: ``items`` as the tiles of a
+    (rows, cols) grid (:func:`grid_shape`), row-major, as generated heightfield tiles. Returns (rows, cols)."""
+    size_x, size_y, resolution = tile_geometry([item.spec() for item in items])
+    rows, cols = grid_shape(len(items))
+    terrain_cfg.mesh_type, terrain_cfg.mode, terrain_cfg.curriculum = "heightfield", "generated", False
+    terrain_cfg.generated_specs = [str(item.spec_path) for item in items]
+    terrain_cfg.num_rows, terrain_cfg.num_cols = rows, cols
+    terrain_cfg.terrain_length, terrain_cfg.terrain_width, terrain_cfg.resolution = size_x, size_y, resolution
+    return rows, cols
+
+
 def settle_steps(settle_s: float, dt: float) -> int:
     """The policy steps at the start of an episode left out of the tracking error."""
     return int(round(settle_s / dt))
@@ -186,15 +198,8 @@ class Evaluation:
         if mode not in ("velocity", "waypoints"):
             raise ValueError(f"mode {mode!r}: use 'velocity' or 'waypoints'.")
         self.items, self.mode, self.seed = list(items), mode, seed
-        specs = [item.spec() for item in self.items]
-        size_x, size_y, resolution = tile_geometry(specs)
-        rows, cols = grid_shape(len(self.items))
         env_cfg, self.train_cfg = task_registry.get_cfgs(task)
-        t = env_cfg.terrain
-        t.mesh_type, t.mode, t.curriculum = "heightfield", "generated", False
-        t.generated_specs = [str(item.spec_path) for item in self.items]
-        t.num_rows, t.num_cols = rows, cols
-        t.terrain_length, t.terrain_width, t.resolution = size_x, size_y, resolution
+        _, cols = lay_out_items(env_cfg.terrain, self.items)
         env_cfg.env.num_envs = len(self.items) * robots_per_terrain
         self.dt = env_cfg.sim.dt * env_cfg.control.decimation
         self.num_steps = int(math.ceil(episode_length_s / self.dt))
