@@ -27,7 +27,8 @@ def exit_times(start: np.ndarray, velocity: np.ndarray, lo: np.ndarray, hi: np.n
     """Per robot: when a point moving from ``start`` at ``velocity`` (n, 2) first leaves the box [lo, hi] (inf if
     it stands still)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        to_wall = np.where(velocity > 0, (hi - start) / velocity, np.where(velocity < 0, (lo - start) / velocity, np.inf))
+        wall = np.where(velocity > 0, hi, lo)
+        to_wall = np.where(velocity != 0, (wall - start) / velocity, np.inf)
     return to_wall.min(axis=1)
 
 
@@ -82,7 +83,8 @@ def main() -> None:
     args = parser.parse_args()
     r = edge_paths(args.benchmark, args.task, args.robots_per_terrain, args.seed)
     total = len(r["leave"])
-    print(f"{args.benchmark}: {r['terrains']} terrains, {total} moving robots ({args.task}'s commands, seed {args.seed})")
+    print(f"{args.benchmark}: {r['terrains']} terrains, {total} moving robots ({args.task}'s commands, "
+          f"seed {args.seed})")
     for seconds, what in ((EPISODE_S, "within the episode"), (SUCCESS_S, "before the success rule's distance")):
         off = r["leave"] < seconds
         s = np.abs(r["step"][off])
