@@ -377,3 +377,36 @@ def test_an_evaluation_without_moving_robots_says_so(tmp_path, capsys):
           "--stand_fraction", "1", "--episode_s", "0.2", "--settle_s", "0.1", "--device", "cpu", "--out",
           str(tmp_path), "--no_progress"])
     assert "no robot had a moving command (all were told to stand still" in capsys.readouterr().out
+
+
+def test_a_robot_at_its_tiles_edge_ends_its_measured_episode_there_with_a_tile_edge_margin():
+    """Robots 2 and 3 stand on the second of two 20 m tiles (a 1 x 2 grid: y from 20 to 40 m). At step 3 robot 3's
+    base is put 0.3 m from the tile's edge at y = 20; with a 0.5 m margin its measured episode ends at that
+    step (left_tile, not a fall): it is measured for 3 steps, robot 2 for all 10. Without a margin it goes on."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    items = load_benchmark(str(BENCHMARK), ITEMS)
+    evaluation = Evaluation("gente_biped", items, 2, "cpu", 0.2)
+    env = evaluation.env
+    assert evaluation.tile_bounds(0.5)[2:].tolist() == [[0.5, 20.5, 19.5, 39.5]] * 2
+    with pytest.raises(ValueError, match="tile_edge_margin"):
+        evaluation.tile_bounds(10.0)
+
+    def run(margin):
+        calls = []
+
+        def policy(obs):
+            calls.append(1)
+            if len(calls) == 3:
+                env.sim.qpos[3, 1] = 20.3  # m, world y: 0.3 m inside tile 1's edge at y = 20
+            return torch.zeros(env.num_envs, env.num_actions)
+
+        task = evaluation.make_task(stand_fraction=0.0)
+        return evaluation.run(policy, task, settle_s=0.04, progress=False, tile_edge_margin=margin).metrics
+
+    m = run(0.5)
+    assert m["left_tile"].tolist() == [False, False, False, True] and not m["fell"].any()
+    assert m["time_s"][3] == pytest.approx(3 * env.dt) and m["time_s"][2] == pytest.approx(10 * env.dt)
+    m = run(None)
+    assert not m["left_tile"].any() and m["time_s"][3] == pytest.approx(10 * env.dt)

@@ -31,6 +31,9 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
   measured step, for moving commands: how far from its heading a robot ends, which ``progress`` weighs only
   through the distance lost (not part of ``success``).
 * ``standing``: the robot was commanded to stand still (velocity task).
+* ``left_tile``: with ``tile_edge_margin``, the robot's base came within that margin of its tile's edge, where
+  its terrain ends (the next tile or the border lies at any height: often a cliff on GenTe's terrains); its
+  measured episode ended there, not as a fall. Without it robots walk on past their tile's edge.
 * ``success``: never for a diverged robot; velocity task, moving command (|c_xy| >= 0.3 m/s): not fell,
   tracking_error < ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still
   command (its own category): not fell and tracking_error < ``tracking_threshold``; waypoint task: the last
@@ -91,12 +94,14 @@ def settle_steps(settle_s: float, dt: float) -> int:
 class Recorder:
     """Per-robot accumulators on the env's device, updated after every policy step from what the step left."""
 
-    def __init__(self, env, settle_s: float, trace_robots: torch.Tensor):
+    def __init__(self, env, settle_s: float, trace_robots: torch.Tensor, tile_bounds: torch.Tensor | None = None):
         n, dev = env.num_envs, env.device
+        self.tile_bounds = tile_bounds
+        """(n, 4) x_lo, y_lo, x_hi, y_hi (m, world) of the part of its tile a robot is measured on, or None."""
         z = lambda dtype=torch.float32: torch.zeros(n, dtype=dtype, device=dev)  # noqa: E731
         self.dt, self.settle_steps = env.dt, settle_steps(settle_s, env.dt)
         self.active = torch.ones(n, dtype=torch.bool, device=dev)
-        self.fell, self.diverged = z(torch.bool), z(torch.bool)
+        self.fell, self.diverged, self.left_tile = z(torch.bool), z(torch.bool), z(torch.bool)
         self.err_sum, self.err_steps, self.distance, self.energy, self.alive_steps = z(), z(), z(), z(), z()
         self.along_cmd, self.cmd_distance = z(), z()
         self.heading_error = torch.full((n,), float("nan"), device=dev)
@@ -151,6 +156,11 @@ class Recorder:
         self.collisions += (contact & ~self.in_contact).float() * af
         self.in_contact = contact
         self.alive_steps += af
+        if self.tile_bounds is not None:
+            b = self.tile_bounds
+            outside = (xy < b[:, :2]).any(1) | (xy > b[:, 2:]).any(1)
+            self.left_tile |= alive & outside  # its terrain ends here: the measured episode does too
+            alive = alive & ~outside
         self.active = alive
         r = self.trace_robots
         self.trace["cmd"].append(env.commands[r, :3].clone())
@@ -222,6 +232,19 @@ class Evaluation:
         self.env.terrain_columns = tile % cols
         self.env.env_origins = self.env.terrain_origins[self.env.terrain_levels, self.env.terrain_columns]
 
+    def tile_bounds(self, margin: float | None) -> torch.Tensor | None:
+        """(n, 4) x_lo, y_lo, x_hi, y_hi of every robot's tile, ``margin`` (m) inside its edges; None without one."""
+        if margin is None:
+            return None
+        size_x, size_y = self.env.terrain.tile_size
+        if not 0.0 <= margin < min(size_x, size_y) / 2:
+            raise ValueError(f"tile_edge_margin {margin} m must be in [0, {min(size_x, size_y) / 2:g}) for "
+                             f"{size_x:g} x {size_y:g} m tiles.")
+        cols = self.env_cfg.terrain.num_cols
+        lo = torch.stack([(self.tile // cols) * size_x, (self.tile % cols) * size_y], 1).float()
+        hi = lo + torch.tensor([size_x, size_y], device=lo.device)
+        return torch.cat([lo + margin, hi - margin], 1)
+
     def make_task(self, reach_distance: float = 1.0, speed: float = 0.6, num_waypoints: int = 4,
                   spacing: float = 1.8, lateral: float = 1.5, min_speed: float = 0.3, stand_fraction: float = 0.1):
         env = self.env
@@ -231,8 +254,11 @@ class Evaluation:
         points = zigzag_waypoints(env.env_origins[:, :2], num_waypoints, spacing, lateral, seed=self.seed)
         return WaypointTask(points, reach_distance, speed)
 
-    def run(self, policy, task=None, settle_s: float = 1.0, progress: bool = True) -> RunResult:
-        """Roll ``policy`` (obs TensorDict -> actions) for one episode of every robot; returns per-robot metrics."""
+    def run(self, policy, task=None, settle_s: float = 1.0, progress: bool = True,
+            tile_edge_margin: float | None = None) -> RunResult:
+        """Roll ``policy`` (obs TensorDict -> actions) for one episode of every robot; returns per-robot metrics.
+        With ``tile_edge_margin`` (m) a robot's measured episode ends when its base comes that close to its tile's
+        edge, where its terrain ends and the next tile or the border begins (``left_tile``)."""
         from tqdm import tqdm
 
         env = self.env
@@ -250,7 +276,7 @@ class Evaluation:
         with torch.inference_mode():
             env.reset()  # every robot to its tile's spawn
             obs = command()
-            recorder = Recorder(env, settle_s, first)
+            recorder = Recorder(env, settle_s, first, self.tile_bounds(tile_edge_margin))
             for _ in tqdm(range(self.num_steps), desc=f"{self.mode} rollout", disable=not progress, unit="step"):
                 _, _, dones, _ = env.step(policy(obs))
                 recorder.record(env, dones)
@@ -267,13 +293,14 @@ class Evaluation:
             "displacement": torch.norm(r.last_xy - r.start_xy, dim=1), "collisions": r.collisions,
             "energy": r.energy, "time_s": r.alive_steps * env.dt, "finished": task.finished,
             "progress": progress, "heading_error": r.heading_error, "standing": standing, "diverged": r.diverged,
+            "left_tile": r.left_tile,
         }
         out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
         traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}
         traces["spawn"] = env.env_origins[first].cpu().numpy()
         traces["dt"] = np.array(env.dt)
         params = {"settle_s": settle_s, "dt": env.dt, "episode_length_s": self.num_steps * env.dt,
-                  "max_base_speed": MAX_BASE_SPEED}
+                  "max_base_speed": MAX_BASE_SPEED, "tile_edge_margin": tile_edge_margin}
         if isinstance(task, WaypointTask):
             traces["waypoints"] = task.waypoints[first].cpu().numpy()
             params |= {"reach_distance": task.reach_distance, "speed": task.speed}

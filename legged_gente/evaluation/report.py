@@ -30,7 +30,7 @@ BASE_GROUND = ("flat", "natural_ground", "random_uniform", "waves")
 CATEGORIES = ("water", "soil", "obstacles", "slopes_and_stairs")
 
 METRIC_COLUMNS = ("robots", "success_rate", "tracking_error", "progress", "heading_error", "distance", "displacement",
-                  "collisions", "falls", "fall_rate", "diverged", "energy_per_m")
+                  "collisions", "falls", "fall_rate", "diverged", "energy_per_m", "left_tile")
 
 
 def categories_of(spec) -> list[str]:
@@ -98,6 +98,7 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
         "fall_rate": falls / n if n else math.nan,
         "diverged": int(diverged.sum()),
         "energy_per_m": float(kept["energy"].sum()) / distance if distance > 0 else math.nan,
+        "left_tile": int(metrics.get("left_tile", np.zeros(n, bool)).sum()),
     }
 
 

@@ -44,6 +44,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(*flag("--settle_s"), type=float, default=1.0, help="s at the start not counted in the tracking error")
     p.add_argument(*flag("--reach_distance"), type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
+    p.add_argument(*flag("--tile_edge_margin"), type=float, default=None,
+                   help="m; end a robot's measured episode when its base comes this close to its tile's edge, where "
+                        "its terrain ends (default: measure it past the edge, on the next tile or the border)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
@@ -75,11 +78,13 @@ def evaluate(args) -> dict:
                                                args.pretrained)
     task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
                                 stand_fraction=args.stand_fraction)
-    result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress)
+    result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress,
+                            tile_edge_margin=args.tile_edge_margin)
     meta = {"task": args.task, "benchmark": str(args.benchmark),
             "policy": args.checkpoint or args.exported or args.baseline or "pretrained",
             "policy_file": str(policy_file) if policy_file else None,
-            "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed}
+            "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed,
+            "tile_edge_margin": args.tile_edge_margin}
     report = build_report(result, items, args.tracking_threshold, meta, args.min_progress)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
