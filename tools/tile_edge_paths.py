@@ -19,8 +19,11 @@ import argparse
 import numpy as np
 import torch
 
+from legged_gente.evaluation.report import MIN_PROGRESS
+
 EPISODE_S = 10.0
-SUCCESS_S = 1.0 + 0.7 * (EPISODE_S - 1.0)  # settle, then 70 % of the commanded distance
+SETTLE_S = 1.0  # gente-evaluate's --settle_s
+SUCCESS_S = SETTLE_S + MIN_PROGRESS * (EPISODE_S - SETTLE_S)  # settle, then the success rule's share of the distance
 
 
 def exit_times(start: np.ndarray, velocity: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -62,15 +65,10 @@ def edge_paths(benchmark: str, task: str = "gente_biped", robots_per_terrain: in
     start = start[moving]
     leave = exit_times(start, velocity, lo[moving], hi[moving])
 
-    heights, origin, res = terrain.height_field, np.array(terrain.origin_xy), terrain.resolution
-
-    def height(points: np.ndarray) -> np.ndarray:
-        ij = np.clip(np.round((points - origin) / res).astype(int), 0, np.array(heights.shape) - 1)
-        return heights[ij[:, 0], ij[:, 1]]
-
     direction = velocity / np.linalg.norm(velocity, axis=1, keepdims=True)
     edge = start + velocity * np.where(np.isfinite(leave), leave, 0.0)[:, None]
-    step = height(edge + 0.25 * direction) - height(edge - 0.25 * direction)
+    outside, inside = edge + 0.25 * direction, edge - 0.25 * direction
+    step = terrain.height_at(*outside.T) - terrain.height_at(*inside.T)
     return {"terrains": len(items), "leave": leave, "step": step}
 
 
