@@ -76,6 +76,8 @@ def test_nonsense_settings_are_rejected_before_anything_runs(capsys, override, m
     (["--min_progress", "5"], "min_progress is a share of the commanded distance, in (0, 1]; got 5.0"),
     (["--min_speed", "0"], "min_speed must be > 0 m/s"),
     (["--out", "FILE"], "is a file; give a folder"),
+    (["--tile_edge_margin", "near"], "'near' is not a distance in m; give a number such as 0.5, or 'off'"),
+    (["--tile_edge_margin", "-0.1"], "tile_edge_margin -0.1 m must be in [0, "),
 ])
 def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
     (tmp_path / "FILE").write_text("")
@@ -85,6 +87,13 @@ def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
                                                          "--benchmark", "flat", "--robots_per_terrain", "2",
                                                          "--device", "cpu", "--no_progress", *out, *flags])
     assert message in line
+
+
+def test_the_tile_edge_margin_is_on_by_default_and_can_be_turned_off():
+    def margin(*flags):
+        return evaluate_script.build_parser().parse_args(["--baseline", "zero", "--out", "o", *flags]).tile_edge_margin
+
+    assert margin() == 0.5 and margin("--tile_edge_margin", "0.8") == 0.8 and margin("--tile-edge-margin", "off") is None
 
 
 @pytest.mark.parametrize("flags, message", [

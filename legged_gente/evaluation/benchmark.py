@@ -23,6 +23,12 @@ from pathlib import Path
 
 from legged_gente.generation.spec import TerrainSpec
 
+TILE_EDGE_MARGIN = 0.5
+"""m; a robot's measured episode ends when its base comes this close to its tile's edge. Beyond the edge lies the
+next terrain or the layout's border at any height (4.6 m below the rim on one of GenTe's terrains), which the terrain's
+author never drew: a fall or a blow-up there is the layout's. In the default pose the shipped robots' bodies reach
+0.33 m (biped) and 0.36 m (quadruped) from their base (bounding spheres): half a metre keeps them on the tile."""
+
 KINDS = ("text", "image")
 SHIPPED = Path(str(importlib.resources.files("legged_gente"))) / "benchmarks"  # package data
 

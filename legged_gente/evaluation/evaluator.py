@@ -31,9 +31,10 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
   measured step, for moving commands: how far from its heading a robot ends, which ``progress`` weighs only
   through the distance lost (not part of ``success``).
 * ``standing``: the robot was commanded to stand still (velocity task).
-* ``left_tile``: with ``tile_edge_margin``, the robot's base came within that margin of its tile's edge, where
-  its terrain ends (the next tile or the border lies at any height: often a cliff on GenTe's terrains); its
-  measured episode ended there, not as a fall. Without it robots walk on past their tile's edge.
+* ``left_tile``: the robot's base came within ``tile_edge_margin`` (default :data:`TILE_EDGE_MARGIN`) of its
+  tile's edge, where its terrain ends (the next tile or the border lies at any height: often a cliff on GenTe's
+  terrains); its measured episode ended there, not as a fall. With ``tile_edge_margin=None`` robots walk on past
+  their tile's edge.
 * ``success``: never for a diverged robot; velocity task, moving command (|c_xy| >= 0.3 m/s): not fell,
   tracking_error < ``tracking_threshold`` (0.25 m/s) and progress >= ``min_progress`` (0.7); stand-still
   command (its own category): not fell and tracking_error < ``tracking_threshold``; waypoint task: the last
@@ -55,7 +56,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from legged_gente.evaluation.benchmark import Item, tile_geometry
+from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN, Item, tile_geometry
 from legged_gente.evaluation.tasks import VelocityTask, WaypointTask, zigzag_waypoints
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
 from legged_gente.utils.torch_math import quat_rotate_inverse, wrap_to_pi, yaw_of, yaw_quat
@@ -255,10 +256,10 @@ class Evaluation:
         return WaypointTask(points, reach_distance, speed)
 
     def run(self, policy, task=None, settle_s: float = 1.0, progress: bool = True,
-            tile_edge_margin: float | None = None) -> RunResult:
+            tile_edge_margin: float | None = TILE_EDGE_MARGIN) -> RunResult:
         """Roll ``policy`` (obs TensorDict -> actions) for one episode of every robot; returns per-robot metrics.
-        With ``tile_edge_margin`` (m) a robot's measured episode ends when its base comes that close to its tile's
-        edge, where its terrain ends and the next tile or the border begins (``left_tile``)."""
+        A robot's measured episode ends when its base comes ``tile_edge_margin`` (m) close to its tile's edge,
+        where its terrain ends and the next tile or the border begins (``left_tile``); None measures on past it."""
         from tqdm import tqdm
 
         env = self.env

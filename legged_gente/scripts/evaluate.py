@@ -15,7 +15,18 @@ from pathlib import Path
 
 import numpy as np
 
+from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN
 from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
+
+
+def edge_margin(text: str) -> float | None:
+    """--tile_edge_margin's value: metres, or 'off' (None: no margin)."""
+    if text == "off":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a distance in m; give a number such as 0.5, or 'off'")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -44,9 +55,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(*flag("--settle_s"), type=float, default=1.0, help="s at the start not counted in the tracking error")
     p.add_argument(*flag("--reach_distance"), type=float, default=1.0, help="m; waypoint reached within this distance (d)")
     p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
-    p.add_argument(*flag("--tile_edge_margin"), type=float, default=None,
-                   help="m; end a robot's measured episode when its base comes this close to its tile's edge, where "
-                        "its terrain ends (default: measure it past the edge, on the next tile or the border)")
+    p.add_argument(*flag("--tile_edge_margin"), type=edge_margin, default=TILE_EDGE_MARGIN,
+                   help=f"m; end a robot's measured episode when its base comes this close to its tile's edge, where "
+                        f"its terrain ends (default {TILE_EDGE_MARGIN}); 'off' measures on past the edge, on the next "
+                        f"tile or the border")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
