@@ -54,6 +54,18 @@ def test_zigzag_waypoints_alternate_sides():
     assert torch.allclose(offsets.abs(), torch.tensor(1.5)) and (offsets[:-1] * offsets[1:] < 0).all()
 
 
+def test_zigzag_waypoints_turn_back_where_the_path_would_leave_its_terrain():
+    """Tiles span x in [0, 20] (within a 0.5 m margin: [0.5, 19.5]); 4 waypoints 1.8 m apart need 7.2 m. From x = 10
+    the path runs +x to 17.2; from x = 15 (4.5 m of room ahead, 14.5 behind) it runs -x to 7.8; on a 4 m tile, from
+    x = 1.5 (room for neither, 2 m ahead, 1 m behind) it keeps +x."""
+    starts = torch.tensor([[10.0, 3.0], [15.0, 3.0], [1.5, 3.0]])
+    x_range = torch.tensor([[0.5, 19.5], [0.5, 19.5], [0.5, 3.5]])
+    pts = zigzag_waypoints(starts, 4, 1.8, 1.5, seed=1, x_range=x_range)
+    assert torch.allclose(pts[:, -1, 0], torch.tensor([10.0 + 7.2, 15.0 - 7.2, 1.5 + 7.2]))
+    assert torch.allclose(pts[1, :, 0], torch.tensor([13.2, 11.4, 9.6, 7.8]))
+    assert torch.allclose((pts[:, :, 1] - 3.0).abs(), torch.tensor(1.5))
+
+
 def test_grid_shape():
     assert grid_shape(100) == (10, 10) and grid_shape(2) == (1, 2) and grid_shape(7) == (1, 7)
     assert grid_shape(50) == (5, 10)

@@ -252,7 +252,9 @@ class Evaluation:
         if self.mode == "velocity":
             return VelocityTask(env.num_envs, self.env_cfg.commands.ranges, self.env_cfg.commands.heading_command,
                                 env.device, seed=self.seed, min_speed=min_speed, stand_fraction=stand_fraction)
-        points = zigzag_waypoints(env.env_origins[:, :2], num_waypoints, spacing, lateral, seed=self.seed)
+        inside = self.tile_bounds(TILE_EDGE_MARGIN)
+        points = zigzag_waypoints(env.env_origins[:, :2], num_waypoints, spacing, lateral, seed=self.seed,
+                                  x_range=inside[:, [0, 2]])
         return WaypointTask(points, reach_distance, speed)
 
     def run(self, policy, task=None, settle_s: float = 1.0, progress: bool = True,

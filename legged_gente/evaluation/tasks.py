@@ -124,13 +124,20 @@ class WaypointTask:
         return torch.stack([self.speed * go, torch.zeros_like(go), current[:, 2] * go, heading], 1)
 
 
-def zigzag_waypoints(starts_xy: torch.Tensor, count: int, spacing: float, lateral: float, seed: int = 0) -> torch.Tensor:
+def zigzag_waypoints(starts_xy: torch.Tensor, count: int, spacing: float, lateral: float, seed: int = 0,
+                     x_range: torch.Tensor | None = None) -> torch.Tensor:
     """(n, count, 2) waypoints ahead (+x) of each start: ``spacing`` m apart, alternating ``lateral`` m left/right
-    with a random first side per robot, so every path needs turns."""
+    with a random first side per robot, so every path needs turns. With ``x_range`` ((n, 2): the x each robot's
+    waypoints should stay within, its terrain's) a path that would pass the upper bound runs towards -x instead
+    where there is more room that way, so that a robot spawned off its tile's centre is not sent off its terrain."""
     n = starts_xy.shape[0]
     g = torch.Generator().manual_seed(seed)
     side = torch.where(torch.rand(n, generator=g) < 0.5, -1.0, 1.0).to(starts_xy.device)
     k = torch.arange(1, count + 1, device=starts_xy.device, dtype=starts_xy.dtype)
     sign = side[:, None] * torch.where(k % 2 == 1, 1.0, -1.0)[None, :]
-    return torch.stack([starts_xy[:, None, 0] + spacing * k[None, :], starts_xy[:, None, 1] + lateral * sign], -1)
-
+    ahead = torch.ones_like(side)
+    if x_range is not None:
+        room_ahead, room_behind = x_range[:, 1] - starts_xy[:, 0], starts_xy[:, 0] - x_range[:, 0]
+        ahead = torch.where((room_ahead < spacing * count) & (room_behind > room_ahead), -1.0, 1.0)
+    x = starts_xy[:, None, 0] + ahead[:, None] * spacing * k[None, :]
+    return torch.stack([x, starts_xy[:, None, 1] + lateral * sign], -1)
