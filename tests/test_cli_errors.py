@@ -76,6 +76,7 @@ def test_nonsense_settings_are_rejected_before_anything_runs(capsys, override, m
     (["--min_progress", "5"], "min_progress is a share of the commanded distance, in (0, 1]; got 5.0"),
     (["--min_speed", "0"], "min_speed must be > 0 m/s"),
     (["--out", "FILE"], "is a file; give a folder"),
+    (["--mode", "waypoints", "--speed", "0"], "speed must be > 0 m/s, got 0.0"),
     (["--tile_edge_margin", "near"], "'near' is not a distance in m; give a number such as 0.5, or 'off'"),
     (["--tile_edge_margin", "-0.1"], "tile_edge_margin -0.1 m must be in [0, "),
 ])

@@ -66,6 +66,17 @@ def test_zigzag_waypoints_turn_back_where_the_path_would_leave_its_terrain():
     assert torch.allclose((pts[:, :, 1] - 3.0).abs(), torch.tensor(1.5))
 
 
+def test_the_waypoint_episode_gives_half_again_the_time_to_walk_the_zigzag():
+    """4 waypoints 1.8 m apart, 1.5 m to either side: legs of sqrt(1.8^2 + 1.5^2) = 2.343 m, then 3 of
+    sqrt(1.8^2 + 3^2) = 3.499 m: 12.839 m, 21.40 s at 0.6 m/s, 32.10 s with half again."""
+    from legged_gente.evaluation.tasks import waypoint_episode_s, zigzag_length
+
+    assert zigzag_length() == pytest.approx(2.3431 + 3 * 3.4986, abs=1e-3)
+    assert waypoint_episode_s(0.6) == pytest.approx(1.5 * 12.8388 / 0.6, abs=1e-2)
+    with pytest.raises(ValueError, match="speed must be > 0 m/s"):
+        waypoint_episode_s(0.0)
+
+
 def test_grid_shape():
     assert grid_shape(100) == (10, 10) and grid_shape(2) == (1, 2) and grid_shape(7) == (1, 7)
     assert grid_shape(50) == (5, 10)

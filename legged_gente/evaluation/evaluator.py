@@ -57,7 +57,8 @@ import numpy as np
 import torch
 
 from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN, Item, tile_geometry
-from legged_gente.evaluation.tasks import VelocityTask, WaypointTask, zigzag_waypoints
+from legged_gente.evaluation.tasks import (WAYPOINT_LATERAL, WAYPOINT_SPACING, WAYPOINT_SPEED, WAYPOINTS, VelocityTask,
+                                           WaypointTask, zigzag_waypoints)
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
 from legged_gente.utils.torch_math import quat_rotate_inverse, wrap_to_pi, yaw_of, yaw_quat
 
@@ -246,8 +247,9 @@ class Evaluation:
         hi = lo + torch.tensor([size_x, size_y], device=lo.device)
         return torch.cat([lo + margin, hi - margin], 1)
 
-    def make_task(self, reach_distance: float = 1.0, speed: float = 0.6, num_waypoints: int = 4,
-                  spacing: float = 1.8, lateral: float = 1.5, min_speed: float = 0.3, stand_fraction: float = 0.1):
+    def make_task(self, reach_distance: float = 1.0, speed: float = WAYPOINT_SPEED, num_waypoints: int = WAYPOINTS,
+                  spacing: float = WAYPOINT_SPACING, lateral: float = WAYPOINT_LATERAL, min_speed: float = 0.3,
+                  stand_fraction: float = 0.1):
         env = self.env
         if self.mode == "velocity":
             return VelocityTask(env.num_envs, self.env_cfg.commands.ranges, self.env_cfg.commands.heading_command,

@@ -129,12 +129,16 @@ def plot_trajectories(heights: np.ndarray, resolution: float, runs: dict[float, 
 
 
 def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "gente100",
-                    distances=(0.1, 1.0, 5.0, 20.0), device: str = "cpu", episode_s: float = 20.0, **policy) -> Path:
-    """Run the waypoint task on one terrain once per reach distance d (one robot) and plot the trajectories."""
+                    distances=(0.1, 1.0, 5.0, 20.0), device: str = "cpu", episode_s: float | None = None,
+                    **policy) -> Path:
+    """Run the waypoint task on one terrain once per reach distance d (one robot) and plot the trajectories
+    (``episode_s`` defaults to the waypoint task's, as in ``gente-evaluate --mode waypoints``)."""
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.evaluation.tasks import WAYPOINT_SPEED, waypoint_episode_s
 
     item = load_benchmark(benchmark, [item_id])[0]
+    episode_s = waypoint_episode_s(WAYPOINT_SPEED) if episode_s is None else episode_s
     evaluation = Evaluation(task, [item], 1, device, episode_s, "waypoints")
     act = load_policy(evaluation, **policy)
     runs = {}  # the single tile starts at world (0, 0), so world xy is the tile frame

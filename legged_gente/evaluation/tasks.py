@@ -124,6 +124,28 @@ class WaypointTask:
         return torch.stack([self.speed * go, torch.zeros_like(go), current[:, 2] * go, heading], 1)
 
 
+WAYPOINTS, WAYPOINT_SPACING, WAYPOINT_LATERAL, WAYPOINT_SPEED = 4, 1.8, 1.5, 0.6
+"""The waypoint task's zigzag: 4 waypoints 1.8 m apart along the path's axis, alternately 1.5 m left and right,
+walked at a forward command of 0.6 m/s."""
+WAYPOINT_TIME_SLACK = 1.5
+"""The waypoint episode's time over the time to walk the zigzag at the commanded speed: turning onto each
+waypoint and rough ground slow a robot; 50 % more keeps the task one of reaching the waypoints, not of speed."""
+
+
+def zigzag_length(count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING, lateral: float = WAYPOINT_LATERAL) -> float:
+    """m; the zigzag's polyline from the start through every waypoint: one leg of (spacing, lateral), then legs of
+    (spacing, 2 lateral) from side to side."""
+    return math.hypot(spacing, lateral) + (count - 1) * math.hypot(spacing, 2 * lateral)
+
+
+def waypoint_episode_s(speed: float, count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING,
+                       lateral: float = WAYPOINT_LATERAL) -> float:
+    """s; the waypoint task's default episode: ``WAYPOINT_TIME_SLACK`` times the zigzag's length over ``speed``."""
+    if not speed > 0:
+        raise ValueError(f"speed must be > 0 m/s, got {speed}.")
+    return WAYPOINT_TIME_SLACK * zigzag_length(count, spacing, lateral) / speed
+
+
 def zigzag_waypoints(starts_xy: torch.Tensor, count: int, spacing: float, lateral: float, seed: int = 0,
                      x_range: torch.Tensor | None = None) -> torch.Tensor:
     """(n, count, 2) waypoints ahead (+x) of each start: ``spacing`` m apart, alternating ``lateral`` m left/right

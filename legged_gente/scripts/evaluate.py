@@ -44,7 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(*flag("--robots_per_terrain"), type=int, default=16)
     p.add_argument("--mode", choices=("velocity", "waypoints"), default="velocity", help="evaluation task")
     p.add_argument(*flag("--episode_s"), type=float, default=None,
-                   help="episode length in s (default: 10 for velocity, 20 for waypoints)")
+                   help="episode length in s (default: 10 for velocity; for waypoints 1.5 times the zigzag's "
+                        "length over --speed: 32.1 s at 0.6 m/s)")
     p.add_argument(*flag("--tracking_threshold"), type=float, default=0.25,
                    help="m/s; velocity-task success needs a mean tracking error below it")
     p.add_argument(*flag("--min_progress"), type=float, default=0.7,
@@ -71,6 +72,7 @@ def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
     from legged_gente.evaluation.report import build_report, check_success_rule, write_reports
+    from legged_gente.evaluation.tasks import waypoint_episode_s
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built
@@ -84,7 +86,8 @@ def evaluate(args) -> dict:
             raise ValueError(f"--limit must be >= 1, got {args.limit}.")
         items = items[: args.limit]
     device = resolve_device(args.device)
-    episode_s = args.episode_s if args.episode_s is not None else (20.0 if args.mode == "waypoints" else 10.0)
+    episode_s = args.episode_s if args.episode_s is not None else (
+        waypoint_episode_s(args.speed) if args.mode == "waypoints" else 10.0)
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
                                                args.pretrained)
