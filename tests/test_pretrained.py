@@ -41,12 +41,13 @@ def test_play_pretrained(tmp_path, capsys):
         assert torch.equal(value, shipped[key])
 
 
-def test_evaluate_pretrained_records_the_file(tmp_path):
+def test_evaluate_pretrained_records_the_file(tmp_path, capsys):
     args = evaluate_script.build_parser().parse_args([
         "--task", SHIPPED, "--pretrained", "--out", str(tmp_path), "--device", "cpu", "--limit", "1",
         "--robots_per_terrain", "1", "--episode_s", "0.2", "--settle_s", "0", "--no_progress"])
     report = evaluate_script.evaluate(args)
-    assert report["meta"]["policy"] == "pretrained"
+    assert "diverged 0; stopped at their tile's edge 0" in capsys.readouterr().out
+    assert report["meta"]["policy"] == "pretrained" and report["meta"]["tile_edge_margin"] == 0.5
     assert report["meta"]["policy_file"] == str(policies_root() / SHIPPED / "model.pt")
     assert json.loads((tmp_path / "report.json").read_text())["meta"]["policy_file"].endswith("model.pt")
 

@@ -110,7 +110,8 @@ def evaluate(args) -> dict:
     heading = o.get("heading_error")
     heading = f"heading error {heading:.1f} deg; " if heading is not None and math.isfinite(heading) else ""
     print(f"success {100 * o['success_rate']:.1f}% over {o['robots']} robots on {o['terrains']} terrains; "
-          f"tracking error {o['tracking_error']:.3f} m/s; {heading}falls {o['falls']}; diverged {o['diverged']}")
+          f"tracking error {o['tracking_error']:.3f} m/s; {heading}falls {o['falls']}; diverged {o['diverged']}; "
+          f"stopped at their tile's edge {o['left_tile']}")
     for name, g in report["groups"].items():
         print(f"  {name:18s} success {100 * g['success_rate']:5.1f}%  ({g['terrains']} terrains)")
     print(f"wrote {json_path}, {csv_path}")
