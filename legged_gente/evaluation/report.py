@@ -98,7 +98,7 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
         "fall_rate": falls / n if n else math.nan,
         "diverged": int(diverged.sum()),
         "energy_per_m": float(kept["energy"].sum()) / distance if distance > 0 else math.nan,
-        "left_tile": int(metrics.get("left_tile", np.zeros(n, bool)).sum()),
+        "left_tile": int(metrics["left_tile"].sum()),
     }
 
 
