@@ -316,6 +316,26 @@ def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
     np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], expect, rtol=1e-4)
 
 
+def test_feet_lifted_out_of_the_water_lose_their_forces_and_added_mass():
+    # The box and sphere soles half submerged: each point's added-mass scale is its wet fraction, 1/2. Raised
+    # 0.1 m (above their half-heights of 0.02 and 0.03 m) they are dry: no water force, no force on their bodies,
+    # and no added mass left over from the wet substep.
+    z_w = 0.5
+    mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
+                '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
+                f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
+                '<geom name="ball" type="sphere" size=".03" mass="1"/></body>')
+    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"]})
+    m, d, f = make(mjm, water(surface=z_w), cfg)
+    mjw.step(m, d)
+    np.testing.assert_allclose(f.point_mass.numpy()[:, 0], [0.5, 0.5], rtol=1e-4)
+    assign(d.qpos, [[0.1, 0.1]])
+    mjw.step(m, d)
+    assert np.all(f.foot_water_force.numpy() == 0.0)
+    assert np.all(f.point_mass.numpy() == 0.0)
+    assert np.all(d.xfrc_applied.numpy() == 0.0)
+
+
 # ----------------------------------------------------------------------------- kernels vs numpy references
 
 
