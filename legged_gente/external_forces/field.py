@@ -431,8 +431,6 @@ class TerrainForces:
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
             ))
-        launches.append(wp.launch(K.foot_rut_kernel, dim=(self.nworld, nf), device=dev,
-                  inputs=[self.foot_touch, self.foot_cand, self.foot_sinkage, self.foot_soil], record_cmd=True))
         return launches
 
     def passive(self, m, d):
@@ -473,8 +471,8 @@ class TerrainForces:
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
                         d.cvel, d.subtree_com, self.sole_length, self.sole_width, int(self.sole_disc),
                         float(cfg.bulldozing_speed_reg), self.soil_params,
-                        self.foot_fn, self.foot_sinkage, self.foot_soil, self.foot_vel, self.foot_force,
-                        d.xfrc_applied],
+                        self.foot_fn, self.foot_touch, self.foot_cand, self.foot_soil, self.foot_sinkage,
+                        self.foot_vel, self.foot_force, d.xfrc_applied],
             )
         if cfg.soil and self.nfoot and self.has_rft:
             wp.launch(

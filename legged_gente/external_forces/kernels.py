@@ -425,19 +425,6 @@ def contact_filter_kernel(
     foot_touch[w, f] = 1
 
 
-@wp.kernel
-def foot_rut_kernel(
-    foot_touch: wp.array2d[int], foot_cand: wp.array2d[float], foot_sinkage: wp.array2d[float],
-    foot_soil: wp.array2d[int],
-):
-    """Deepen each touching foot's rut for the next substep; no rut off soil (lift-off: ``foot_state_kernel``)."""
-    w, f = wp.tid()
-    if foot_soil[w, f] < 0:
-        foot_sinkage[w, f] = 0.0
-    elif foot_touch[w, f] != 0:
-        foot_sinkage[w, f] = wp.max(foot_sinkage[w, f], foot_cand[w, f])
-
-
 # --------------------------------------------------------------------------------------------------------
 # Soil forces (passive callback)
 
@@ -459,26 +446,35 @@ def soil_force_kernel(
     speed_reg: float,
     soil_params: wp.array3d[float],
     foot_fn: wp.array2d[float],
-    foot_sinkage: wp.array2d[float],
+    foot_touch: wp.array2d[int],
+    foot_cand: wp.array2d[float],
     foot_soil: wp.array2d[int],
     # out
+    foot_sinkage: wp.array2d[float],
     foot_vel: wp.array2d[wp.vec3],
     foot_force: wp.array2d[wp.vec3],
     xfrc: wp.array2d[wp.spatial_vector],
 ):
-    """Bekker bulldozing against the foot's horizontal velocity, at the sole's contact plane (``foot_drop``
-    below the sole centre), where the soil acts. The shear is the contacts' friction (``ground_friction``).
+    """The soil's response to this substep's contacts, per foot. First the rut: a touching foot's deepens to what
+    the contact filter found (``foot_cand``: plastic, it never rises during a stance) for this substep's forces and
+    observations and the next substep's contacts; off soil there is none (lift-off: ``foot_state_kernel``). Then
+    Bekker bulldozing against the foot's horizontal velocity, at the sole's contact plane (``foot_drop`` below the
+    sole centre), where the soil acts. The shear is the contacts' friction (``ground_friction``).
 
     The bulldozing direction is regularised, v / max(|v|, speed_reg), so it fades out linearly below
     speed_reg instead of chattering around zero speed; its power -F |v|^2 / max(|v|, speed_reg) is never positive.
     """
     w, f = wp.tid()
+    s = foot_soil[w, f]
+    if s < 0:
+        foot_sinkage[w, f] = 0.0
+    elif foot_touch[w, f] != 0:
+        foot_sinkage[w, f] = wp.max(foot_sinkage[w, f], foot_cand[w, f])
     b = foot_body[f]
     p = sole_point(xpos, xmat, w, b, foot_offset[f]) - wp.vec3(0.0, 0.0, foot_drop[f])
     v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
     vh = wp.vec3(v[0], v[1], 0.0)
     foot_vel[w, f] = vh
-    s = foot_soil[w, f]
     force = wp.vec3(0.0)
     if s >= 0 and foot_fn[w, f] > 0.0:
         face = bulldozing_width_fn(xmat[w, b], vh, sole_length, sole_width, sole_disc)
