@@ -80,6 +80,8 @@ def test_curriculum_layout(curriculum):
     assert t.tile_type_names == TerrainCfg.terrain_types
     assert t.terrain_types.tolist() == [0, 1, 2, 3, 4, 5]
     assert t.terrain_origins.shape == (3, 6, 3)
+    # 4 m tiles from world (0, 0): tile (row 2, column 5) spans x 8-12 m, y 20-24 m
+    assert t.tile_bounds(np.array([0, 2]), np.array([0, 5])).tolist() == [[0, 0, 4, 4], [8, 20, 12, 24]]
     # Rows get harder: the slope column's highest point grows with the row.
     peaks = [t.height_field[10 + r * 40 : 50 + r * 40, 10:50].max() for r in range(3)]
     assert peaks[0] < peaks[1] < peaks[2]

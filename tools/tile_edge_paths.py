@@ -52,8 +52,8 @@ def edge_paths(benchmark: str, task: str = "gente_biped", robots_per_terrain: in
     tile = np.arange(n) // robots_per_terrain
     row, col = tile // cols, tile % cols
     start = terrain.terrain_origins[row, col][:, :2]
-    lo = np.stack([row, col], 1) * np.array(terrain.tile_size)
-    hi = lo + np.array(terrain.tile_size)
+    bounds = terrain.tile_bounds(row, col)
+    lo, hi = bounds[:, :2], bounds[:, 2:]
 
     commands = env_cfg.commands
     draw = VelocityTask(n, commands.ranges, commands.heading_command, "cpu", seed=seed)

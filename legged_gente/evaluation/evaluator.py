@@ -242,10 +242,11 @@ class Evaluation:
         if not 0.0 <= margin < min(size_x, size_y) / 2:
             raise ValueError(f"tile_edge_margin {margin} m must be in [0, {min(size_x, size_y) / 2:g}) for "
                              f"{size_x:g} x {size_y:g} m tiles.")
-        cols = self.env_cfg.terrain.num_cols
-        lo = torch.stack([(self.tile // cols) * size_x, (self.tile % cols) * size_y], 1).float()
-        hi = lo + torch.tensor([size_x, size_y], device=lo.device)
-        return torch.cat([lo + margin, hi - margin], 1)
+        tile = self.tile.cpu().numpy()
+        bounds = torch.as_tensor(self.env.terrain.tile_bounds(tile // self.env_cfg.terrain.num_cols,
+                                                             tile % self.env_cfg.terrain.num_cols),
+                                 dtype=torch.float32, device=self.tile.device)
+        return bounds + torch.tensor([margin, margin, -margin, -margin], device=bounds.device)
 
     def make_task(self, reach_distance: float = 1.0, speed: float = WAYPOINT_SPEED, num_waypoints: int = WAYPOINTS,
                   spacing: float = WAYPOINT_SPACING, lateral: float = WAYPOINT_LATERAL, min_speed: float = 0.3,

@@ -277,6 +277,11 @@ class Terrain:
         return origins
 
     # ---------------------------------------------------------------------------------------------- queries
+    def tile_bounds(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(n, 4) x_lo, y_lo, x_hi, y_hi (m, world) of tiles (rows[k], cols[k]); the first tile starts at (0, 0)."""
+        lo = np.stack([np.asarray(rows), np.asarray(cols)], -1) * np.array(self.tile_size)
+        return np.concatenate([lo, lo + np.array(self.tile_size)], -1)
+
     def height_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Ground height (m) at world points, bilinear between cells; points off the grid take the edge's height."""
         x, y = np.broadcast_arrays(np.asarray(x, np.float64), np.asarray(y, np.float64))
