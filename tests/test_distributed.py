@@ -145,6 +145,9 @@ def test_multi_gpu_report_reads_rsl_rl_logs(tmp_path):
     rows = (tmp_path / "runs.csv").read_text().splitlines()
     assert rows[0] == "run,iteration,steps_per_second,mean_reward,mean_episode_length" and len(rows) == 9
     assert (tmp_path / "runs.png").stat().st_size > 0
+    four = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"), str(tmp_path / "2.log"),
+                           "--gpus", "4", "--skip", "1"], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert "throughput ratio 4gpu/1gpu: 1.900" in four.stdout and "4gpu: 4 iterations" in four.stdout
     short = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"),
                             str(tmp_path / "2.log"), "--skip", "4"], cwd=REPO, capture_output=True, text=True)
     assert short.returncode != 0 and "only 4 iterations logged" in short.stderr

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# 2-GPU / 1-GPU PPO throughput and learning, on one host with >= 2 GPUs, from the project root:
+# N-GPU / 1-GPU PPO throughput and learning, on one host with >= N GPUs (GPUS, default 2), from the project root:
 #   T=300 NUM_ENVS=4096 TASK=gente_biped_flat tools/multi_gpu_bench.sh
-# Trains for T seconds on cuda:0 alone, then T seconds under torchrun on 2 GPUs with the same num_envs per
+#   GPUS=4 T=110 NUM_ENVS=8192 TASK=gente_biped tools/multi_gpu_bench.sh
+# Trains for T seconds on cuda:0 alone, then T seconds under torchrun on N GPUs with the same num_envs per
 # rank and the same seed; prints each run's mean "Steps per second" (rsl-rl counts all ranks' steps:
 # num_steps_per_env * num_envs * world_size / rank 0's iteration time), skipping the first SKIP iterations
 # (kernel loading, CUDA-graph capture), their ratio, and the mean reward / episode length of each run at its
-# last iteration and at the last iteration both reached (each 2-GPU iteration learns from twice the samples);
+# last iteration and at the last iteration both reached (each N-GPU iteration learns from N times the samples);
 # every iteration of both runs goes to $OUT_DIR/multi_gpu.csv, their reward curves to multi_gpu.png
 # (tools/multi_gpu_report.py).
 set -uo pipefail
@@ -13,12 +14,13 @@ T=${T:-300}
 NUM_ENVS=${NUM_ENVS:-4096}
 TASK=${TASK:-gente_biped_flat}
 SKIP=${SKIP:-3}
+GPUS=${GPUS:-2}
 OUT_DIR=${OUT_DIR:-/tmp/gente_multi_gpu}
 # NVLink multicast off, as the runner keeps it by default (docs/multi_gpu.md)
 export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 PYTHONUNBUFFERED=1
 
 gpus=$(python3 -c "import torch; print(torch.cuda.device_count())")
-[ "$gpus" -ge 2 ] || { echo "multi_gpu_bench.sh needs 2 GPUs, found $gpus" >&2; exit 1; }
+[ "$gpus" -ge "$GPUS" ] && [ "$GPUS" -ge 2 ] || { echo "multi_gpu_bench.sh: GPUS=$GPUS needs 2 or more GPUs and at most the $gpus found" >&2; exit 1; }
 mkdir -p "$OUT_DIR"
 
 # SIGINT after T s: train.py saves a checkpoint and exits; -k: SIGKILL 60 s later if a rank still hangs
@@ -36,7 +38,7 @@ train() {
 GENTE_LOG_ROOT="$OUT_DIR/warmup" python3 legged_gente/scripts/train.py --task="$TASK" --headless --num_envs "$NUM_ENVS" \
   --max_iterations 1 --device cuda:0 > "$OUT_DIR/warmup.log" 2>&1 || { tail -20 "$OUT_DIR/warmup.log"; exit 1; }
 train 1gpu python3 legged_gente/scripts/train.py --device cuda:0
-train 2gpu python3 -m torch.distributed.run --standalone --nproc_per_node=2 legged_gente/scripts/train.py
+train "${GPUS}gpu" python3 -m torch.distributed.run --standalone --nproc_per_node="$GPUS" legged_gente/scripts/train.py
 
-python3 tools/multi_gpu_report.py "$OUT_DIR/1gpu.log" "$OUT_DIR/2gpu.log" --skip "$SKIP" --csv "$OUT_DIR/multi_gpu.csv" \
+python3 tools/multi_gpu_report.py "$OUT_DIR/1gpu.log" "$OUT_DIR/${GPUS}gpu.log" --gpus "$GPUS" --skip "$SKIP" --csv "$OUT_DIR/multi_gpu.csv" \
   --plot "$OUT_DIR/multi_gpu.png"

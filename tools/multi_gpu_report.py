@@ -1,6 +1,6 @@
-"""Throughput ratio and learning of a 1-GPU and a 2-GPU training run, from rsl-rl's console logs (rank 0).
+"""Throughput ratio and learning of a 1-GPU and an N-GPU training run, from rsl-rl's console logs (rank 0).
 
-    python tools/multi_gpu_report.py 1gpu.log 2gpu.log [--skip 3] [--csv multi_gpu.csv]
+    python tools/multi_gpu_report.py 1gpu.log 2gpu.log [--gpus 2] [--skip 3] [--csv multi_gpu.csv]
 
 Mean "Steps per second" of each run (rsl-rl counts all ranks' steps: num_steps_per_env * num_envs * world_size /
 rank 0's iteration time) after the first --skip iterations (kernel loading, CUDA-graph capture), their ratio,
@@ -37,12 +37,14 @@ def learning(rows: dict, iteration: int) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("one_gpu_log")
-    parser.add_argument("two_gpu_log")
+    parser.add_argument("multi_gpu_log")
+    parser.add_argument("--gpus", type=int, default=2, help="how many GPUs the second run trained on")
     parser.add_argument("--skip", type=int, default=3, help="first iterations left out of the mean steps/s")
     parser.add_argument("--csv", help="write every iteration of both runs here")
     parser.add_argument("--plot", help="save the mean reward of both runs per iteration here (PNG)")
     args = parser.parse_args()
-    runs = {"1gpu": parse(args.one_gpu_log), "2gpu": parse(args.two_gpu_log)}
+    multi = f"{args.gpus}gpu"
+    runs = {"1gpu": parse(args.one_gpu_log), multi: parse(args.multi_gpu_log)}
     for name, rows in runs.items():
         if len(rows) <= args.skip:
             raise SystemExit(f"{name}: only {len(rows)} iterations logged (need > --skip {args.skip}); train "
@@ -55,7 +57,7 @@ def main() -> None:
               f"{args.skip})")
         print(f"      last   {learning(rows, max(rows))}")
         print(f"      common {learning(rows, common)}")
-    print(f"throughput ratio 2gpu/1gpu: {sps['2gpu'] / sps['1gpu']:.3f}")
+    print(f"throughput ratio {multi}/1gpu: {sps[multi] / sps['1gpu']:.3f}")
     if args.csv:
         with open(args.csv, "w", newline="") as f:
             writer = csv.writer(f)
@@ -68,7 +70,7 @@ def main() -> None:
 
 
 def plot(runs: dict, sps: dict, path: str) -> None:
-    """Mean reward per iteration of both runs (a 2-GPU iteration learns from twice the samples)."""
+    """Mean reward per iteration of both runs (an N-GPU iteration learns from N times the samples)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -78,7 +80,7 @@ def plot(runs: dict, sps: dict, path: str) -> None:
     for name, rows in runs.items():
         iterations = sorted(i for i, r in rows.items() if "Mean reward" in r)
         ax.plot(iterations, [rows[i]["Mean reward"] for i in iterations],
-                label=f"{name[0]} GPU{'s' if name[0] != '1' else ''}: {sps[name] / 1e6:.2f} M env-steps/s")
+                label=f"{name[:-3]} GPU{'s' if name != '1gpu' else ''}: {sps[name] / 1e6:.2f} M env-steps/s")
     ax.set_xlabel("PPO iteration")
     ax.set_ylabel("mean episode reward")
     ax.grid(alpha=0.3)
