@@ -3,6 +3,7 @@
 from unittest.mock import patch
 
 import mujoco
+import mujoco_warp as mjw
 import numpy as np
 import pytest
 import torch
@@ -11,6 +12,7 @@ import warp as wp
 from legged_gente.envs.base.step_runner import StepRunner
 from legged_gente.envs.gente_biped.gente_biped import GenteBiped
 from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
+from legged_gente.sim.backend import Simulation
 from legged_gente.sim.assembly import build_model
 from legged_gente.terrain.terrain import Terrain
 
@@ -360,3 +362,50 @@ def test_without_a_curriculum_robots_spawn_on_every_row():
     env = GenteBiped(cfg, device="cpu")
     assert not env.terrain_curriculum
     assert sorted(set(env.terrain_levels.tolist())) == [0, 1, 2]
+
+
+def _plain_substeps(sim, decimation):
+    """The reference: MuJoCo-Warp's own step, whole, every substep."""
+    for _ in range(decimation):
+        mjw.step(sim.m, sim.d)
+        for hook in sim.after_substep:
+            hook()
+    sim._contact_forces()
+
+
+def _plain_recompute(sim):
+    """The reference forward: MuJoCo-Warp's own, then the hooks; what they integrate put back."""
+    with sim.substep_state_kept():
+        mjw.forward(sim.m, sim.d)
+        for hook in sim.after_substep:
+            hook()
+        sim._contact_forces()
+
+
+def test_the_forwards_stage_gives_the_steps_own_numbers():
+    """The forward after a step's resets computes the next substep's positions, contacts and passive forces (the
+    soil's ruts and the water's forces included) ahead, and the step reuses them. Against the same run with
+    MuJoCo-Warp's own ``mjw.step`` and ``mjw.forward``: bitwise the same state, force-field state and
+    observations, over steps with resets on every terrain."""
+
+    def run() -> list[torch.Tensor]:
+        torch.manual_seed(3)
+        env = GenteBiped(SmallCurriculum(), device="cpu")
+        env.reset()
+        actions = torch.Generator().manual_seed(4)
+        record = []
+        for step in range(12):
+            if step in (3, 7):  # a reset (so a forward) onto another tile: the feet's force observation changes
+                robot, column = {3: (3, 0), 7: (2, 3)}[step]  # soil -> rigid, water -> soil
+                env.episode_length_buf[robot] = env.max_episode_length - 1
+                env.terrain_columns[robot] = column
+            obs, _, _, _ = env.step(torch.rand(5, env.num_actions, generator=actions) * 2 - 1)
+            record += [env.sim.qpos.clone(), env.sim.qvel.clone(), obs["critic"]]
+            record += [t.clone() for t in env.sim.substep_state]
+        assert env.forces.privileged_obs().reshape(5, 2, 12)[:, :, 3].any()  # feet on soil
+        return record
+
+    staged = run()
+    with patch.object(Simulation, "_substeps", _plain_substeps), patch.object(Simulation, "recompute", _plain_recompute):
+        plain = run()
+    assert all(torch.equal(a, b) for a, b in zip(staged, plain, strict=True))

@@ -5,7 +5,8 @@ Usage by the env (per substep, all inside the captured graph)::
     forces = TerrainForces(mjm, m, d, heights, origin_xy, resolution, material, cfg.forces, seed)
     forces.install()                 # once: sets m.callback.contactfilter / m.callback.passive
     ...
-    forces.new_policy_step()         # once per policy step, before the substeps (redraws the flow noise xi)
+    forces.new_policy_step()         # once per policy step, before its first substep's passive forces (redraws
+                                     # the flow noise xi; the env draws it before the forward that computes them)
     for _ in range(decimation):
         mjw.step(m, d)               # runs the callbacks
         forces.after_substep()       # foot normal forces and slip for the next substep, privileged obs

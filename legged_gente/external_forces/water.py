@@ -11,7 +11,8 @@ so an addition made here is seen by the whole step: the added mass is implicit, 
 destabilise a light body (an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a
 exceeds the body's mass, and its finite-difference acceleration also sees contact impulses). The velocity-product
 part of the point's acceleration (Jdot qvel: centripetal and Coriolis terms) is applied explicitly.
-``mjw.step1``/``step2`` factorise M before the callback and are not supported.
+``mjw.step1``/``step2`` factorise M before the callback and are not supported; ``Simulation`` splits the step after
+the passive callback instead, factorising in its second half as ``mjw.step`` does.
 
 M is stored by rows of ancestor dofs (``M_rowadr``, ``M_rownnz``, diagonal last). MuJoCo stores only the diagonal
 of "simple" bodies (bodies of the world with a diagonal inertia, e.g. a lone free body or slide joints): there the

@@ -103,6 +103,7 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
     finally:
         sim.m.callback.passive, sim.m.callback.contactfilter = callbacks
         restore()
+        sim.drop_stage()
 
 
 def force_pass(env, only_sole_contacts: bool = False):
@@ -135,15 +136,15 @@ def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> fl
             return _timed_calls(env, force_pass(env, only_sole_contacts), steps) * env.num_envs
         finally:
             wp.copy(sim.d.nacon, nacon)
+            sim.drop_stage()
 
 
 def reset_forward_per_s(env, calls: int) -> float:
     """Calls/s of the Warp work of the forward a step runs after its resets (``Simulation.recompute``: MuJoCo's
     forward with the force fields' callbacks, their after-substep hooks and the per-body contact forces), on the
     current state. On a GPU the step runs it every time, whether a world reset or not (deciding would wait for
-    the device). What the hooks integrate is put back afterwards, as ``forward`` does."""
-    with env.sim.substep_state_kept():
-        return _timed_calls(env, env.sim.recompute, calls)
+    the device); its first half is the next substep's, computed ahead, which that substep does not repeat."""
+    return _timed_calls(env, env.sim.recompute, calls)
 
 
 def env_steps(env, steps: int, check_sync: bool = False) -> float:

@@ -1,5 +1,10 @@
 """Thin MuJoCo-Warp backend: device model/data, zero-copy torch views, a captured substep loop.
 
+A substep is MuJoCo-Warp's step in its two halves: the position and velocity stage (bodies, contacts,
+constraint rows, passive forces; what the controls do not enter), then actuation, the constraint solver and the
+integration. The forward that follows a policy step's resets computes the next substep's first half, so that
+substep reuses it instead of computing it again.
+
 All worlds share one compiled model (robot + terrain); per-world model fields that domain randomisation
 touches are batched with ``put_model(batch_sizes=...)``. With ``cuda_graph = "physics"`` on a CUDA device the
 ``decimation`` substeps (and any force kernels installed as mujoco_warp callbacks) are captured once into a
@@ -18,6 +23,8 @@ import torch
 import warp as wp
 from mujoco_warp._src.support import contact_force_fn
 
+# the integrators the two-stage substep is written for (``mjw.step`` runs ``implicit`` for implicitfast)
+SPLIT_INTEGRATORS = (mjw.IntegratorType.EULER, mjw.IntegratorType.IMPLICITFAST)
 # per-world model fields: what domain randomisation writes (friction, base mass and inertia) and what
 # ``mjw.set_const`` derives from the masses (subtree masses, the inverse weights the solver regularises with)
 BATCHED_FIELDS = ("geom_friction", "body_mass", "body_inertia", "body_subtreemass", "body_invweight0",
@@ -69,6 +76,11 @@ class Simulation:
             self.m.opt.warn_overflow &= ~(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
             self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
             self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
+        opt = self.m.opt
+        if opt.enableflags & (mjw.EnableBit.ENERGY | mjw.EnableBit.SLEEP) or opt.integrator not in SPLIT_INTEGRATORS:
+            raise ValueError("Simulation: the model enables energy or sleep, or uses another integrator than euler "
+                             "or implicitfast, which the two-stage substep does not run; set sim.integrator to "
+                             "'euler' or 'implicitfast'")
         self.after_substep: list[Callable[[], None]] = []
         self.after_reset: list[Callable[[torch.Tensor], None]] = []  # called with the reset mask (torch bool)
         self._graph = None
@@ -77,6 +89,11 @@ class Simulation:
         # callbacks and after_substep hooks integrate from one substep to the next, which it leaves as it was
         self.observed: list[torch.Tensor] = [self.body_contact_force]
         self.substep_state: list[torch.Tensor] = []
+        # the next substep's first half, computed ahead (see the module docstring): per substep-state array, its
+        # value as the stage leaves it and as it was before; the version counters of the inputs the stage was
+        # computed from (None: no stage). Warp copies only: ``recompute`` may be captured by Warp or by torch
+        self._stage_buffers: list[tuple[wp.array, wp.array, wp.array]] = []
+        self._stage_versions: tuple[int, ...] | None = None
 
     def _make_views(self) -> None:
         t = wp.to_torch
@@ -90,9 +107,87 @@ class Simulation:
         self.body_mass, self.body_inertia = t(m.body_mass), t(m.body_inertia)
 
     # ---- stepping -------------------------------------------------------------------------------------
+    def add_substep_state(self, arrays: list[wp.array]) -> None:
+        """Register per-world arrays the callbacks and after_substep hooks integrate from one substep to the
+        next (soil ruts, slip, ...): ``forward`` leaves them as they were."""
+        for a in arrays:
+            self.substep_state.append(wp.to_torch(a))
+            self._stage_buffers.append((a, wp.empty_like(a), wp.empty_like(a)))
+
+    def _input_versions(self) -> tuple[int, ...]:
+        """torch's version counters of the state and model views: any in-place torch write to them (or to a
+        view of them) changes its counter. Warp's writes do not: code that runs Warp on ``d`` calls
+        ``drop_stage``."""
+        return tuple(t._version for t in (self.qpos, self.qvel, self.geom_friction, self.body_mass,
+                                          self.body_inertia))
+
+    def drop_stage(self) -> None:
+        """Forget the next substep's first half computed ahead: the next step computes it afresh. For code that
+        changes ``d`` or the model through Warp between steps (torch writes to the views are noticed)."""
+        self._stage_versions = None
+
+    def ensure_stage(self) -> None:
+        """Compute the next substep's first half now unless the one computed ahead still holds (nothing wrote
+        qpos, qvel, friction, masses or inertias since). Runs before a step, outside any graph."""
+        if self._stage_versions != self._input_versions():
+            with wp.ScopedDevice(self.wp_device):
+                self._stage()
+
+    def _stage(self) -> None:
+        """The next substep's first half, ahead of it: its results stay in ``d``, and the substep state it
+        integrated is kept aside for the substep (``substep_state`` itself is put back)."""
+        for state, _, before in self._stage_buffers:
+            wp.copy(before, state)
+        self._position_and_velocity()
+        for state, staged, before in self._stage_buffers:
+            wp.copy(staged, state)
+            wp.copy(state, before)
+        self._stage_versions = self._input_versions()
+
+    def _use_stage(self) -> None:
+        """The substep state as the stage left it (``d`` holds the stage's results already)."""
+        for state, staged, _ in self._stage_buffers:
+            wp.copy(state, staged)
+
+    def _position_and_velocity(self) -> None:
+        """The first half of MuJoCo-Warp's forward, in ``mjw.forward``'s order: positions (bodies, contacts with
+        the contact-filter callback, constraint rows), position sensors, velocities (passive forces with the
+        passive callback, which adds the feet's added mass to the inertia, so it is factorised later), velocity
+        sensors."""
+        m, d = self.m, self.d
+        mjw.fwd_position(m, d, factorize=False)
+        d.sensordata.zero_()
+        mjw.sensor_pos(m, d)
+        mjw.fwd_velocity(m, d)
+        mjw.sensor_vel(m, d)
+
+    def _acceleration(self) -> None:
+        """The second half of MuJoCo-Warp's forward, in ``mjw.forward``'s order: the control callback, actuator
+        forces, the factorised inertia and smooth acceleration, the constraint solver, acceleration sensors."""
+        m, d = self.m, self.d
+        if m.callback.control and not (m.opt.disableflags & mjw.DisableBit.ACTUATION):
+            m.callback.control(m, d)
+        mjw.fwd_actuation(m, d)
+        mjw.fwd_acceleration(m, d, factorize=True)
+        mjw.solve(m, d)
+        if m.opt.run_rne_postconstraint or (m.sensor_rne_postconstraint
+                                            and not m.opt.disableflags & mjw.DisableBit.SENSOR):
+            mjw.rne_postconstraint(m, d)
+        mjw.sensor_acc(m, d, skip_rne_postconstraint=True)
+
     def _substeps(self, decimation: int) -> None:
-        for _ in range(decimation):
-            mjw.step(self.m, self.d)
+        """``decimation`` substeps, each ``mjw.step`` in two halves then the after_substep hooks; the first
+        substep's first half is the stage computed ahead (``ensure_stage`` ran before)."""
+        m, d = self.m, self.d
+        self._use_stage()
+        for substep in range(decimation):
+            if substep > 0:
+                self._position_and_velocity()
+            self._acceleration()
+            if m.opt.integrator == mjw.IntegratorType.EULER:
+                mjw.euler(m, d)
+            else:
+                mjw.implicit(m, d)
             for hook in self.after_substep:
                 hook()
         self._contact_forces()
@@ -108,6 +203,8 @@ class Simulation:
 
     def step(self, decimation: int) -> None:
         """Advance all worlds by ``decimation`` substeps; contact forces per body are refreshed at the end."""
+        self.ensure_stage()
+        self._stage_versions = None  # the substeps use the stage up
         with wp.ScopedDevice(self.wp_device):
             if not self.use_graph:
                 self._substeps(decimation)  # on Warp's current stream (the env's step graph sets it to torch's)
@@ -141,6 +238,7 @@ class Simulation:
             return
         with wp.ScopedDevice(self.wp_device):
             mjw.reset_data(self.m, self.d, reset=wp.from_torch(mask.contiguous(), dtype=wp.bool))
+        self.drop_stage()
         for hook in self.after_reset:
             hook(mask)
 
@@ -152,16 +250,15 @@ class Simulation:
         the per-body contact forces. The worlds in ``mask`` take the new values of every ``observed`` tensor; the
         others keep their last substep's.
 
-        Physics-neutral: ``mjw.forward`` leaves the solver's warm start alone, and everything in
-        ``substep_state`` (what the callbacks and hooks integrate once per substep, e.g. soil ruts, slip) is put
-        back as it was, in every world. It costs about a third of a policy step's physics (4 substeps); on the
-        CPU it is skipped when no world is masked (a host read, free there; on a GPU it always runs, as the step
-        must not wait for the device)."""
+        Physics-neutral: the solver's warm start and everything in ``substep_state`` (what the callbacks and
+        hooks integrate once per substep, e.g. soil ruts, slip) stay as they were, in every world. Its first
+        half is the next substep's, computed ahead (see the module docstring): the next step reuses it. On the
+        CPU it is skipped when no world is masked (a host read, free there; on a GPU it always runs, as the
+        step must not wait for the device)."""
         if not self.wp_device.is_cuda and not bool(mask.any()):
             return
         last = [t.clone() for t in self.observed]
-        with self.substep_state_kept():
-            self.recompute()
+        self.recompute()
         for t, old in zip(self.observed, last):
             t.copy_(torch.where(mask.view(-1, *[1] * (t.dim() - 1)), t, old))
 
@@ -176,17 +273,22 @@ class Simulation:
                 t.copy_(old)
 
     def recompute(self) -> None:
-        """The Warp work of :meth:`forward`, in every world: MuJoCo's forward (with the force fields' callbacks),
-        the ``after_substep`` hooks and the per-body contact forces. Unlike ``forward`` it keeps every new value
-        and leaves ``substep_state`` advanced."""
+        """The Warp work of :meth:`forward`, in every world: the next substep's first half, computed ahead and
+        kept for it (with the force fields' callbacks); the second half of MuJoCo's forward, the
+        ``after_substep`` hooks and the per-body contact forces. ``substep_state`` is left as it was."""
         with wp.ScopedDevice(self.wp_device):
-            mjw.forward(self.m, self.d)
+            self._stage()
+            self._use_stage()
+            self._acceleration()
             for hook in self.after_substep:
                 hook()
             self._contact_forces()
+            for state, _, before in self._stage_buffers:
+                wp.copy(state, before)
 
     @torch.compiler.disable
     def set_const(self) -> None:
         """Derived model constants (subtree masses, inverse weights) after body masses or inertias changed."""
         with wp.ScopedDevice(self.wp_device):
             mjw.set_const(self.m, self.d)
+        self.drop_stage()

@@ -171,7 +171,7 @@ class LeggedRobot(VecEnv):
         # the post-reset forward runs the fields' callbacks and hooks: their observation is refreshed for the
         # reset worlds, and what they integrate (ruts, slip, loads, ...) is put back
         self.sim.observed.append(self._force_obs)
-        self.sim.substep_state.extend(wp.to_torch(a) for a in forces.per_world_state())
+        self.sim.add_substep_state(forces.per_world_state())
         return forces
 
     def _reset_forces(self, mask: torch.Tensor) -> None:
@@ -404,7 +404,7 @@ class LeggedRobot(VecEnv):
         all_envs = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
         self._reset_envs(all_envs)
         self._resample_commands(all_envs)
-        self.sim.forward(all_envs)
+        self._next_step_forward(all_envs)
         self._update_state()
         self._update_heading_commands()
         self._compute_observations()
@@ -417,6 +417,7 @@ class LeggedRobot(VecEnv):
             raise ValueError(f"actions of shape {tuple(actions.shape)}; this env takes (num_envs, num_actions) = "
                              f"{tuple(self._step_actions.shape)}")
         self._step_actions.copy_(actions)
+        self.sim.ensure_stage()  # outside the step's graph: the graph reuses the stage computed ahead
         self._runner()
         self.common_step_counter += 1
         if self.push_robots and self.common_step_counter % self._push_steps == 0:
@@ -431,8 +432,6 @@ class LeggedRobot(VecEnv):
         """Everything a step does on the device (what StepRunner compiles and captures)."""
         self.actions = torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions)
         self.sim.ctrl[:] = self.default_dof_pos + self.action_scale * self.actions
-        if self.forces is not None:
-            self.forces.new_policy_step()
         self.sim.step(self.decimation)
         self._post_physics_step()
 
@@ -451,12 +450,21 @@ class LeggedRobot(VecEnv):
         # new commands for the robots just reset and for those whose resampling time came (episode length 0
         # after a reset, so both are caught by the same test)
         self._resample_commands(self.episode_length_buf % self._resample_steps == 0)
-        self.sim.forward(self.reset_buf)  # the reset worlds' bodies, contacts, contact forces, force-field obs
+        self._next_step_forward(self.reset_buf)
         self._update_state()
         self._update_heading_commands()
         self._compute_observations()
         self.last_actions[:] = self.actions
         self.last_dof_vel[:] = self.dof_vel
+
+    @torch.compiler.disable  # Warp launches (torch.compile runs them as they are)
+    def _next_step_forward(self, reset: torch.Tensor) -> None:
+        """The force fields' flow noise for the next step, then the forward: the reset worlds' bodies, contacts,
+        contact forces and force-field observation. The forward's positions, contacts and passive forces are
+        the next step's first substep's, computed ahead, so that step's noise is drawn first."""
+        if self.forces is not None:
+            self.forces.new_policy_step()
+        self.sim.forward(reset)
 
     def _diverged(self) -> torch.Tensor:
         """Worlds whose state is non-finite or absurdly fast, or whose constraint rows overflowed ``njmax`` (MuJoCo
