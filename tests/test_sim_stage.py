@@ -115,7 +115,11 @@ def test_writes_between_the_forward_and_the_step_are_seen():
     _assert_same_state(sim, d)
 
 
-def test_other_integrators_are_refused_with_the_fix():
+def test_what_the_two_stage_substep_does_not_run_is_refused_with_the_fix():
     mjm = mujoco.MjModel.from_xml_string(HOPPER.format(integrator="RK4"))
-    with pytest.raises(ValueError, match="set sim.integrator to 'euler' or 'implicitfast'"):
+    with pytest.raises(ValueError, match="integrator mjINT_RK4 .* set sim.integrator to 'euler' or 'implicitfast'"):
+        Simulation(mjm, 1, "cpu", SIM_CFG, batch_model=False)
+    mjm = mujoco.MjModel.from_xml_string(HOPPER.format(integrator="Euler").replace(
+        "<option ", '<option><flag energy="enable"/></option>\n  <option '))
+    with pytest.raises(ValueError, match="energy or sleep flag.*remove <flag energy"):
         Simulation(mjm, 1, "cpu", SIM_CFG, batch_model=False)

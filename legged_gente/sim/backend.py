@@ -77,10 +77,12 @@ class Simulation:
             self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
             self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
         opt = self.m.opt
-        if opt.enableflags & (mjw.EnableBit.ENERGY | mjw.EnableBit.SLEEP) or opt.integrator not in SPLIT_INTEGRATORS:
-            raise ValueError("Simulation: the model enables energy or sleep, or uses another integrator than euler "
-                             "or implicitfast, which the two-stage substep does not run; set sim.integrator to "
-                             "'euler' or 'implicitfast'")
+        if opt.integrator not in SPLIT_INTEGRATORS:
+            raise ValueError(f"Simulation: integrator {mujoco.mjtIntegrator(opt.integrator).name} is not run by the "
+                             f"two-stage substep; set sim.integrator to 'euler' or 'implicitfast'")
+        if opt.enableflags & (mjw.EnableBit.ENERGY | mjw.EnableBit.SLEEP):
+            raise ValueError("Simulation: the model enables MuJoCo's energy or sleep flag, which the two-stage substep "
+                             "does not run; remove <flag energy=.../> and <flag sleep=.../> from the robot's MJCF option")
         self.after_substep: list[Callable[[], None]] = []
         self.after_reset: list[Callable[[torch.Tensor], None]] = []  # called with the reset mask (torch bool)
         self._graph = None
