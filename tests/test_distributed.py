@@ -148,6 +148,9 @@ def test_multi_gpu_report_reads_rsl_rl_logs(tmp_path):
     four = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"), str(tmp_path / "2.log"),
                            "--gpus", "4", "--skip", "1"], cwd=REPO, capture_output=True, text=True, timeout=60)
     assert "throughput ratio 4gpu/1gpu: 1.900" in four.stdout and "4gpu: 4 iterations" in four.stdout
+    one = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"), str(tmp_path / "2.log"),
+                          "--gpus", "1"], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert one.returncode != 0 and "--gpus 1: the second run trains on 2 or more GPUs" in one.stderr
     short = subprocess.run([sys.executable, "tools/multi_gpu_report.py", str(tmp_path / "1.log"),
                             str(tmp_path / "2.log"), "--skip", "4"], cwd=REPO, capture_output=True, text=True)
     assert short.returncode != 0 and "only 4 iterations logged" in short.stderr

@@ -43,6 +43,8 @@ def main() -> None:
     parser.add_argument("--csv", help="write every iteration of both runs here")
     parser.add_argument("--plot", help="save the mean reward of both runs per iteration here (PNG)")
     args = parser.parse_args()
+    if args.gpus < 2:
+        parser.error(f"--gpus {args.gpus}: the second run trains on 2 or more GPUs; give how many it used")
     multi = f"{args.gpus}gpu"
     runs = {"1gpu": parse(args.one_gpu_log), multi: parse(args.multi_gpu_log)}
     for name, rows in runs.items():
