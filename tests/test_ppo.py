@@ -238,3 +238,29 @@ def test_a_run_saved_during_its_critic_warmup_resumes_it():
     assert "frozen_actor_updates" not in released.save()
     released.load(released.save(), None, True)
     assert released._frozen_actor_updates == 0 and float(released._actor_gradient_scale) == 1.0
+
+
+def test_mixed_precision_is_a_setting_that_reaches_both_updates():
+    """``--set algorithm.use_mixed_precision=True`` turns on bf16 autocast in GentePPO's update as in rsl-rl's:
+    both give the same losses, and they differ from the fp32 update's by bf16's rounding."""
+    from legged_gente.utils.args import apply_overrides
+
+    train_cfg = LeggedRobotCfgPPO()
+    apply_overrides(["algorithm.use_mixed_precision=True"], SimpleNamespace(), train_cfg)
+    assert rsl_rl_train_cfg(train_cfg)["algorithm"]["use_mixed_precision"] is True
+
+    def losses(alg_class, mixed):
+        generator = torch.Generator().manual_seed(0)
+        cfg = rsl_rl_train_cfg(train_cfg if mixed else LeggedRobotCfgPPO())
+        cfg["num_steps_per_env"] = STEPS
+        cfg["multi_gpu"] = None
+        cfg["algorithm"].update(class_name=alg_class, num_mini_batches=2, num_learning_epochs=3)
+        torch.manual_seed(0)
+        alg = PPO.construct_algorithm(observations(generator),
+                                      SimpleNamespace(num_envs=NUM_ENVS, num_actions=NUM_ACTIONS), cfg, "cpu")
+        assert alg.use_mixed_precision is mixed
+        return rollout_and_update(alg, generator)
+
+    ours, theirs, fp32 = losses(GentePPO, True), losses(PPO, True), losses(GentePPO, False)
+    assert ours == pytest.approx(theirs, rel=1e-3, abs=1e-5)
+    assert ours["value"] != pytest.approx(fp32["value"], rel=1e-5)
