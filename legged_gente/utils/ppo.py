@@ -1,27 +1,29 @@
 """rsl-rl's PPO with an update that never waits for the GPU.
 
-rsl-rl 5.5's ``PPO.update`` reads four numbers back to the host in every mini-batch: the KL divergence (to
-adapt the learning rate in Python) and the three losses (``.item()``). Each read makes the CPU wait until the
-GPU has finished the mini-batch before it launches the next one, so the few hundred small kernels of a
-mini-batch are issued and executed one after the other instead of overlapping. ``GentePPO`` keeps the
-learning rate in a device tensor that the optimizer reads (adapted in place by the same rule), sums the
-losses on the device, and reads everything once per update. On a GPU each mini-batch step (forward, loss,
-backward, gradient clipping, Adam) then runs as CUDA graphs (``StepGraph``), fed through a static mini-batch
-that each step's data is copied into: one graph on a single GPU; under torchrun two, the gradients and the
-optimizer step, with one NCCL all-reduce launched between them. All gradients live in one flat buffer
-(``param.grad`` are views into it, which backward accumulates into in place) with one more element for the KL
-divergence, so that all-reduce averages the gradients and the KL at once, where rsl-rl issues one per gradient
-bucket plus one for the KL and a broadcast of the learning rate. The rollout's ``act`` (policy and value
-forward passes, sampling) is one more graph. The loss is PPO's clipped surrogate with the clipped value loss
-and entropy bonus (Schulman et al. 2017), as in rsl-rl; ``update`` falls back to rsl-rl's for what it does
-not cover (recurrent models, RND, symmetry, optimizers other than Adam).
+rsl-rl 5.5's ``PPO.update`` reads four numbers back to the host in every mini-batch: the KL divergence (to adapt
+the learning rate in Python) and the three losses (``.item()``). Each read makes the CPU wait until the GPU has
+finished the mini-batch before it launches the next one, so the few hundred small kernels of a mini-batch are
+issued and executed one after the other instead of overlapping. ``GentePPO`` keeps the learning rate in a device
+tensor that the optimizer reads (adapted in place by the same rule), sums the losses on the device, and reads
+everything once per update. On a GPU each mini-batch step (the gather of its rows from the rollout, forward, loss,
+backward, gradient clipping, Adam) then runs as CUDA graphs (``StepGraph``) that read the rows from a tensor the
+host refills: one graph on a single GPU; under torchrun two, the gradients and the optimizer step, with one NCCL
+all-reduce launched between them. All gradients live in one flat buffer (``param.grad`` are views into it, which
+backward accumulates into in place) with one more element for the KL divergence, so that all-reduce averages the
+gradients and the KL at once, where rsl-rl issues one per gradient bucket plus one for the KL and a broadcast of
+the learning rate. The rollout's ``act`` (policy and value forward passes, sampling) is one more graph. The loss
+is PPO's clipped surrogate with the clipped value loss and entropy bonus (Schulman et al. 2017), as in rsl-rl;
+``update`` falls back to rsl-rl's for what it does not cover (recurrent models, RND, symmetry, optimizers other
+than Adam).
 
 What rsl-rl factors out is shared: the models' log-probabilities, entropy and KL divergence
-(``get_output_log_prob``, ``output_entropy``, ``get_kl_divergence``), the storage's mini-batches, ``act`` and
-the fallback update. rsl-rl-lib 5.5 computes the loss terms, the KL test and the learning-rate rule inline in
-``PPO.update``, between host reads (``kl_mean > ...`` in Python, ``.item()``), so there is no smaller piece of
-it to subclass; those few lines are written here on device tensors, and ``tests/test_ppo.py`` pins them to
-rsl-rl's: the same mini-batches give the same losses, clipped gradients and learning rate.
+(``get_output_log_prob``, ``output_entropy``, ``get_kl_divergence``), the rollout storage, ``act`` and the
+fallback update. The mini-batches are the storage generator's (the same random permutation, cut in order),
+gathered inside the graph instead of by the generator on the host. rsl-rl-lib 5.5 computes the loss terms, the KL
+test and the learning-rate rule inline in ``PPO.update``, between host reads (``kl_mean > ...`` in Python,
+``.item()``), so there is no smaller piece of it to subclass; those few lines are written here on device tensors,
+and ``tests/test_ppo.py`` pins them to rsl-rl's: the same mini-batches give the same losses, clipped gradients and
+learning rate.
 
 ``SyncFreeGaussianDistribution`` is rsl-rl's Gaussian policy distribution sampled as mean + std * N(0, 1):
 ``torch.normal(mean, std)``, which rsl-rl's ``sample`` calls, checks ``std >= 0`` on the host, a sync at
@@ -73,7 +75,8 @@ class GentePPO(PPO):
             self._loss_sums = torch.zeros(3, device=self.device)  # value, surrogate, entropy
             self._actor_size = sum(parameter.numel() for parameter in self.actor.parameters())
             self._actor_gradient_scale = torch.ones((), device=self.device)  # 0 while the actor is held fixed
-            self._batch: RolloutStorage.Batch | None = None  # the mini-batch _minibatch_gradients reads
+            self._batch_indices: torch.Tensor | None = None  # the rollout rows of the next mini-batch
+            self._advantages: torch.Tensor | None = None  # the rollout's advantages, in one tensor (see update)
             self._graphed = cuda
             if not cuda:
                 self._minibatch_stages = (self._minibatch_step,)
@@ -164,37 +167,33 @@ class GentePPO(PPO):
         lr.copy_(torch.where(kl > 2.0 * self.desired_kl, lower,
                              torch.where((kl < 0.5 * self.desired_kl) & (kl > 0.0), higher, lr)))
 
-    BATCH_TENSORS = ("actions", "values", "advantages", "returns", "old_actions_log_prob")
-    """The mini-batch's plain tensors that the update reads (besides observations and distribution params)."""
+    def _minibatch(self) -> RolloutStorage.Batch:
+        """The mini-batch of rollout rows ``self._batch_indices``, gathered from the storage (as rsl-rl's
+        generator does). Under graphs the gather is part of the mini-batch graph, which reads the index tensor the
+        host refills, so nothing is copied into a static batch and the host issues no gathers."""
+        storage, rows = self.storage, self._batch_indices
 
-    def _load_batch(self, batch: RolloutStorage.Batch) -> None:
-        """Make ``batch`` the one the next mini-batch step reads: copied into the static one under graphs."""
-        if not self._graphed:
-            self._batch = batch
-        elif self._batch is None:
-            self._batch = RolloutStorage.Batch(
-                observations=batch.observations.clone(),
-                old_distribution_params=tuple(p.clone() for p in batch.old_distribution_params),
-                **{name: getattr(batch, name).clone() for name in self.BATCH_TENSORS})
-        else:
-            static = self._batch
-            static.observations.copy_(batch.observations)
-            for name in self.BATCH_TENSORS:
-                getattr(static, name).copy_(getattr(batch, name))
-            for mine, theirs in zip(static.old_distribution_params, batch.old_distribution_params):
-                mine.copy_(theirs)
+        def gathered(tensor: torch.Tensor) -> torch.Tensor:
+            return tensor.flatten(0, 1)[rows]
+
+        return RolloutStorage.Batch(
+            observations=storage.observations.flatten(0, 1)[rows], actions=gathered(storage.actions),
+            values=gathered(storage.values), advantages=self._advantages.flatten(0, 1)[rows],
+            returns=gathered(storage.returns), old_actions_log_prob=gathered(storage.actions_log_prob),
+            old_distribution_params=tuple(gathered(p) for p in storage.distribution_params))
 
     def _minibatch_step(self) -> None:
-        """One PPO mini-batch step on ``self._batch``: gradients, their average over the ranks, Adam."""
+        """One PPO mini-batch step on the rows ``self._batch_indices``: gradients, their average over the ranks,
+        Adam."""
         self._minibatch_gradients()
         if self.is_multi_gpu:
             self._all_reduce_gradients()
         self._apply_gradients()
 
     def _minibatch_gradients(self) -> None:
-        """PPO's loss on ``self._batch``, its gradients (and the KL divergence) into ``self._gradients``, the
-        losses added to ``self._loss_sums``."""
-        batch = self._batch
+        """PPO's loss on the rows ``self._batch_indices``, its gradients (and the KL divergence) into
+        ``self._gradients``, the losses added to ``self._loss_sums``."""
+        batch = self._minibatch()
         advantages = batch.advantages.squeeze(-1)
         if self.normalize_advantage_per_mini_batch:
             advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
@@ -280,10 +279,22 @@ class GentePPO(PPO):
             self._check_finite(losses, bool(self._parameters_finite()))
             return losses
         self._loss_sums.zero_()
-        for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
-            self._load_batch(batch)
-            for stage in self._minibatch_stages:
-                stage()
+        # rsl-rl's compute_returns binds the storage's advantages to a new tensor; the graphs read this one
+        if self._advantages is None:
+            self._advantages = self.storage.advantages.clone()
+        else:
+            self._advantages.copy_(self.storage.advantages)
+        # the mini-batches of rsl-rl's mini_batch_generator: the same random permutation, cut in order
+        size = self.storage.num_envs * self.storage.num_transitions_per_env // self.num_mini_batches
+        permutation = torch.randperm(self.num_mini_batches * size, device=self.device)
+        for _ in range(self.num_learning_epochs):
+            for rows in permutation.split(size):
+                if self._graphed and self._batch_indices is not None:
+                    self._batch_indices.copy_(rows)  # the tensor the graphs read
+                else:
+                    self._batch_indices = rows.clone() if self._graphed else rows
+                for stage in self._minibatch_stages:
+                    stage()
         self._update_normalization()
         self.storage.clear()
         num_updates = self.num_learning_epochs * self.num_mini_batches
