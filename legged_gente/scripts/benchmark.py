@@ -270,12 +270,15 @@ def profile(runner, steps: int, out: str, raw_substeps_per_s: float) -> None:
 def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, check_sync: bool = False,
         profile_out: str | None = None, profile_envs: int | None = None, cuda_graph: str | None = None) -> list[dict]:
     rows = []
-    for num_envs in sizes:
+    for index, num_envs in enumerate(sizes):
+        # GPU memory of the first size only: a later one reuses memory the sizes before it left in the pools
+        # (Warp's, the CUDA graphs'), so it would seem to take less than it does alone
+        measure_memory = device.startswith("cuda") and index == 0
         env_cfg, _ = task_registry.get_cfgs(task)
         env_cfg.env.num_envs = num_envs
         if cuda_graph is not None:
             env_cfg.sim.cuda_graph = cuda_graph
-        free_before = torch.cuda.mem_get_info(device)[0] if device.startswith("cuda") else 0
+        free_before = torch.cuda.mem_get_info(device)[0] if measure_memory else 0
         env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
         settle(env)
         raw = raw_physics(env, steps * env.cfg.control.decimation)
@@ -303,7 +306,7 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
             if profiled:
                 profile(runner, 10, profile_out, raw)
         ceiling = raw / env.cfg.control.decimation
-        memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if device.startswith("cuda") else float("nan")
+        memory = (free_before - torch.cuda.mem_get_info(device)[0]) / 2**30 if measure_memory else float("nan")
         rows.append({"num_envs": num_envs, "raw_substeps_per_s": raw, "env_steps_per_s": stepped,
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
                      "ppo_update_share": update_share, "forces_share": forces_share, "soles_share": soles_share,
@@ -334,7 +337,8 @@ def print_table(rows: list[dict], device: str) -> None:
           "  with them (nan: terrain has none); soles: the analytic sole contacts' (the feet's terrain collision,\n"
           "  in raw too), apart from forces;\n"
           "forces Δ: how much slower the physics substep is with the force fields on (kernels + changed contacts);\n"
-          "forward: the post-reset forward's share of an env step (it runs every step on a GPU)")
+          "forward: the post-reset forward's share of an env step (it runs every step on a GPU);\n"
+          "GPU GiB: device memory the first size took (later sizes reuse pooled memory: run each alone to measure it)")
 
 
 def main(argv=None) -> None:
