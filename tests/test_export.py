@@ -90,3 +90,10 @@ def test_evaluate_exported_runs_the_onnx_file_and_checks_its_size(exported, tmp_
         OnnxPolicy(path, num_obs=50)
     with pytest.raises(FileNotFoundError, match="no such file"):
         OnnxPolicy(tmp_path / "policy.onnx")
+
+
+def test_a_cpu_runner_leaves_the_update_uncompiled(exported):
+    """runner.compile_update (on by default) compiles GentePPO's update on CUDA only."""
+    _, runner, _ = exported
+    assert runner.cfg["compile_update"] is True and runner.alg.device_side_update
+    assert runner.alg._compiled_mlps == []

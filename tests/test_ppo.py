@@ -264,3 +264,31 @@ def test_mixed_precision_is_a_setting_that_reaches_both_updates():
     ours, theirs, fp32 = losses(GentePPO, True), losses(PPO, True), losses(GentePPO, False)
     assert ours == pytest.approx(theirs, rel=1e-3, abs=1e-5)
     assert ours["value"] != pytest.approx(fp32["value"], rel=1e-5)
+
+
+def test_compile_update_runs_the_update_through_compiled_mlps_and_leaves_the_models_as_they_were(monkeypatch):
+    """GentePPO.compile_update (on by default on CUDA, runner.compile_update): the update's mini-batch steps call
+    the MLPs compiled by TorchInductor, which compute what the plain ones compute; afterwards the models hold
+    their plain MLPs again, so state dicts (checkpoints) and exports keep their keys."""
+    generator = torch.Generator().manual_seed(0)
+    plain, plain_losses = updated(GentePPO, 1e-3)
+    alg = algorithm(GentePPO, 1e-3, generator)
+    keys = list(alg.actor.state_dict()) + list(alg.critic.state_dict())
+    alg.compile_update()
+    seen = []
+    gradients = alg._minibatch_gradients
+
+    def spying():
+        seen.append((type(alg.actor.mlp).__name__, type(alg.critic.mlp).__name__))
+        gradients()
+
+    monkeypatch.setattr(alg, "_minibatch_gradients", spying)
+    alg._minibatch_stages = (alg._minibatch_step,)
+    losses = rollout_and_update(alg, generator)
+    assert seen and all(names == ("OptimizedModule", "OptimizedModule") for names in seen)
+    assert type(alg.actor.mlp).__name__ == type(alg.critic.mlp).__name__ == "MLP"
+    assert list(alg.actor.state_dict()) + list(alg.critic.state_dict()) == keys
+    assert losses == pytest.approx(plain_losses, rel=1e-4, abs=1e-6)
+    for theirs, mine in zip(plain.actor.parameters(), alg.actor.parameters()):
+        assert torch.allclose(theirs, mine, atol=1e-5)
+

@@ -135,16 +135,20 @@ MATMUL_PRECISIONS = ("highest", "high", "medium")  # torch.set_float32_matmul_pr
 
 class GenteOnPolicyRunner(OnPolicyRunner):
     """rsl-rl's OnPolicyRunner, made distributed by any torchrun launch, with per-rank torch seeds, the
-    configured float32 matmul precision, and a logger that does not sync with the GPU at every env step."""
+    configured float32 matmul precision, the update's MLPs compiled on CUDA (``runner.compile_update``), and a
+    logger that does not sync with the GPU at every env step."""
 
     def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu"):
         precision = train_cfg.get("matmul_precision", "highest")
         if precision not in MATMUL_PRECISIONS:
             raise ValueError(f"runner.matmul_precision={precision!r}; use one of {MATMUL_PRECISIONS} "
                              f"(torch.set_float32_matmul_precision)")
-        if str(device).startswith("cuda"):
+        cuda = str(device).startswith("cuda")
+        if cuda:
             torch.set_float32_matmul_precision(precision)
         super().__init__(env, train_cfg, log_dir, device)
+        if cuda and train_cfg.get("compile_update") and getattr(self.alg, "device_side_update", False):
+            self.alg.compile_update()  # GentePPO's own update (rsl-rl's runs as it is)
         self.logger = DeferredLogger(log_dir=log_dir, cfg=self.cfg, env_cfg=self.env.cfg, num_envs=self.env.num_envs,
                                      is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
                                      gpu_global_rank=self.gpu_global_rank, device=self.device)

@@ -32,6 +32,7 @@ every action sampled in the rollout and in every mini-batch.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from itertools import chain
 
@@ -77,6 +78,7 @@ class GentePPO(PPO):
             self._actor_gradient_scale = torch.ones((), device=self.device)  # 0 while the actor is held fixed
             self._batch_indices: torch.Tensor | None = None  # the rollout rows of the next mini-batch
             self._advantages: torch.Tensor | None = None  # the rollout's advantages, in one tensor (see update)
+            self._compiled_mlps: list[tuple[nn.Module, nn.Module]] = []  # (model, its compiled MLP): compile_update
             self._graphed = cuda
             if not cuda:
                 self._minibatch_stages = (self._minibatch_step,)
@@ -102,6 +104,27 @@ class GentePPO(PPO):
         self._act_graph()
         vars(self.transition).update(self._act_transition)
         return self.transition.actions
+
+    def compile_update(self) -> None:
+        """Let the update run the actor's and critic's MLPs compiled by TorchInductor (``torch.compile``), which
+        fuses their elementwise work (the ELUs, their gradients, the bias gradients): that work, not the matrix
+        products, bounds the update (docs/performance.md). Only the update uses the compiled MLPs; the models,
+        their state dict, ``act`` and exports stay as they are. They compile in the first update (seconds),
+        before its graphs are captured."""
+        self._compiled_mlps = [(model, torch.compile(model.mlp, dynamic=False)) for model in (self.actor, self.critic)
+                               if isinstance(getattr(model, "mlp", None), nn.Module)]
+
+    @contextlib.contextmanager
+    def _update_models(self):
+        """The models with their compiled MLPs in place (``compile_update``) for the block's duration."""
+        kept = [(model, model.mlp) for model, _ in self._compiled_mlps]
+        for model, compiled in self._compiled_mlps:
+            model.mlp = compiled
+        try:
+            yield
+        finally:
+            for model, mlp in kept:
+                model.mlp = mlp
 
     def freeze_actor(self, updates: int) -> None:
         """Train the critic alone for the next ``updates`` updates: the actor's gradients are zeroed, so Adam
@@ -287,14 +310,15 @@ class GentePPO(PPO):
         # the mini-batches of rsl-rl's mini_batch_generator: the same random permutation, cut in order
         size = self.storage.num_envs * self.storage.num_transitions_per_env // self.num_mini_batches
         permutation = torch.randperm(self.num_mini_batches * size, device=self.device)
-        for _ in range(self.num_learning_epochs):
-            for rows in permutation.split(size):
-                if self._graphed and self._batch_indices is not None:
-                    self._batch_indices.copy_(rows)  # the tensor the graphs read
-                else:
-                    self._batch_indices = rows.clone() if self._graphed else rows
-                for stage in self._minibatch_stages:
-                    stage()
+        with self._update_models():
+            for _ in range(self.num_learning_epochs):
+                for rows in permutation.split(size):
+                    if self._graphed and self._batch_indices is not None:
+                        self._batch_indices.copy_(rows)  # the tensor the graphs read
+                    else:
+                        self._batch_indices = rows.clone() if self._graphed else rows
+                    for stage in self._minibatch_stages:
+                        stage()
         self._update_normalization()
         self.storage.clear()
         num_updates = self.num_learning_epochs * self.num_mini_batches
