@@ -88,7 +88,10 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, launch.rsl_rl_multi_gpu() if launch else None
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
     torch.manual_seed(0)  # the same initial networks on every rank (rsl-rl's runner broadcasts rank 0's)
-    return PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
+    alg = PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
+    if cfg["compile_update"] and device.startswith("cuda") and getattr(alg, "device_side_update", False):
+        alg.compile_update()  # as GenteOnPolicyRunner does
+    return alg
 
 
 def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24, frozen_actor: int = 0):
@@ -134,7 +137,8 @@ def check_ppo(device: str, num_envs: int, tolerance: float) -> bool:
     _, theirs = ppo_updates(PPO, device, num_envs)
     rank = f"rank {torch.distributed.get_rank()}: " if torch.distributed.is_initialized() else ""
     graphs = [stage.graph is not None for stage in ours._minibatch_stages if hasattr(stage, "graph")]
-    print(f"{rank}PPO update: GentePPO's mini-batch stages {len(ours._minibatch_stages)}, graphs captured {graphs}")
+    print(f"{rank}PPO update: GentePPO's mini-batch stages {len(ours._minibatch_stages)}, graphs captured {graphs}, "
+          f"MLPs compiled {bool(ours._compiled_mlps)}")
     agree = True
     for i, ((p, losses, lr), (q, ref_losses, ref_lr)) in enumerate(zip(mine[1:], theirs[1:])):
         difference = float((p - q).abs().max())
