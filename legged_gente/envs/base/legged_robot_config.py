@@ -249,8 +249,8 @@ class LeggedRobotCfgPPO(BaseConfig):
         # accumulation); "highest" keeps full fp32. Applied on CUDA devices only.
         matmul_precision = "high"
         # CUDA: GentePPO's update runs the actor's and critic's MLPs compiled by TorchInductor
-        # (GentePPO.compile_update); on an H100 at 8192 robots the update took 63-66 ms instead of 70-73 ms
-        # (PPO +2.4 %; docs/performance.md)
+        # (GentePPO.compile_update); on an H100 at 8192 robots the update took 63-64 ms instead of 69-70 ms
+        # (PPO +2.0 %; docs/performance.md)
         compile_update = True
         obs_groups = {"actor": ["policy"], "critic": ["critic"]}
         # fine-tuning a shipped policy (gente-train --pretrained): its critic is not shipped, so the first
