@@ -292,3 +292,16 @@ def test_compile_update_runs_the_update_through_compiled_mlps_and_leaves_the_mod
     for theirs, mine in zip(plain.actor.parameters(), alg.actor.parameters()):
         assert torch.allclose(theirs, mine, atol=1e-5)
 
+
+
+@pytest.mark.parametrize("device, own_update, configured, compiled", [
+    ("cuda:0", True, True, True), ("cpu", True, True, False), ("cuda:0", False, True, False),
+    ("cuda:0", True, False, False)])
+def test_compile_update_applies_to_gentes_own_update_on_cuda_only(device, own_update, configured, compiled):
+    """runner.compile_update, as the runner and the CUDA-graph check apply it: GentePPO's own update on CUDA."""
+    from legged_gente.utils.ppo import compile_update_if_configured
+
+    calls = []
+    alg = SimpleNamespace(device=device, device_side_update=own_update, compile_update=lambda: calls.append(1))
+    compile_update_if_configured(alg, {"compile_update": configured})
+    assert calls == ([1] if compiled else [])

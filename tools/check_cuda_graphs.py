@@ -82,6 +82,7 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     from rsl_rl.algorithms import PPO
 
     from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO, rsl_rl_train_cfg
+    from legged_gente.utils.ppo import compile_update_if_configured
 
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
     launch = torchrun_launch()
@@ -89,8 +90,7 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
     torch.manual_seed(0)  # the same initial networks on every rank (rsl-rl's runner broadcasts rank 0's)
     alg = PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
-    if cfg["compile_update"] and device.startswith("cuda") and getattr(alg, "device_side_update", False):
-        alg.compile_update()  # as GenteOnPolicyRunner does
+    compile_update_if_configured(alg, cfg)  # as GenteOnPolicyRunner does
     return alg
 
 

@@ -29,6 +29,7 @@ import torch.distributed as dist
 from rsl_rl.runners import OnPolicyRunner
 
 from legged_gente.utils.episode_logger import DeferredLogger
+from legged_gente.utils.ppo import compile_update_if_configured
 
 TORCHRUN_VARS = ("RANK", "LOCAL_RANK", "WORLD_SIZE")
 
@@ -143,12 +144,10 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         if precision not in MATMUL_PRECISIONS:
             raise ValueError(f"runner.matmul_precision={precision!r}; use one of {MATMUL_PRECISIONS} "
                              f"(torch.set_float32_matmul_precision)")
-        cuda = str(device).startswith("cuda")
-        if cuda:
+        if str(device).startswith("cuda"):
             torch.set_float32_matmul_precision(precision)
         super().__init__(env, train_cfg, log_dir, device)
-        if cuda and train_cfg.get("compile_update") and getattr(self.alg, "device_side_update", False):
-            self.alg.compile_update()  # GentePPO's own update (rsl-rl's runs as it is)
+        compile_update_if_configured(self.alg, train_cfg)
         self.logger = DeferredLogger(log_dir=log_dir, cfg=self.cfg, env_cfg=self.env.cfg, num_envs=self.env.num_envs,
                                      is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
                                      gpu_global_rank=self.gpu_global_rank, device=self.device)

@@ -53,6 +53,14 @@ class SyncFreeGaussianDistribution(GaussianDistribution):
             return self._distribution.rsample()
 
 
+def compile_update_if_configured(alg: PPO, train_cfg: dict) -> None:
+    """``runner.compile_update``: GentePPO's own update on a CUDA device runs compiled MLPs; rsl-rl's update, and
+    any update on the CPU, run as they are. The runner and the CUDA-graph check both apply it here."""
+    if (train_cfg.get("compile_update") and torch.device(alg.device).type == "cuda"
+            and getattr(alg, "device_side_update", False)):
+        alg.compile_update()
+
+
 class GentePPO(PPO):
     MIN_LEARNING_RATE, MAX_LEARNING_RATE = 1e-5, 1e-2
     """The adaptive schedule's bounds (rsl-rl's)."""
