@@ -7,6 +7,7 @@ import onnxruntime
 import pytest
 import torch
 
+from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO
 from legged_gente.envs.task_registry import task_registry
 from legged_gente.evaluation.evaluator import load_policy_and_file
 from legged_gente.utils.args import build_parser, parse_args
@@ -92,8 +93,11 @@ def test_evaluate_exported_runs_the_onnx_file_and_checks_its_size(exported, tmp_
         OnnxPolicy(tmp_path / "policy.onnx")
 
 
-def test_a_cpu_runner_leaves_the_update_uncompiled(exported):
-    """runner.compile_update (on by default) compiles GentePPO's update on CUDA only."""
+def test_a_cpu_runner_leaves_the_update_uncompiled_and_fp32(exported):
+    """runner.compile_update and algorithm.use_mixed_precision (both on by default) apply on CUDA only; the run's
+    config records the fp32 update that ran."""
     _, runner, _ = exported
     assert runner.cfg["compile_update"] is True and runner.alg.device_side_update
     assert runner.alg._compiled_mlps == []
+    assert LeggedRobotCfgPPO.algorithm.use_mixed_precision is True
+    assert runner.alg.use_mixed_precision is False and runner.cfg["algorithm"]["use_mixed_precision"] is False

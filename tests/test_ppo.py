@@ -9,7 +9,7 @@ from rsl_rl.algorithms import PPO
 from tensordict import TensorDict
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO, rsl_rl_train_cfg
-from legged_gente.utils.ppo import GentePPO
+from legged_gente.utils.ppo import GentePPO, mixed_precision_on_cuda_only
 
 NUM_ENVS, NUM_ACTIONS, STEPS = 32, 3, 8
 
@@ -20,8 +20,9 @@ def observations(generator):
 
 
 def algorithm(alg_class, learning_rate, generator, mini_batches=2, epochs=3):
-    """The algorithm built from the default train config, seeded."""
+    """The algorithm built from the default train config as a CPU runner builds it (fp32), seeded."""
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
+    mixed_precision_on_cuda_only(cfg, "cpu")
     cfg["num_steps_per_env"] = STEPS
     cfg["multi_gpu"] = None
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=mini_batches, num_learning_epochs=epochs,
@@ -241,17 +242,19 @@ def test_a_run_saved_during_its_critic_warmup_resumes_it():
 
 
 def test_mixed_precision_is_a_setting_that_reaches_both_updates():
-    """``--set algorithm.use_mixed_precision=True`` turns on bf16 autocast in GentePPO's update as in rsl-rl's:
-    both give the same losses, and they differ from the fp32 update's by bf16's rounding."""
+    """``algorithm.use_mixed_precision`` (on by default; ``--set algorithm.use_mixed_precision=False`` turns it off)
+    turns on bf16 autocast in GentePPO's update as in rsl-rl's: both give the same losses, and they differ from the
+    fp32 update's by bf16's rounding."""
     from legged_gente.utils.args import apply_overrides
 
-    train_cfg = LeggedRobotCfgPPO()
-    apply_overrides(["algorithm.use_mixed_precision=True"], SimpleNamespace(), train_cfg)
-    assert rsl_rl_train_cfg(train_cfg)["algorithm"]["use_mixed_precision"] is True
+    fp32_cfg = LeggedRobotCfgPPO()
+    apply_overrides(["algorithm.use_mixed_precision=False"], SimpleNamespace(), fp32_cfg)
+    assert rsl_rl_train_cfg(LeggedRobotCfgPPO())["algorithm"]["use_mixed_precision"] is True
+    assert rsl_rl_train_cfg(fp32_cfg)["algorithm"]["use_mixed_precision"] is False
 
     def losses(alg_class, mixed):
         generator = torch.Generator().manual_seed(0)
-        cfg = rsl_rl_train_cfg(train_cfg if mixed else LeggedRobotCfgPPO())
+        cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO() if mixed else fp32_cfg)
         cfg["num_steps_per_env"] = STEPS
         cfg["multi_gpu"] = None
         cfg["algorithm"].update(class_name=alg_class, num_mini_batches=2, num_learning_epochs=3)
@@ -264,6 +267,16 @@ def test_mixed_precision_is_a_setting_that_reaches_both_updates():
     ours, theirs, fp32 = losses(GentePPO, True), losses(PPO, True), losses(GentePPO, False)
     assert ours == pytest.approx(theirs, rel=1e-3, abs=1e-5)
     assert ours["value"] != pytest.approx(fp32["value"], rel=1e-5)
+
+
+@pytest.mark.parametrize("device, configured, mixed", [
+    ("cuda:0", True, True), (torch.device("cuda", 1), True, True), ("cuda:0", False, False), ("cpu", True, False),
+    ("cpu", False, False)])
+def test_mixed_precision_applies_on_cuda_only(device, configured, mixed):
+    """algorithm.use_mixed_precision, as the runner and the CUDA-graph check apply it: bf16 on CUDA devices only."""
+    cfg = {"algorithm": {"use_mixed_precision": configured}}
+    mixed_precision_on_cuda_only(cfg, device)
+    assert cfg["algorithm"]["use_mixed_precision"] is mixed
 
 
 def test_compile_update_runs_the_update_through_compiled_mlps_and_leaves_the_models_as_they_were(monkeypatch):

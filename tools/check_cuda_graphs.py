@@ -82,12 +82,13 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     from rsl_rl.algorithms import PPO
 
     from legged_gente.envs.base.legged_robot_config import LeggedRobotCfgPPO, rsl_rl_train_cfg
-    from legged_gente.utils.ppo import compile_update_if_configured
+    from legged_gente.utils.ppo import compile_update_if_configured, mixed_precision_on_cuda_only
 
     cfg = rsl_rl_train_cfg(LeggedRobotCfgPPO())
     launch = torchrun_launch()
     cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, launch.rsl_rl_multi_gpu() if launch else None
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
+    mixed_precision_on_cuda_only(cfg, device)  # as GenteOnPolicyRunner does (bf16 in both updates on CUDA)
     torch.manual_seed(0)  # the same initial networks on every rank (rsl-rl's runner broadcasts rank 0's)
     alg = PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
     compile_update_if_configured(alg, cfg)  # as GenteOnPolicyRunner does

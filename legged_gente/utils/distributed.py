@@ -29,7 +29,7 @@ import torch.distributed as dist
 from rsl_rl.runners import OnPolicyRunner
 
 from legged_gente.utils.episode_logger import DeferredLogger
-from legged_gente.utils.ppo import compile_update_if_configured
+from legged_gente.utils.ppo import compile_update_if_configured, mixed_precision_on_cuda_only
 
 TORCHRUN_VARS = ("RANK", "LOCAL_RANK", "WORLD_SIZE")
 
@@ -136,8 +136,9 @@ MATMUL_PRECISIONS = ("highest", "high", "medium")  # torch.set_float32_matmul_pr
 
 class GenteOnPolicyRunner(OnPolicyRunner):
     """rsl-rl's OnPolicyRunner, made distributed by any torchrun launch, with per-rank torch seeds, the
-    configured float32 matmul precision, the update's MLPs compiled on CUDA (``runner.compile_update``), and a
-    logger that does not sync with the GPU at every env step."""
+    configured float32 matmul precision, the update's bf16 autocast (``algorithm.use_mixed_precision``) and
+    compiled MLPs (``runner.compile_update``) on CUDA only, and a logger that does not sync with the GPU at every
+    env step."""
 
     def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu"):
         precision = train_cfg.get("matmul_precision", "highest")
@@ -146,6 +147,7 @@ class GenteOnPolicyRunner(OnPolicyRunner):
                              f"(torch.set_float32_matmul_precision)")
         if str(device).startswith("cuda"):
             torch.set_float32_matmul_precision(precision)
+        mixed_precision_on_cuda_only(train_cfg, device)
         super().__init__(env, train_cfg, log_dir, device)
         compile_update_if_configured(self.alg, train_cfg)
         self.logger = DeferredLogger(log_dir=log_dir, cfg=self.cfg, env_cfg=self.env.cfg, num_envs=self.env.num_envs,

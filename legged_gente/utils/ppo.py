@@ -53,6 +53,16 @@ class SyncFreeGaussianDistribution(GaussianDistribution):
             return self._distribution.rsample()
 
 
+def mixed_precision_on_cuda_only(train_cfg: dict, device: str | torch.device) -> None:
+    """``algorithm.use_mixed_precision`` (bf16 autocast of the update's forward pass) applies on CUDA devices only,
+    as ``runner.matmul_precision`` does: on the CPU bf16 autocast made the update slower, so the update stays
+    fp32 there. Rewrites the setting before the algorithm is built, so the run's saved config holds what ran;
+    the runner and the CUDA-graph check both apply it here."""
+    algorithm = train_cfg["algorithm"]
+    algorithm["use_mixed_precision"] = (bool(algorithm.get("use_mixed_precision"))
+                                        and torch.device(device).type == "cuda")
+
+
 def compile_update_if_configured(alg: PPO, train_cfg: dict) -> None:
     """``runner.compile_update``: GentePPO's own update on a CUDA device runs compiled MLPs; rsl-rl's update, and
     any update on the CPU, run as they are. The runner and the CUDA-graph check both apply it here."""
