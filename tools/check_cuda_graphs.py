@@ -19,9 +19,12 @@ distance agree within STATISTICS_TOLERANCE.
 
 PPO update: GentePPO with its mini-batch graphs and rsl-rl's PPO update the same networks on the same
 synthetic rollouts (one mini-batch per epoch, so the shuffling draws do not matter); parameters, losses and
-the adaptive learning rate are compared after each update (a mismatch: more than --tolerance). Under torchrun every rank gets its own rollouts, so the gradient and KL all-reduce between
-GentePPO's two graphs is compared with rsl-rl's (with --device cpu: the same update without graphs, over gloo;
-the CPU tests run it that way).
+the adaptive learning rate are compared after each update (a mismatch: more than --tolerance). On CUDA it runs
+twice: in fp32, and with the bf16 autocast the runner uses there (``algorithm.use_mixed_precision``), where the
+compiled MLPs' fused kernels and rsl-rl's eager ones round differently (bf16 keeps 8 significant bits, 2^-8 = 3.9e-3),
+so --bf16_tolerance applies. Under torchrun every rank gets its own rollouts, so the gradient and KL all-reduce
+between GentePPO's two graphs is compared with rsl-rl's (with --device cpu: the same update without graphs, over
+gloo, in fp32; the CPU tests run it that way).
 
 Critic warm-up: GentePPO with its actor held for two updates (``freeze_actor``, what ``gente-train --pretrained``
 does first), through the same graphs: the actor and the learning rate must stay exactly as they were (TF32 rounding
@@ -76,7 +79,7 @@ def synthetic_observations(num_envs: int, device: str, generator: torch.Generato
                       batch_size=[num_envs], device=device)
 
 
-def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observations):
+def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observations, mixed_precision: bool):
     from types import SimpleNamespace
 
     from rsl_rl.algorithms import PPO
@@ -88,24 +91,26 @@ def ppo_algorithm(alg_class, device: str, num_envs: int, steps: int, observation
     launch = torchrun_launch()
     cfg["num_steps_per_env"], cfg["multi_gpu"] = steps, launch.rsl_rl_multi_gpu() if launch else None
     cfg["algorithm"].update(class_name=alg_class, num_mini_batches=1, num_learning_epochs=4, learning_rate=3e-3)
-    mixed_precision_on_cuda_only(cfg, device)  # as GenteOnPolicyRunner does (bf16 in both updates on CUDA)
+    cfg["algorithm"]["use_mixed_precision"] = mixed_precision
+    mixed_precision_on_cuda_only(cfg, device)  # as GenteOnPolicyRunner does: bf16 on CUDA only
     torch.manual_seed(0)  # the same initial networks on every rank (rsl-rl's runner broadcasts rank 0's)
     alg = PPO.construct_algorithm(observations(), SimpleNamespace(num_envs=num_envs, num_actions=12), cfg, device)
     compile_update_if_configured(alg, cfg)  # as GenteOnPolicyRunner does
     return alg
 
 
-def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24, frozen_actor: int = 0):
+def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: int = 24, frozen_actor: int = 0,
+                mixed_precision: bool = True):
     """``updates`` PPO updates on seeded synthetic rollouts (each rank its own), the first ``frozen_actor`` of them
-    with the actor held (GentePPO only); the actor's parameters, losses and learning rate before the first and after
-    each."""
+    with the actor held (GentePPO only), in bf16 on CUDA as the runner updates unless ``mixed_precision`` is False;
+    the actor's parameters, losses and learning rate before the first and after each."""
     rank = torch.distributed.get_rank() if torch.distributed.is_initialized() else 0
     generator = torch.Generator(device=device).manual_seed(rank)
 
     def observations():
         return synthetic_observations(num_envs, device, generator)
 
-    alg = ppo_algorithm(alg_class, device, num_envs, steps, observations)
+    alg = ppo_algorithm(alg_class, device, num_envs, steps, observations, mixed_precision)
     if hasattr(alg, "_act_graph"):
         alg._act_graph = None  # the same sampled actions as rsl-rl's act; the act graph is checked apart
     if frozen_actor:
@@ -128,18 +133,18 @@ def ppo_updates(alg_class, device: str, num_envs: int, updates: int = 3, steps: 
     return alg, history
 
 
-def check_ppo(device: str, num_envs: int, tolerance: float) -> bool:
+def check_ppo(device: str, num_envs: int, tolerance: float, mixed_precision: bool = False) -> bool:
     """GentePPO's update against rsl-rl's; True when parameters, losses and learning rates agree."""
     from rsl_rl.algorithms import PPO
 
     from legged_gente.utils.ppo import GentePPO
 
-    ours, mine = ppo_updates(GentePPO, device, num_envs)
-    _, theirs = ppo_updates(PPO, device, num_envs)
+    ours, mine = ppo_updates(GentePPO, device, num_envs, mixed_precision=mixed_precision)
+    _, theirs = ppo_updates(PPO, device, num_envs, mixed_precision=mixed_precision)
     rank = f"rank {torch.distributed.get_rank()}: " if torch.distributed.is_initialized() else ""
     graphs = [stage.graph is not None for stage in ours._minibatch_stages if hasattr(stage, "graph")]
-    print(f"{rank}PPO update: GentePPO's mini-batch stages {len(ours._minibatch_stages)}, graphs captured {graphs}, "
-          f"MLPs compiled {bool(ours._compiled_mlps)}")
+    print(f"{rank}PPO update ({'bf16' if ours.use_mixed_precision else 'fp32'}): GentePPO's mini-batch stages "
+          f"{len(ours._minibatch_stages)}, graphs captured {graphs}, MLPs compiled {bool(ours._compiled_mlps)}")
     agree = True
     for i, ((p, losses, lr), (q, ref_losses, ref_lr)) in enumerate(zip(mine[1:], theirs[1:])):
         difference = float((p - q).abs().max())
@@ -176,7 +181,7 @@ def check_act(device: str, num_envs: int) -> bool:
     def observations():
         return synthetic_observations(num_envs, device)
 
-    alg = ppo_algorithm(GentePPO, device, num_envs, 24, observations)
+    alg = ppo_algorithm(GentePPO, device, num_envs, 24, observations, mixed_precision=True)
     agree = True
     with torch.inference_mode():
         for call in range(3):
@@ -208,6 +213,8 @@ def main() -> None:
     parser.add_argument("--ppo_envs", type=int, default=4096, help="envs of the synthetic PPO rollouts")
     parser.add_argument("--tolerance", type=float, default=1e-3,
                         help="largest accepted parameter and relative loss difference of the PPO updates")
+    parser.add_argument("--bf16_tolerance", type=float, default=1e-2,
+                        help="the same, for the updates in bf16 (on CUDA)")
     parser.add_argument("--ppo_only", action="store_true", help="check the PPO update only (what torchrun runs)")
     args = parser.parse_args()
     launch = torchrun_launch()
@@ -216,14 +223,16 @@ def main() -> None:
         device = rank_device(args.device, launch)
         init_process_group(launch, device)
     agree = check_ppo(device, args.ppo_envs, args.tolerance)
+    if device.startswith("cuda"):
+        agree &= check_ppo(device, args.ppo_envs, args.bf16_tolerance, mixed_precision=True)
     agree &= check_critic_warmup(device, args.ppo_envs)
     if device.startswith("cuda") and launch is None:
         agree &= check_act(device, args.ppo_envs)
     if agree:
         print("GentePPO agrees with rsl-rl's PPO")
     else:
-        print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance}, or its critic "
-              f"warm-up did not hold the actor")
+        print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance} (fp32) or "
+              f"--bf16_tolerance {args.bf16_tolerance} (bf16), or its critic warm-up did not hold the actor")
     if not args.ppo_only:
         if env_steps(args.task, args.num_envs, args.steps, args.seed):
             print("the env step agrees across graph and compile modes")
