@@ -18,8 +18,9 @@ class ForcesConfig:
     plate_drag_coefficient: float  cd of a box sole's faces as flat plates normal to the flow (1.17, Hoerner)
     sphere_drag_coefficient: float  cd of a sphere sole (0.47, Hoerner, subcritical)
     noise_std: float      std of the paper's eps (per episode, drag and vertical forces) and xi (per step, flow)
-    vertical_drag: bool   cross-flow drag on the full relative velocity (True); False drops its vertical part
-                           first (the paper's horizontal-only drag)
+    vertical_drag: bool   the legs' cross-flow drag on the full relative velocity (True); False drops its
+                           vertical part first (the paper's horizontal-only drag, of its leg model: the feet,
+                           which the paper does not model, keep their drag on the full relative velocity)
     paper_drag_area: bool  GenTe's A = 2 pi r h instead of the projected 2 r h
     paper_added_mass: bool GenTe's effective weight (added mass only adds weight) instead of the reaction
                            -m_a * relative acceleration
