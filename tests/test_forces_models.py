@@ -176,6 +176,25 @@ def test_rft_element_force_directions_by_hand():
     assert not models.rft_element_force([0, 0, -1.0], [0.3, 0.0, 0.0], -0.01, area, zeta, reg).any()  # in the air
 
 
+def test_rft_face_force_by_hand():
+    """The leading face of a sole sunk 2.14 cm, 0.09 m across the motion: strips of vertical plate (beta = pi/2)
+    whose stress alpha_x(pi/2, gamma) |s| = (C01 - C11 - C-11) cos(gamma) zeta |s| = 0.370 cos(gamma) zeta |s|
+    integrates over the depth to 0.370 cos(gamma) zeta z^2 / 2 * b (the vertical-plate value of
+    test_rft_other_orientations_by_hand)."""
+    zeta, z, b, reg = 4.64e5, 0.0214, 0.09, 0.05
+    level = 0.370 * zeta * z * z / 2 * b  # 3.54 N
+    np.testing.assert_allclose(models.rft_face_force([0.3, 0.0, 0.0], z, b, zeta, reg), [-level, 0.0, 0.0],
+                               rtol=1e-9)
+    # dragged along -y while sinking at 45 deg: gamma = pi/4, cos(gamma) = sqrt(1/2), pushed back along +y
+    np.testing.assert_allclose(models.rft_face_force([0.0, -0.2, -0.2], z, b, zeta, reg),
+                               [0.0, level * np.sqrt(0.5), 0.0], rtol=1e-9, atol=1e-12)
+    # slower than the fade speed: scaled by |v| / reg; straight down (the face slides along itself): none
+    np.testing.assert_allclose(models.rft_face_force([0.01, 0.0, 0.0], z, b, zeta, reg),
+                               [-level * 0.01 / reg, 0.0, 0.0], rtol=1e-9)
+    assert not models.rft_face_force([0.0, 0.0, -0.3], z, b, zeta, reg).any()
+    assert not models.rft_face_force([0.3, 0.0, 0.0], -0.01, b, zeta, reg).any()  # above the surface
+
+
 def test_rft_support_by_hand():
     """The vertical stress under a sole in units of zeta, alpha_z(beta, gamma) / zeta, from the Fourier series by
     hand (beta = 0 for a level sole: cos(2 beta) = 1, the B terms sum to (0.212 + 0.358 + 0.055) sin(gamma))."""
@@ -239,10 +258,12 @@ def test_rft_kernel_matches_reference():
 
     @wp.kernel
     def rft_eval(normals: wp.array[wp.vec3], vels: wp.array[wp.vec3], depths: wp.array[float],
-                 angles: wp.array[wp.vec2], out: wp.array[wp.vec3], alphas: wp.array[wp.vec2]):
+                 angles: wp.array[wp.vec2], out: wp.array[wp.vec3], alphas: wp.array[wp.vec2],
+                 faces: wp.array[wp.vec3]):
         i = wp.tid()
         out[i] = R.rft_element_force_fn(normals[i], vels[i], depths[i], 1.0e-3, 4.64e5, 0.05)
         alphas[i] = R.rft_alpha_fn(angles[i][0], angles[i][1], 4.64e5)
+        faces[i] = R.rft_face_force_fn(vels[i], depths[i], 0.09, 4.64e5, 0.05)
 
     rng = np.random.default_rng(1)
     k = 300
@@ -255,8 +276,12 @@ def test_rft_kernel_matches_reference():
     arrays = [wp.array(a.astype(np.float32), dtype=t, device="cpu")
               for a, t in ((normals, wp.vec3), (vels, wp.vec3), (depths, float), (angles, wp.vec2))]
     out, alphas = wp.zeros(k, dtype=wp.vec3, device="cpu"), wp.zeros(k, dtype=wp.vec2, device="cpu")
-    wp.launch(rft_eval, dim=k, device="cpu", inputs=[*arrays, out, alphas])
+    faces = wp.zeros(k, dtype=wp.vec3, device="cpu")
+    wp.launch(rft_eval, dim=k, device="cpu", inputs=[*arrays, out, alphas, faces])
     for i in range(k):
         ref = models.rft_element_force(normals[i], vels[i], depths[i], 1e-3, 4.64e5, 0.05)
         np.testing.assert_allclose(out.numpy()[i], ref, rtol=1e-4, atol=1e-3)
         np.testing.assert_allclose(alphas.numpy()[i], models.rft_alpha(*angles[i], 4.64e5), rtol=1e-5, atol=0.5)
+        face = models.rft_face_force(vels[i], depths[i], 0.09, 4.64e5, 0.05)
+        np.testing.assert_allclose(faces.numpy()[i], face, rtol=1e-4, atol=1e-4)
+    assert np.count_nonzero(np.abs(faces.numpy()).max(1) > 1.0) > 100  # most of the random faces are sunk and moving

@@ -276,28 +276,40 @@ def test_soil_forces_act_at_the_contact_plane():
 
 def test_rft_sole_sinks_to_zeta_and_drags_with_alpha_x():
     """A 20 kg foot on an RFT medium sinks until zeta |z| A carries its weight, and dragged sideways in its rut
-    the medium resists with RFT's horizontal stress on its sole plate: alpha_x(0, 0) |z| A = 0.136 zeta z A =
-    0.136 m g (z = m g / (zeta A)), applied element by element at the contact plane."""
+    the medium resists with RFT's horizontal stress on its sole plate, alpha_x(0, 0) |z| A = 0.136 zeta z A =
+    0.136 m g (z = m g / (zeta A)), applied element by element at the contact plane; and on its leading face, the
+    soil wall 0.09 m wide (the sole's width across the motion) from the surface down to z: vertical-plate strips,
+    alpha_x(pi/2, 0) = 0.370 zeta, integrated over the depth, 0.370 zeta z^2 / 2 * 0.09, at z / 3 above the
+    contact plane."""
     wp.set_device(DEV)
-    mass, zeta, area = 20.0, 4.64e5, 0.22 * 0.09
+    mass, zeta, area, width = 20.0, 4.64e5, 0.22 * 0.09, 0.09
     z_rft = mass * G / area / zeta  # 9909 Pa / 4.64e5 N/m^3 = 0.0214 m
-    drag = (-0.124 + 0.253 + 0.007) * zeta * z_rft * area  # C11 + C01 + C-11 = 0.136: 26.7 N
     m, d, f = make(foot_world(mass, z0=0.02), soil_map("t_rft"), sinkage_rate=0.25, sinkage_load_tau=0.2)
     run(m, d, f, 200)
     assert -d.qpos.numpy()[0, 1] == pytest.approx(z_rft, rel=0.08)
-    # dragged along +x at 0.3 m/s (above the 0.05 m/s fade): the RFT force is -0.136 m g along x
+    # dragged along +x at 0.3 m/s (above the 0.05 m/s fade); the last substep's forces are those of the state
+    # it started from: its velocity (0.3 m/s along x; sinking at vz, as the dragged sole's rut deepens) and its
+    # depth (the contact plane, 2 cm (the spheres' radius) below the body origin, under the flat surface at 0:
+    # d.xpos after the step, whose forward computed the bodies before integrating)
     for _ in range(5):
         q = d.qvel.numpy()
         q[0, 0] = 0.3
         d.qvel.assign(q)
+        vz = q[0, 1]
         mjw.step(m, d)
         f.after_substep()
+    contact_z, com = d.xpos.numpy()[0, 1, 2] - 0.02, d.xipos.numpy()[0, 1]
+    z = -contact_z
+    assert z == pytest.approx(z_rft, rel=0.08)
+    # gamma = atan2(-vz, 0.3): alpha_x(0, gamma) = 0.136 cos(gamma), alpha_x(pi/2, gamma) = 0.370 cos(gamma)
+    cos_gamma = 0.3 / math.hypot(0.3, vz)
+    plate = (-0.124 + 0.253 + 0.007) * cos_gamma * zeta * z * area  # C11 + C01 + C-11 = 0.136: 26.7 N at z_rft
+    face = (0.253 + 0.124 - 0.007) * cos_gamma * zeta * z * z / 2 * width  # C01 - C11 - C-11 = 0.370: 3.5 N
     fx = f.foot_force.numpy()[0, 0]
-    assert fx[0] == pytest.approx(-drag, rel=0.1) and abs(fx[1]) < 1e-3 and fx[2] == 0.0
-    # its moment: every element at the contact plane, 2 cm (the spheres' radius) below the body origin
-    contact_z = d.xpos.numpy()[0, 1, 2] - 0.02
-    com = d.xipos.numpy()[0, 1]
-    assert d.xfrc_applied.numpy()[0, 1, 4] == pytest.approx((contact_z - com[2]) * fx[0], rel=1e-4)
+    assert fx[0] == pytest.approx(-(plate + face), rel=1e-3) and abs(fx[1]) < 1e-3 and fx[2] == 0.0
+    # its moment: the plate's elements at the contact plane, the face's centre of pressure z / 3 above it
+    torque_y = (contact_z - com[2]) * fx[0] + z / 3 * -face
+    assert d.xfrc_applied.numpy()[0, 1, 4] == pytest.approx(torque_y, rel=2e-3)
 
 
 def drag(m, d, f, substeps, vx):

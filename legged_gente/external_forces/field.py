@@ -480,7 +480,8 @@ class TerrainForces:
                 R.rft_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
                         d.cvel, d.subtree_com, self.hf_heights, self.hf_origin, self.hf_res, self.sole_length,
-                        self.sole_width, self.sole_area, float(cfg.bulldozing_speed_reg), self.soil_params, self.foot_soil,
+                        self.sole_width, int(self.sole_disc), self.sole_area, float(cfg.bulldozing_speed_reg),
+                        self.soil_params, self.foot_soil,
                         self.foot_support, self.foot_force, d.xfrc_applied],
             )
 

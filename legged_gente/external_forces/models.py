@@ -191,6 +191,26 @@ def rft_element_force(normal, velocity, depth, area, zeta, speed_reg):
     return -ax * depth * area * fade * e
 
 
+def rft_face_force(velocity, depth, face_width, zeta, speed_reg):
+    """Horizontal RFT force (N, 3-vector) on a sunk sole's leading face: the soil wall of ``face_width`` (the
+    footprint projected across the horizontal motion, as Bekker's bulldozing width) from the surface down to
+    the sole's ``depth``, pushed along the motion. Each strip of it at depth |s| is a vertical plate (beta =
+    pi/2) moving at gamma: the stress alpha_x(pi/2, gamma) |s| integrates over 0..depth to
+    -alpha_x depth^2 / 2 * face_width e (Li et al. 2013's elements summed over the face), faded in linearly
+    below ``speed_reg`` (m/s) as the plate's elements are. Its centre of pressure is depth / 3 above the sole's
+    contact plane. A motion with no horizontal part moves the face along itself: no force. This is the part of
+    RFT that stands for Bekker's bulldozing."""
+    v = np.asarray(velocity, float)
+    vh = np.array([v[0], v[1], 0.0])
+    speed_h = np.linalg.norm(vh)
+    if depth <= 0.0 or speed_h <= 0.0:
+        return np.zeros(3)
+    gamma = np.arctan2(-v[2], speed_h)
+    ax, _ = rft_alpha(np.pi / 2, gamma, zeta)
+    fade = min(np.linalg.norm(v) / speed_reg, 1.0)
+    return -ax * 0.5 * depth**2 * face_width * fade * vh / speed_h
+
+
 def rft_support(normal, velocity, speed_reg):
     """RFT's vertical stress per unit depth under a sole of unit ``normal`` moving at ``velocity``, in units of
     zeta: alpha_z(beta, gamma) / zeta, faded linearly to 1 (a sole pushed straight down, alpha_z(0, pi/2) = zeta)

@@ -1,6 +1,6 @@
 """Resistive force theory under the soles (Li, Zhang & Goldman, Science 2013): Warp twins of the numpy
-references in ``models.py`` (``rft_alpha``, ``rft_plane``, ``rft_element_force``, ``rft_support``) and the kernel
-that applies them per sole element.
+references in ``models.py`` (``rft_alpha``, ``rft_plane``, ``rft_element_force``, ``rft_face_force``,
+``rft_support``) and the kernel that applies them per sole element and leading face.
 
 A foot on an "rft" soil (``soil.rft_preset``) sinks into its rut until RFT's vertical stress under its current
 motion carries its load (p = alpha_z(beta, gamma) |z|: zeta |z| pushed straight down or at rest, 0.375 zeta |z|
@@ -8,8 +8,10 @@ dragged level sideways), through the same rut and contact as Bekker's soils: ``r
 sole's mean ``rft_support_fn`` over its elements for the next substep's rut (``kernels.rut_sinkage_fn``).
 It adds, for each element of the sole plate (``NX x NY`` elements of the sole's footprint at its contact
 plane), the horizontal RFT stress -alpha_x(beta, gamma) |z| A against its motion, at the element's own point
-(so a turning or tilted sole gets the moment of its elements' forces), in place of Bekker's bulldozing. The
-vertical stress is carried by the contact alone (the rut), never applied as a force too.
+(so a turning or tilted sole gets the moment of its elements' forces); and the horizontal RFT stress on the
+sole's leading face, the soil wall it pushes from the surface down to its contact plane (``rft_face_force_fn``):
+together they stand in place of Bekker's bulldozing. The vertical stress is carried by the contact alone (the
+rut), never applied as a force too.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from __future__ import annotations
 import warp as wp
 
 from legged_gente.external_forces.contact import surface_height_fn
-from legged_gente.external_forces.kernels import MODEL, ZETA, apply_force, point_velocity
+from legged_gente.external_forces.kernels import MODEL, ZETA, apply_force, bulldozing_width_fn, point_velocity
 from legged_gente.external_forces.models import RFT_GENERIC
 
 NX, NY = 4, 2
@@ -68,6 +70,18 @@ def rft_element_force_fn(normal: wp.vec3, velocity: wp.vec3, depth: float, area:
 
 
 @wp.func
+def rft_face_force_fn(velocity: wp.vec3, depth: float, face_width: float, zeta: float, speed_reg: float) -> wp.vec3:
+    """Horizontal RFT force on a sunk sole's leading face (see ``models.rft_face_force``)."""
+    vh = wp.vec3(velocity[0], velocity[1], 0.0)
+    speed_h = wp.length(vh)
+    if depth <= 0.0 or speed_h <= 0.0:
+        return wp.vec3(0.0)
+    alpha = rft_alpha_fn(HALF_PI, wp.atan2(-velocity[2], speed_h), zeta)
+    fade = wp.min(wp.length(velocity) / speed_reg, 1.0)
+    return -(alpha[0] * 0.5 * depth * depth * face_width * fade / speed_h) * vh
+
+
+@wp.func
 def rft_support_fn(normal: wp.vec3, velocity: wp.vec3, speed_reg: float) -> float:
     """alpha_z / zeta of a sole moving at ``velocity`` (gamma at least 0), faded to 1 below speed_reg (see
     ``models.rft_support``)."""
@@ -92,6 +106,7 @@ def rft_force_kernel(
     hf_res: float,
     sole_length: float,
     sole_width: float,
+    sole_disc: int,
     sole_area: float,
     speed_reg: float,
     soil_params: wp.array3d[float],
@@ -105,7 +120,10 @@ def rft_force_kernel(
     (x, y) of the sole plate (body frame: sole_length along the foot body's x axis, sole_width along its y axis,
     the sole's contact plane ``foot_drop`` below its centre, normal the body's z axis) at
     depth |z| below the terrain surface (the unlowered one: the rut is the medium it was pushed into) gets
-    ``rft_element_force_fn``, applied at its point.
+    ``rft_element_force_fn``, applied at its point; the leading face, as wide as the footprint across the
+    horizontal motion of the sole's centre (``kernels.bulldozing_width_fn``), from the surface down to that
+    centre's depth, gets ``rft_face_force_fn`` at its centre of pressure, a third of the depth above the
+    contact plane (the face's offset along the motion is parallel to the force: it adds no moment).
 
     Every foot's ``foot_support`` is written for the rut of the next substep, whose contacts are built before
     the velocities are (the load the rut carries is the last substep's too): the mean of its elements'
@@ -138,4 +156,10 @@ def rft_force_kernel(
                 total = total + force
     foot_support[w, f] = support / float(NX * NY)
     if rft != 0:
-        foot_force[w, f] = foot_force[w, f] + total
+        p = xpos[w, b] + xm @ (foot_offset[f] - wp.vec3(0.0, 0.0, foot_drop[f]))
+        v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+        depth = surface_height_fn(heights, hf_origin, hf_res, p[0], p[1])[3] - p[2]
+        face = bulldozing_width_fn(xm, wp.vec3(v[0], v[1], 0.0), sole_length, sole_width, sole_disc)
+        force = rft_face_force_fn(v, depth, face, soil_params[w, s, ZETA], speed_reg)
+        apply_force(xfrc, xipos, w, b, force, p + wp.vec3(0.0, 0.0, wp.max(depth, 0.0) / 3.0))
+        foot_force[w, f] = foot_force[w, f] + total + force

@@ -22,7 +22,8 @@ Each preset names its granular ``model``: "bekker" (Bekker sinkage and bulldozin
 natural soil here; the shipped policies were trained with it) or "rft" (resistive force theory: a sole sinks
 until RFT's vertical stress under its motion, alpha_z(beta, gamma) |z|, carries its load: zeta |z| at rest or
 pushed down, Bekker's law with n = 1, kc = 0, kphi = zeta; its resistance to moving through the medium is the
-RFT stresses of its elements in place of bulldozing; see :func:`rft_preset`).
+RFT stresses on its sole plate's elements and on its leading face in place of bulldozing; see
+:func:`rft_preset`).
 
 The traction a foot can get from a soil is its shear strength (Mohr-Coulomb: c A + F_N tan phi, A the sole
 area), mobilised with the foot's slip j as Janosi and Hanamoto measured: (c A + F_N tan phi)(1 - exp(-j/K)).
@@ -117,7 +118,7 @@ def rft_preset(zeta, c, phi_deg, K, source) -> SoilPreset:
     RFT's stress on a horizontal sole pushed straight down is alpha_z(0, pi/2) |z| = zeta |z|: the sinkage law
     p = zeta z, which is Bekker's with kc = 0, kphi = zeta, n = 1 (the values given here, which the observations
     show). The rut itself uses zeta times the sole's current alpha_z / zeta (``kernels.rut_sinkage_fn``), so a
-    moving sole sinks as RFT says. No bulldozing: the RFT element stresses replace it."""
+    moving sole sinks as RFT says. No bulldozing: the RFT stresses on the sole plate's elements and its leading face replace it."""
     return SoilPreset(kc=(0.0, 0.0), kphi=_pct(zeta, 0.15), n=(1.0, 0.0), c=_pct(c, 0.15),
                       mu=_pct(math.tan(math.radians(phi_deg)), 0.1), K=_pct(K, 0.2), bulldoze_c=(0.0, 0.0),
                       bulldoze_g=(0.0, 0.0), zeta=_pct(zeta, 0.15), model="rft", source=source)
