@@ -4,6 +4,7 @@ both spellings (--num_envs, --num-envs) in every command; the CPU default of 409
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
@@ -79,6 +80,7 @@ def test_nonsense_settings_are_rejected_before_anything_runs(capsys, override, m
     (["--mode", "waypoints", "--speed", "0"], "speed must be > 0 m/s, got 0.0"),
     (["--tile_edge_margin", "near"], "'near' is not a distance in m; give a number such as 0.5, or 'off'"),
     (["--tile_edge_margin", "-0.1"], "tile_edge_margin -0.1 m must be in [0, "),
+    (["--settle_s", "-1", "--episode_s", "2"], "settle_s must be >= 0 s, got -1.0"),
 ])
 def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
     (tmp_path / "FILE").write_text("")
@@ -182,9 +184,8 @@ def test_generation_errors_are_one_line_and_name_the_image(capsys, tmp_path):
     assert line == "gente-generate: error: --size 100000: must be in [1, 200]."
     image = tmp_path / "photo.png"
     image.write_text("not an image")
-    assert generate_script.main(["--image", str(image), "--out", str(tmp_path / "o")]) == 1
-    err = capsys.readouterr().err.strip()
-    assert f"{image} could not be read as an image" in err and "BytesIO" not in err, err
+    line = one_line_error(capsys, generate_script.main, ["--image", str(image), "--out", str(tmp_path / "o")])
+    assert f"{image} could not be read as an image" in line and "BytesIO" not in line, line
 
 
 def test_cuda_without_a_gpu_says_so(capsys, monkeypatch):
@@ -261,3 +262,219 @@ def test_third_party_noise_is_quiet_by_default():
         assert wp.config.log_level == wp.LOG_WARNING  # no "Module ... loaded" lines, no banner
     finally:
         wp.config.log_level = level
+
+
+def test_an_os_error_is_one_line_naming_its_path(capsys, tmp_path):
+    """A folder that is a file, or one that may not be written, from wherever in a command it comes."""
+    from legged_gente.utils.args import run_command
+
+    def fail(args):
+        raise NotADirectoryError(20, "Not a directory", str(tmp_path / "a.png" / "sub"))
+
+    with pytest.raises(SystemExit) as exit_info:
+        run_command("gente-x", fail, parse_args(build_parser("t"), ["--device", "cpu"]))
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "Traceback" not in err
+    assert err.strip() == f"gente-x: error: {tmp_path / 'a.png' / 'sub'}: Not a directory", err
+
+
+class Started(Exception):
+    """The command began its work (it should have refused its input before)."""
+
+
+def never(*args, **kwargs):
+    raise Started
+
+
+@pytest.fixture
+def blocked(tmp_path):
+    """An output path under a file: no folder can be made there."""
+    (tmp_path / "notimage.png").write_text("x")
+    return tmp_path / "notimage.png" / "sub"
+
+
+def test_evaluate_checks_its_out_folder_before_evaluating(capsys, monkeypatch, blocked):
+    from legged_gente.evaluation import evaluator
+
+    monkeypatch.setattr(evaluator, "Evaluation", never)
+    line = one_line_error(capsys, evaluate_script.main, ["--baseline", "zero", "--benchmark", "flat", "--device",
+                                                         "cpu", "--out", str(blocked)])
+    assert line == f"gente-evaluate: error: --out {blocked}: {blocked.parent} is a file; give a folder to write to"
+
+
+def test_benchmark_checks_its_csv_and_profile_before_measuring(capsys, monkeypatch, blocked):
+    monkeypatch.setattr(benchmark_script, "run", never)
+    for name in ("--csv", "--profile"):
+        line = one_line_error(capsys, benchmark_script.main, ["--num_envs", "2", "--device", "cpu", name,
+                                                              str(blocked / "x.csv")])
+        assert line == f"gente-benchmark: error: {name} {blocked / 'x.csv'}: {blocked.parent} is a file; give a " \
+                       f"folder to write to"
+
+
+def test_train_and_play_check_the_log_root_before_building(capsys, monkeypatch, blocked):
+    monkeypatch.setattr(task_registry, "make_env", never)
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(blocked))
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU])
+    assert line == f"gente-train: error: GENTE_LOG_ROOT {blocked}: {blocked.parent} is a file; give a folder to " \
+                   f"write to"
+    line = one_line_error(capsys, play_script.main, ["--task", "gente_biped_flat", *CPU, "--pretrained"])
+    assert line == f"gente-play: error: GENTE_LOG_ROOT {blocked}: {blocked.parent} is a file; give a folder to " \
+                   f"write to"
+    monkeypatch.delenv("GENTE_LOG_ROOT")
+    line = one_line_error(capsys, play_script.main, ["--task", "gente_biped_flat", *CPU, "--pretrained",
+                                                     "--log_root", str(blocked)])
+    assert line == f"gente-play: error: --log_root {blocked}: {blocked.parent} is a file; give a folder to write to"
+
+
+@pytest.mark.parametrize("override", ["actor.hidden_dims=[]", "actor.hidden_dims=[-4]", "actor.hidden_dims=[64,'a']",
+                                      "critic.hidden_dims=[0]", "critic.hidden_dims=[64,2.5]"])
+def test_network_sizes_are_positive_layer_widths(capsys, monkeypatch, override):
+    """An empty list, a negative or zero width or a word crashed in torch, or trained a 0-wide layer."""
+    _, env_cfg, train_cfg = task_registry.tasks["gente_biped_flat"]
+    monkeypatch.setitem(task_registry.tasks, "gente_biped_flat", (never, env_cfg, train_cfg))
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--set", override])
+    section = override.split(".")[0]
+    assert f"{section}.hidden_dims=" in line and "must be a non-empty list of layer widths >= 1" in line, line
+
+
+def test_a_checkpoint_without_config_json_is_evaluated_with_set(capsys, tmp_path):
+    """The size-mismatch error tells gente-evaluate's user to pass --set actor.hidden_dims=[...]: that works."""
+    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", *CPU])
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
+    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    runner.save(str(tmp_path / "model_0.pt"))  # no config.json beside it
+    flags = ["--task", "gente_biped_flat", "--checkpoint", str(tmp_path / "model_0.pt"), "--benchmark", "flat",
+             "--robots_per_terrain", "1", "--episode_s", "0.1", "--settle_s", "0", "--device", "cpu",
+             "--no_progress", "--out", str(tmp_path / "out")]
+    line = one_line_error(capsys, evaluate_script.main, flags)
+    assert "--set actor.hidden_dims=[...]" in line
+    evaluate_script.main([*flags, "--set", "actor.hidden_dims=[8]"])
+    assert (tmp_path / "out" / "report.json").is_file()
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--baseline", "zero", "--set", "actor.hidden_dims=[8]"], "--set sets the network sizes of a --checkpoint"),
+    (["--checkpoint", "CKPT", "--set", "terrain.num_rows=2"],
+     "--set terrain.num_rows=2: gente-evaluate sets only the network sizes (actor.*, critic.*)"),
+    (["--checkpoint", "CKPT", "--set", "actor.hidden_dims=[]"], "must be a non-empty list of layer widths"),
+])
+def test_evaluate_set_is_refused_where_it_would_do_nothing(capsys, tmp_path, monkeypatch, flags, message):
+    from legged_gente.evaluation import evaluator
+
+    monkeypatch.setattr(evaluator, "Evaluation", never)
+    (tmp_path / "model_0.pt").write_text("")
+    flags = [str(tmp_path / "model_0.pt") if f == "CKPT" else f for f in flags]
+    line = one_line_error(capsys, evaluate_script.main, [*flags, "--benchmark", "flat", "--device", "cpu",
+                                                         "--out", str(tmp_path / "out")])
+    assert message in line
+
+
+def test_evaluate_set_is_refused_beside_a_config_json(capsys, tmp_path, monkeypatch):
+    from legged_gente.evaluation import evaluator
+
+    monkeypatch.setattr(evaluator, "Evaluation", never)
+    (tmp_path / "model_0.pt").write_text("")
+    (tmp_path / "config.json").write_text("{}")
+    line = one_line_error(capsys, evaluate_script.main, ["--checkpoint", str(tmp_path / "model_0.pt"), "--set",
+                                                         "actor.hidden_dims=[8]", "--device", "cpu", "--out",
+                                                         str(tmp_path / "out")])
+    assert f"{tmp_path / 'config.json'} sets the network sizes; leave out --set" in line
+
+
+@pytest.mark.parametrize("main, argv", [
+    (train_script.main, ["--num_envs", "x"]),
+    (play_script.main, ["--bogus"]),
+    (evaluate_script.main, ["--baseline", "zero"]),
+    (benchmark_script.main, ["--steps", "x"]),
+    (view_script.main, ["--port", "x"]),
+])
+def test_a_usage_error_is_one_line_without_the_usage_block(capsys, main, argv):
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"gente-{main.__module__.rsplit('.', 1)[1]}: error: "), err
+
+
+def test_flags_are_never_abbreviated():
+    """--set in gente-evaluate was ambiguous with --settle_s; --max_it was taken for --max_iterations."""
+    with pytest.raises(SystemExit):
+        parse_args(build_parser("t"), ["--device", "cpu", "--max_it", "3"])
+    with pytest.raises(SystemExit):
+        evaluate_script.build_parser().parse_args(["--baseline", "zero", "--out", "o", "--settle", "1"])
+
+
+def view_error(capsys, monkeypatch, tmp_path, argv) -> str:
+    """gente-view's one-line error for ``argv``, given before its server starts."""
+    import viser
+
+    monkeypatch.setattr(viser, "ViserServer", never)
+    names = {"TEXT.npz": "hello", "ROLLOUT.npz": None, "FILE": "x"}
+    for name, text in names.items():
+        if text is not None:
+            (tmp_path / name).write_text(text)
+    if "ROLLOUT.npz" in argv:
+        from legged_gente.viewer.rollout import Rollout
+
+        from test_viewer import GridCfg
+        from legged_gente.terrain.terrain import Terrain
+
+        terrain = Terrain(GridCfg, num_robots=1)
+        steps = 5
+        Rollout("gente_biped_flat", 0.02, np.zeros((steps, 1, 7 + 10), np.float32), np.zeros((steps, 1, 3)),
+                np.zeros((steps, 1, 3)), np.zeros((steps, 1), bool), np.zeros((steps, 1), bool), [],
+                np.zeros((steps, 1, 0, 3), np.float32), np.zeros((steps, 1, 0, 3), np.float32),
+                terrain.height_field, terrain.origin_xy, terrain.resolution, terrain.material
+                ).save(tmp_path / "ROLLOUT.npz")
+    argv = [str(tmp_path / a) if a in names or a.startswith("FILE/") else a for a in argv]
+    return one_line_error(capsys, view_script.main, ["--task", "gente_biped_flat", "--headless", *argv])
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["nonexist.json"], "gente-view: error: nonexist.json: no such file or folder; pass a spec .json, a "
+                        "terrain_cfg.py, a benchmark folder or a rollout .npz"),
+    (["--task", "nope"], "gente-view: error: unknown task 'nope'; registered tasks: ["),
+    (["--record", "r.npz"], "gente-view: error: --record writes the rollout of --play: add --play"),
+    (["--traces", "TEXT.npz"], "gente-view: error: --traces replays gente-evaluate's robots on their benchmark: "
+                               "give its folder as the source (gente-view gente100 --traces eval/traces.npz)"),
+    ([str(FLAT_SPEC), "--traces", "TEXT.npz"], "gente-view: error: --traces replays gente-evaluate's robots"),
+    (["--item", "x"], "gente-view: error: --item picks the item of --traces"),
+    (["ROLLOUT.npz", "--step", "-5"], "gente-view: error: --step -5: the rollout has steps 0..4"),
+    (["ROLLOUT.npz", "--step", "99999"], "gente-view: error: --step 99999: the rollout has steps 0..4"),
+    (["--step", "3"], "gente-view: error: --step opens a rollout paused: give a rollout .npz, --traces or --play"),
+    (["--seconds", "-1"], "gente-view: error: --seconds -1.0 must be >= 0"),
+    (["--play", "--policy", "zero", "--robots", "0"], "gente-view: error: --robots 0 must be >= 1"),
+    (["--play", "--policy", "zero", "--record", "FILE/r.npz"],
+     "gente-view: error: --record FILE/r.npz: FILE is a file; give a folder to write to"),
+    (["gente100", "--traces", "nonexist.npz"], "gente-view: error: nonexist.npz: no such file; give"),
+])
+def test_viewer_input_is_checked_before_the_server_starts(capsys, monkeypatch, tmp_path, argv, message):
+    line = view_error(capsys, monkeypatch, tmp_path, argv)
+    assert line.startswith(message.replace("FILE", str(tmp_path / "FILE"))), line
+
+
+def test_a_bad_terrain_module_stops_the_viewer_before_its_server(capsys, monkeypatch, tmp_path):
+    (tmp_path / "terrain_cfg.py").write_text("x = (\n")
+    line = view_error(capsys, monkeypatch, tmp_path, ["--terrain", str(tmp_path / "terrain_cfg.py")])
+    assert "terrain_cfg.py:1: SyntaxError" in line
+
+
+def test_viewer_flags_take_both_spellings():
+    parser = view_script.build_arg_parser()
+    for spelling in ("--no_shadows", "--no-shadows"):
+        assert parse_args(parser, ["--device", "cpu", spelling]).no_shadows
+    for spelling in ("--log_root", "--log-root"):
+        assert parse_args(parser, ["--device", "cpu", spelling, "x"]).log_root == "x"
+
+
+@pytest.mark.parametrize("main, build", [(play_script.main, play_script.build_play_parser),
+                                         (view_script.main, view_script.build_arg_parser)])
+def test_training_flags_are_not_offered_where_nothing_trains(capsys, main, build):
+    """gente-play and gente-view listed --max_iterations, --resume and --run_name and ignored them."""
+    help_text = build().format_help()
+    for name in ("--max_iterations", "--resume", "--run_name"):
+        assert name not in help_text
+        line = one_line_error(capsys, main, ["--task", "gente_biped_flat", *CPU, name, *(["3"] if name != "--resume" else [])])
+        assert f"unrecognized arguments: {name}" in line

@@ -39,3 +39,27 @@ def test_plane_and_bad_input():
     assert cfg.terrain.mesh_type == "plane"
     with pytest.raises(FileNotFoundError, match="no such file"):
         apply_terrain_arg("missing.json", cfg)
+
+
+@pytest.mark.parametrize("source, message", [
+    ("x = (\n", ":1: SyntaxError: '(' was never closed"),
+    ("import math\nimport nonexistent_mod\n", ":2: ModuleNotFoundError: No module named 'nonexistent_mod'"),
+    ("\n\nraise RuntimeError('no')\n", ":3: RuntimeError: no"),
+])
+def test_a_terrain_module_that_fails_names_its_file_and_line(tmp_path, source, message):
+    path = tmp_path / "terrain_cfg.py"
+    path.write_text(source)
+    with pytest.raises(ValueError) as error:
+        apply_terrain_arg(str(path), GenteBipedCfg())
+    assert str(error.value).startswith(f"--terrain {path}{message}") and "\n" not in str(error.value), error.value
+
+
+def test_a_terrain_module_error_is_one_line_in_the_commands(tmp_path, capsys):
+    from legged_gente.scripts import train as train_script
+
+    path = tmp_path / "terrain_cfg.py"
+    path.write_text("x = (\n")
+    with pytest.raises(SystemExit) as exit_info:
+        train_script.main(["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "1", "--terrain", str(path)])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "Traceback" not in err and f"--terrain {path}:1: SyntaxError" in err, err

@@ -127,3 +127,35 @@ def test_gente_play_video_on_a_plane(tmp_path):
     assert frames.shape[0] == 10 and frames.shape[1:] == (480, 640, 3)
     last = frames[-1].astype(int)
     assert last.std() > 10 and (np.abs(last[..., 0] - last[..., 2]) < 40).mean() > 0.5  # grey checker, robot
+
+
+@pytest.mark.parametrize("gl", ["bogus", "osmesa"])
+def test_gente_play_video_without_offscreen_gl_is_one_line(tmp_path, gl):
+    """An unknown MUJOCO_GL or osmesa without libOSMesa: one line naming the fix (MUJOCO_GL=egl), no traceback."""
+    env = dict(os.environ, MUJOCO_GL=gl)
+    done = subprocess.run([sys.executable, "-m", "legged_gente.scripts.play", "--task", "gente_biped_flat",
+                           "--pretrained", "--video", "--headless", "--steps", "1", "--num_envs", "1", "--device",
+                           "cpu", "--log_root", str(tmp_path)], env=env, timeout=600, capture_output=True, text=True)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert lines[-1].startswith(f"gente-play: error: MUJOCO_GL={gl}: MuJoCo's OpenGL backend does not load") \
+        and "set MUJOCO_GL=egl" in lines[-1], lines[-1]
+
+
+def test_a_renderer_without_a_gl_context_is_a_one_line_error(terrain, monkeypatch, capsys):
+    """MUJOCO_GL=egl without libEGL: the renderer's creation fails; gente-play says so in one line."""
+    import mujoco
+
+    from legged_gente.utils.args import build_parser, parse_args, run_command
+    from legged_gente.viewer.video import VideoRenderer
+
+    def no_context(*args, **kwargs):
+        raise AttributeError("'NoneType' object has no attribute 'eglGetCurrentContext'")
+
+    monkeypatch.setattr(mujoco, "Renderer", no_context)
+    with pytest.raises(SystemExit) as exit_info:
+        run_command("gente-play", lambda args: VideoRenderer(robot_file(), terrain),
+                    parse_args(build_parser("t"), ["--device", "cpu"]))
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and len(err.splitlines()) == 1, err
+    assert "offscreen rendering failed (AttributeError: " in err and "set MUJOCO_GL=egl" in err, err

@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import inspect
 import json
+import traceback
 from pathlib import Path
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
@@ -38,7 +39,11 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
     if path.suffix == ".py":
         spec = importlib.util.spec_from_file_location(f"gente_terrain_{abs(hash(path.resolve()))}", path)
         module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:  # the user's module: its error, with its line
+            raise ValueError(f"--terrain {value}:{_error_line(exc, path)}; fix the module or emit it again with "
+                             f"gente-generate") from None
         classes = [c for _, c in inspect.getmembers(module, inspect.isclass)
                    if c.__module__ == module.__name__ and issubclass(c, LeggedRobotCfg.terrain)]
         if not classes:
@@ -50,3 +55,13 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
                          f"naming it: {{..., \"resolution\": <cell m>, \"heightmap\": {{\"file\": \"{path.name}\", "
                          f"\"vertical_scale\": <m per unit>}}}} (docs/terrain.md)")
     raise ValueError(f"--terrain {value!r}: expected 'plane', a .json spec or a .py terrain config module")
+
+
+def _error_line(exc: Exception, path: Path) -> str:
+    """``line: Error: message`` of ``exc``, raised by the module ``path``: a SyntaxError in it at its own line,
+    else at the module's last line in the traceback ('?' if none)."""
+    if isinstance(exc, SyntaxError) and exc.filename and Path(exc.filename).resolve() == path.resolve():
+        return f"{exc.lineno}: SyntaxError: {exc.msg}"
+    lines = [frame.lineno for frame in traceback.extract_tb(exc.__traceback__)
+             if Path(frame.filename).resolve() == path.resolve()]
+    return f"{lines[-1] if lines else '?'}: {type(exc).__name__}: {exc}"

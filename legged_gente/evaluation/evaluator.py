@@ -268,7 +268,9 @@ class Evaluation:
         from tqdm import tqdm
 
         env = self.env
-        if not (settle_s >= 0.0 and settle_steps(settle_s, self.dt) < self.num_steps):
+        if not settle_s >= 0.0:
+            raise ValueError(f"settle_s must be >= 0 s, got {settle_s}.")
+        if settle_steps(settle_s, self.dt) >= self.num_steps:
             raise ValueError(f"settle_s {settle_s} s leaves nothing of the {self.num_steps * self.dt:g} s episode to "
                              f"measure (steps of {self.dt:g} s); give a value in [0, episode_s - one step).")
         task = task or self.make_task()

@@ -18,9 +18,13 @@ from collections import Counter
 import torch
 import warp as wp
 
+from legged_gente.utils.args import (
+    Parser, add_verbose, check_output, flag, import_mujoco, quiet_third_party, resolve_device, run_command)
+
+import_mujoco("gente-benchmark")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
+
 from legged_gente.envs.base.legged_robot import CUDA_GRAPH_MODES
 from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
 from legged_gente.utils.tables import write_rows
 
 
@@ -342,7 +346,7 @@ def print_table(rows: list[dict], device: str) -> None:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description="legged_gente throughput benchmark")
+    parser = Parser(prog="gente-benchmark", description="legged_gente throughput benchmark")
     parser.add_argument("--task", default="gente_biped_flat")
     parser.add_argument(*flag("--num_envs"), type=int, nargs="+", default=[1024, 4096, 8192])
     parser.add_argument("--device", default=None)
@@ -384,6 +388,9 @@ def main(argv=None) -> None:
 
 def measure(args: argparse.Namespace) -> None:
     """Run the benchmark the flags ask for; print its table and write its CSV."""
+    for name, path in (("--csv", args.csv), ("--profile", args.profile)):
+        if path:
+            check_output(path, name, folder=False)
     rows = run(args.task, args.num_envs, args.device, args.steps, args.iterations, args.check_sync, args.profile,
                args.profile_envs, args.cuda_graph)
     if args.check_sync:

@@ -15,8 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
+from legged_gente.utils.args import (
+    Parser, add_verbose, apply_overrides, check_output, flag, import_mujoco, quiet_third_party, resolve_device,
+    run_command)
+
+import_mujoco("gente-evaluate")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
+
 from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN
-from legged_gente.utils.args import add_verbose, flag, quiet_third_party, resolve_device, run_command
 
 
 def edge_margin(text: str) -> float | None:
@@ -30,7 +35,7 @@ def edge_margin(text: str) -> float | None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description="Evaluate a locomotion policy on a terrain benchmark.")
+    p = Parser(prog="gente-evaluate", description="Evaluate a locomotion policy on a terrain benchmark.")
     p.add_argument("--task", default="gente_biped", help="registered task name")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--checkpoint", help="rsl-rl checkpoint model_N.pt, a run folder (its latest checkpoint) or a "
@@ -64,8 +69,31 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     p.add_argument(*flag("--no_progress"), action="store_true", help="no progress bar")
+    p.add_argument("--set", action="append", default=[], metavar="SECTION.FIELD=VALUE", dest="overrides",
+                   help="the network sizes of a --checkpoint without a config.json beside it (repeatable), e.g. "
+                        "--set actor.hidden_dims=[256,128] (actor.*, critic.*)")
     add_verbose(p)
     return p
+
+
+def check_network_overrides(args) -> None:
+    """``--set`` gives only the network sizes (actor.*, critic.*) of a --checkpoint without a config.json beside
+    it (one with it takes them from there): checked on a fresh config before anything is built."""
+    from legged_gente.envs.task_registry import task_registry
+
+    if not args.checkpoint:
+        raise ValueError("--set sets the network sizes of a --checkpoint; leave it out with --exported, "
+                         "--pretrained or --baseline.")
+    checkpoint = Path(args.checkpoint)
+    config = (checkpoint if checkpoint.is_dir() else checkpoint.parent) / "config.json"
+    if config.is_file():
+        raise ValueError(f"{config} sets the network sizes; leave out --set.")
+    env_cfg, train_cfg = task_registry.get_cfgs(args.task)
+    apply_overrides(args.overrides, env_cfg, train_cfg)  # the names, types and layer widths
+    for text in args.overrides:
+        if text.split(".")[0].strip() not in ("actor", "critic"):
+            raise ValueError(f"--set {text}: gente-evaluate sets only the network sizes (actor.*, critic.*) of a "
+                             f"--checkpoint without config.json; the evaluation's settings are its flags.")
 
 
 def evaluate(args) -> dict:
@@ -77,8 +105,9 @@ def evaluate(args) -> dict:
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built
             raise FileNotFoundError(f"{name} {given}: no such file or run folder.")
-    if Path(args.out).exists() and not Path(args.out).is_dir():
-        raise ValueError(f"--out {args.out} is a file; give a folder (new or existing) for the reports.")
+    check_output(args.out, "--out")
+    if args.overrides:
+        check_network_overrides(args)
     check_success_rule(args.tracking_threshold, args.min_progress)  # before the rollout, not after it
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
@@ -89,6 +118,7 @@ def evaluate(args) -> dict:
     episode_s = args.episode_s if args.episode_s is not None else (
         waypoint_episode_s(args.speed) if args.mode == "waypoints" else 10.0)
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
+    apply_overrides(args.overrides, None, evaluation.train_cfg)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
                                                args.pretrained)
     task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,

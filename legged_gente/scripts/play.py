@@ -12,8 +12,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from legged_gente.utils.args import build_parser, check_log_root, flag, import_mujoco, parse_args, run_command
+
+import_mujoco("gente-play")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
+
 from legged_gente.envs.task_registry import apply_args, default_log_root, task_registry
-from legged_gente.utils.args import build_parser, flag, parse_args, run_command
 from legged_gente.utils.checkpoints import pretrained_policy
 from legged_gente.utils.export import deployment_metadata, export_onnx
 
@@ -72,6 +75,7 @@ class VideoRecorder:
 def play(args) -> dict:
     if getattr(args, "pretrained", False):
         pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
+        check_log_root(args.log_root, default_log_root())  # its exports go there
     env_cfg, train_cfg = task_registry.get_cfgs(args.task)
     env_cfg.env.num_envs = min(env_cfg.env.num_envs, 16)
     env_cfg.noise.add_noise = False
@@ -142,7 +146,7 @@ def _open_viewer(env):
 
 
 def build_play_parser():
-    parser = build_parser("Roll out, export and record a trained policy.")
+    parser = build_parser("Roll out, export and record a trained policy.", prog="gente-play", training=False)
     parser.add_argument("--video", action="store_true", help="write an mp4 of robot 0")
     parser.add_argument("--steps", type=int, default=500, help="policy steps to roll out")
     parser.add_argument(*flag("--log_root"), default=None,

@@ -11,9 +11,12 @@ import threading
 import time
 from pathlib import Path
 
+from legged_gente.utils.args import build_parser, check_log_root, flag, import_mujoco, parse_args, run_command
+
+import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
+
 from legged_gente.envs.base.base_config import class_to_dict
-from legged_gente.envs.task_registry import task_registry
-from legged_gente.utils.args import build_parser, flag, parse_args, run_command
+from legged_gente.envs.task_registry import default_log_root, task_registry
 from legged_gente.utils.episode_logger import TimeLimitReached
 
 
@@ -71,6 +74,7 @@ def _raise_terminated(signum, frame):
 
 
 def train(args) -> Path | None:
+    check_log_root(None, default_log_root())
     env, env_cfg = task_registry.make_env(args.task, args)
     runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
     if log_dir is not None:
@@ -82,9 +86,12 @@ def train(args) -> Path | None:
     previous = signal.signal(signal.SIGTERM, _raise_terminated) if main_thread else None
     if args.max_minutes is not None:
         runner.logger.deadline = time.monotonic() + 60.0 * args.max_minutes
+    signalled = None
     try:
         runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
     except (KeyboardInterrupt, TimeLimitReached) as stop:  # Ctrl-C, SIGTERM, --max_minutes: keep what was learned
+        if not isinstance(stop, TimeLimitReached):
+            signalled = signal.SIGTERM if isinstance(stop, Terminated) else signal.SIGINT
         if main_thread:
             signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the save short
         if log_dir is not None:
@@ -96,11 +103,13 @@ def train(args) -> Path | None:
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
+    if signalled is not None:  # a stopped run is no success: `gente-train ... && next` must not go on
+        sys.exit(128 + signalled)
     return Path(log_dir) if log_dir else None
 
 
 def build_train_parser():
-    parser = build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp.")
+    parser = build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp.", prog="gente-train")
     parser.add_argument(*flag("--max_minutes"), type=float,
                         help="stop after the iteration that passes this much wall-clock time, saving a checkpoint "
                              "to continue with --resume (for time-limited jobs; no signal needed)")

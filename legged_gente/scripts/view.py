@@ -21,17 +21,21 @@ from pathlib import Path
 
 import numpy as np
 
+from legged_gente.utils.args import (
+    USER_ERRORS, build_parser, check_output, error_text, flag, import_mujoco, one_line, parse_args)
+
+import_mujoco("gente-view")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
+
 from legged_gente.envs.task_registry import apply_args, default_log_root
-from legged_gente.utils.args import build_parser, parse_args
 
 
 def build_arg_parser():
-    p = build_parser("See terrains and rollouts in the browser.")
+    p = build_parser("See terrains and rollouts in the browser.", prog="gente-view", training=False)
     p.add_argument("source", nargs="?", help="spec.json, terrain_cfg.py, benchmark folder or rollout .npz "
                                              "(default: the task's terrain grid)")
     p.add_argument("--port", type=int, default=8080, help="port of the web page (default 8080)")
     p.add_argument("--host", default="127.0.0.1", help="address to serve on (0.0.0.0: every interface)")
-    p.add_argument("--no_shadows", action="store_true", help="no shadows (faster in software WebGL)")
+    p.add_argument(*flag("--no_shadows"), action="store_true", help="no shadows (faster in software WebGL)")
     p.add_argument("--seconds", type=float, default=None, help="stop serving after this many seconds")
     p.add_argument("--play", action="store_true", help="roll the task's policy out live (CPU by default)")
     p.add_argument("--policy", choices=("checkpoint", "zero"), default="checkpoint",
@@ -44,7 +48,7 @@ def build_arg_parser():
     p.add_argument("--traces", help="gente-evaluate's traces.npz (with the benchmark folder as source)")
     p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
     p.add_argument("--step", type=int, help="open the rollout paused at this policy step")
-    p.add_argument("--log_root", default=None, help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
+    p.add_argument(*flag("--log_root"), default=None, help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
     return p
 
 
@@ -171,6 +175,7 @@ def main(argv=None) -> None:
         parser.error("--pretrained plays the shipped policy: add --play")
     if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --policy zero, --load_run and --checkpoint")
+    check_flags(parser, args, source)
     rollout, mjm, play = None, None, None
     try:
         if args.pretrained:
@@ -178,8 +183,8 @@ def main(argv=None) -> None:
 
             pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
         if args.play:
-            if source is not None:
-                parser.error("--play rolls out on the task's terrain: give --terrain, not a source file")
+            if args.record:
+                check_output(args.record, "--record", folder=False)
             env, policy, recorder = _make_play(args)
             items = [TerrainItem(f"{args.task} (play)", lambda: env.terrain or BareTerrain(*_plane()))]
             rollout, mjm = recorder, env.mjm
@@ -202,9 +207,15 @@ def main(argv=None) -> None:
                                  _task_terrain(args, source))]
         else:
             parser.error(f"{source}: pass a spec .json, a terrain_cfg.py, a benchmark folder or a rollout .npz")
+        if args.step is not None:
+            steps = args.steps if play is not None else len(rollout.qpos)
+            if not 0 <= args.step < steps:
+                raise ValueError(f"--step {args.step}: the rollout has steps 0..{steps - 1}")
         viewer = Viewer(items, host=args.host, port=args.port, shadows=not args.no_shadows)
-    except (ValueError, FileNotFoundError, KeyError) as error:
-        parser.exit(2, f"gente-view: error: {error}\n")
+    except USER_ERRORS as error:
+        if args.verbose:
+            raise
+        parser.exit(2, f"gente-view: error: {one_line(error_text(error))}\n")
     if rollout is not None:
         player = viewer.attach_rollout(rollout, mjm, play=args.step is None)
         if args.step is not None:
@@ -228,6 +239,28 @@ def main(argv=None) -> None:
         print("gente-view: finishing the rollout to record it", flush=True)
         play.join()
     viewer.stop()
+
+
+def check_flags(parser, args, source: Path | None) -> None:
+    """The flags that need another flag or a source of a kind, and the ranges: refused before anything is built."""
+    if source is not None and not source.exists():
+        parser.error(f"{args.source}: no such file or folder; pass a spec .json, a terrain_cfg.py, a benchmark "
+                     f"folder or a rollout .npz")
+    if args.play and source is not None:
+        parser.error("--play rolls out on the task's terrain: give --terrain, not a source file")
+    if args.record and not args.play:
+        parser.error("--record writes the rollout of --play: add --play")
+    if args.traces and (source is None or not source.is_dir()):
+        parser.error("--traces replays gente-evaluate's robots on their benchmark: give its folder as the source "
+                     "(gente-view gente100 --traces eval/traces.npz)")
+    if args.item and not args.traces:
+        parser.error("--item picks the item of --traces to replay: add --traces")
+    if args.step is not None and not (args.play or args.traces or (source is not None and source.suffix == ".npz")):
+        parser.error("--step opens a rollout paused: give a rollout .npz, --traces or --play")
+    if args.seconds is not None and args.seconds < 0:
+        parser.error(f"--seconds {args.seconds} must be >= 0")
+    if args.robots < 1:
+        parser.error(f"--robots {args.robots} must be >= 1")
 
 
 def _plane():

@@ -6,8 +6,10 @@ from __future__ import annotations
 import argparse
 import ast
 import logging
+import os
 import sys
 import warnings
+from pathlib import Path
 
 
 def flag(name: str) -> tuple[str, ...]:
@@ -17,18 +19,32 @@ def flag(name: str) -> tuple[str, ...]:
     return (name,) if other == name else (name, other)
 
 
-def build_parser(description: str) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(description=description)
+class Parser(argparse.ArgumentParser):
+    """argparse with a usage error on one line, ``gente-x: error: ...`` and exit status 2 (the usage is in
+    --help), and no abbreviated flags (``--set`` would be ambiguous with ``--settle_s``)."""
+
+    def __init__(self, **kwargs):
+        super().__init__(allow_abbrev=False, **kwargs)
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {one_line(message)}\n")
+
+
+def build_parser(description: str, prog: str | None = None, training: bool = True) -> Parser:
+    """The flags shared by gente-train, gente-play and gente-view; ``training=False`` leaves out those only
+    training uses (--max_iterations, --resume, --run_name)."""
+    parser = Parser(prog=prog, description=description)
     parser.add_argument("--task", default="gente_biped", help="registered task name")
     parser.add_argument(*flag("--num_envs"), type=int, help="number of parallel robots (worlds)")
-    parser.add_argument(*flag("--max_iterations"), type=int, help="PPO iterations to run")
+    if training:
+        parser.add_argument(*flag("--max_iterations"), type=int, help="PPO iterations to run")
+        parser.add_argument("--resume", action="store_true", help="continue from a checkpoint")
+        parser.add_argument(*flag("--run_name"), help="suffix of the run folder")
     parser.add_argument("--headless", action="store_true", help="never open a viewer window")
-    parser.add_argument("--resume", action="store_true", help="continue from a checkpoint")
     parser.add_argument(*flag("--load_run"), help="run folder name under logs/<experiment>/, or the path of a run "
                                                   "folder anywhere (default: the latest under logs/<experiment>/)")
     parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
     parser.add_argument(*flag("--experiment_name"), help="logs/<experiment_name>/")
-    parser.add_argument(*flag("--run_name"), help="suffix of the run folder")
     parser.add_argument("--seed", type=int, help="random seed")
     parser.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     parser.add_argument("--terrain", help="'plane', a generated terrain spec JSON, or an emitted terrain_cfg.py")
@@ -86,7 +102,7 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
         parser.error(str(error))
     if args.num_envs is not None and args.num_envs < 1:
         parser.error("--num_envs must be >= 1")
-    if args.max_iterations is not None and args.max_iterations < 0:
+    if getattr(args, "max_iterations", None) is not None and args.max_iterations < 0:
         parser.error("--max_iterations must be >= 0")
     if getattr(args, "steps", None) is not None and args.steps < 1:  # gente-play's and gente-view's rollouts
         parser.error(f"--steps {args.steps}: roll out at least 1 policy step")
@@ -98,13 +114,62 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
     return args
 
 
-# What a user can get wrong (a flag, a config value, a file): reported in one line with exit status 2.
-USER_ERRORS = (ValueError, FileNotFoundError, KeyError)
+GL_FIX = ("set MUJOCO_GL=egl (Mesa's libegl1 on a CPU machine, the GPU driver's EGL otherwise) or MUJOCO_GL=osmesa "
+          "(apt-get install libosmesa6)")
+
+
+def import_mujoco(prog: str) -> None:
+    """Import MuJoCo before a command's modules do: a ``MUJOCO_GL`` it cannot use (an unknown value, osmesa without
+    libOSMesa) breaks its import; here that is one line naming the fix (exit 2) instead of a traceback."""
+    try:
+        import mujoco  # noqa: F401
+    except (ImportError, RuntimeError, AttributeError, OSError) as error:
+        print(f"{prog}: error: MUJOCO_GL={os.environ.get('MUJOCO_GL')}: MuJoCo's OpenGL backend does not load "
+              f"({type(error).__name__}: {one_line(error)}); {GL_FIX}, or leave MUJOCO_GL unset", file=sys.stderr)
+        sys.exit(2)
+
+
+# What a user can get wrong (a flag, a config value, a file or folder): reported in one line with exit status 2.
+USER_ERRORS = (ValueError, OSError, KeyError)
 
 
 def one_line(message) -> str:
     """An error's text on one line (a validation error lists one problem per line)."""
     return " ".join(str(message).splitlines())
+
+
+def error_text(error: BaseException) -> str:
+    """What went wrong, for the user: a KeyError's message without its quotes, an OSError's path and reason
+    (``notimage.png/sub: Not a directory``) without its errno."""
+    if isinstance(error, KeyError) and error.args:
+        return str(error.args[0])
+    if isinstance(error, OSError) and error.strerror and error.filename is not None:
+        return f"{error.filename}: {error.strerror}"
+    return str(error)
+
+
+def check_output(path, name: str, folder: bool = True) -> None:
+    """Refuse, before any work, an output folder (or with ``folder=False`` a file) that cannot be made or written:
+    one under a file, or under a folder without write permission. ``name``: the flag or variable that gave it.
+    Makes nothing."""
+    path = Path(path)
+    if not folder and path.is_dir():
+        raise ValueError(f"{name} {path} is a folder; give a file name")
+    target = path if folder else path.parent
+    existing = next(p for p in (target, *target.parents) if p.exists())
+    if not existing.is_dir():
+        raise ValueError(f"{name} {path}: {existing} is a file; give a folder to write to")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"{name} {path}: {existing} is not writable; give a folder you can write to")
+
+
+def check_log_root(given: str | None, default: Path) -> None:
+    """``check_output`` of where runs and exports go: ``--log_root`` if given, else ``default`` ($GENTE_LOG_ROOT,
+    else ./logs)."""
+    if given:
+        check_output(given, "--log_root")
+    else:
+        check_output(default, "GENTE_LOG_ROOT" if os.environ.get("GENTE_LOG_ROOT") else "the log folder")
 
 
 def run_command(prog: str, main, args: argparse.Namespace):
@@ -115,8 +180,7 @@ def run_command(prog: str, main, args: argparse.Namespace):
     except USER_ERRORS as error:
         if getattr(args, "verbose", False):
             raise
-        message = error.args[0] if isinstance(error, KeyError) and error.args else error
-        print(f"{prog}: error: {one_line(message)}", file=sys.stderr)
+        print(f"{prog}: error: {one_line(error_text(error))}", file=sys.stderr)
         sys.exit(2)
 
 
@@ -197,4 +261,14 @@ def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
             fields = sorted(n for n in dir(owner) if not n.startswith("_"))
             raise ValueError(f"--set {text!r}: {'.'.join(path[:-1])} has no field {path[-1]!r}; its fields: "
                              f"{', '.join(fields)}")
-        setattr(owner, path[-1], _override_value(value, getattr(owner, path[-1]), ".".join(path)))
+        value = _override_value(value, getattr(owner, path[-1]), ".".join(path))
+        if path[-1] == "hidden_dims":
+            _check_layer_widths(".".join(path), value)
+        setattr(owner, path[-1], value)
+
+
+def _check_layer_widths(name: str, dims) -> None:
+    """A network's hidden_dims: torch fails on an empty list or a negative width, and a width 0 is a dead layer."""
+    if not dims or not all(isinstance(d, int) and not isinstance(d, bool) and d >= 1 for d in dims):
+        raise ValueError(f"--set {name}={dims!r}: must be a non-empty list of layer widths >= 1, e.g. "
+                         f"--set {name}=[256,128]")

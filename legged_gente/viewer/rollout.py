@@ -36,6 +36,9 @@ from legged_gente.terrain.materials import MaterialMap
 
 def open_npz(path: str | Path):
     """``np.load`` of a rollout or traces archive (never unpickling), or a one-line error naming the file."""
+    if not Path(path).is_file():
+        raise FileNotFoundError(f"{path}: no such file; give a rollout written by gente-view --record or a "
+                                f"traces.npz written by gente-evaluate.")
     try:
         return np.load(path)
     except (ValueError, OSError, EOFError, zipfile.BadZipFile):  # a text file, a truncated or foreign archive

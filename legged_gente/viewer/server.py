@@ -105,6 +105,7 @@ class Viewer:
             raise ValueError("terrain items need distinct labels.")
         self._built: dict[str, object] = {}
         check_address(host, port)
+        self.terrain(items[0].label)  # its errors (a bad spec or terrain module) before the server starts
         self.server = viser.ViserServer(host=host, port=port, label="legged_gente", verbose=False)
         self.server.scene.set_up_direction("+z")
         self.server.scene.configure_default_lights(enabled=True, cast_shadow=shadows)

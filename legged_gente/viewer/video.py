@@ -13,11 +13,13 @@ before Python starts (MuJoCo picks its OpenGL backend when it is first imported)
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from legged_gente.utils.args import GL_FIX
 from legged_gente.viewer.scene import Arrows, Mesh, material_colours, terrain_scene
 
 CHECKER = 1.0
@@ -93,6 +95,10 @@ def render_model(robot_file: str | Path, terrain) -> tuple[mujoco.MjModel, np.nd
     return spec.compile(), arrows
 
 
+class OffscreenGLError(OSError):
+    """No OpenGL context for offscreen rendering: the machine's set-up, reported in one line like a missing file."""
+
+
 class VideoRenderer:
     """Frames of one robot (qpos per frame) on its terrain, from a camera that follows its base."""
 
@@ -105,9 +111,8 @@ class VideoRenderer:
         try:
             self.renderer = mujoco.Renderer(self.model, height=height, width=width)
         except Exception as error:  # no GL context: say how to get one
-            raise RuntimeError(f"offscreen rendering failed ({error}); set MUJOCO_GL=egl (Mesa's libegl1 on a CPU "
-                               f"machine, the GPU driver's EGL otherwise) or MUJOCO_GL=osmesa (apt-get install "
-                               f"libosmesa6)") from error
+            raise OffscreenGLError(f"MUJOCO_GL={os.environ.get('MUJOCO_GL')}: offscreen rendering failed "
+                                   f"({type(error).__name__}: {error}); {GL_FIX}") from error
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = True
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
         self.camera = mujoco.MjvCamera()
