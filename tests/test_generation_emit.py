@@ -112,7 +112,7 @@ def test_a_malformed_api_key_is_refused_and_never_printed(tmp_path, capsys, monk
         code = main(["--text", "a field", "--backend", "openai", "--base-url", srv.url, "--model", "m",
                      "--api-key-env", "MY_KEY", "--out", str(tmp_path / "o")])
     captured = capsys.readouterr()
-    assert code == 1 and srv.requests == [] and "SECRET" not in captured.out + captured.err
+    assert code == 2 and srv.requests == [] and "SECRET" not in captured.out + captured.err
     assert captured.err == ("gente-generate: error: the API key in the environment variable MY_KEY holds whitespace, "
                             "control or non-ASCII characters (a trailing newline?); set MY_KEY to the key alone.\n")
 
@@ -134,3 +134,68 @@ def test_model_text_reaches_the_terminal_escaped(tmp_path, capsys):
 def test_a_long_text_gives_a_name_the_spec_accepts(tmp_path):
     assert main(["--text", "a " + "x" * 100, "--out", str(tmp_path / "o")]) == 0
     assert TerrainSpec.load(tmp_path / "o" / "spec.json").name == "x" * 64
+
+
+def test_a_non_ascii_prompt_is_written_as_utf8_whatever_the_locale(tmp_path):
+    """Under LC_ALL=C without UTF-8 mode, the emitted module is still UTF-8 Python that imports and keeps the prompt."""
+    import os
+    import subprocess
+    import sys
+
+    prompt = "a caf\u00e9 plaza with stairs \u2014 \u00fcber \u6c34"
+    code = f"from legged_gente.scripts.generate import main; raise SystemExit(main(['--text', {ascii(prompt)}, '--out', {ascii(str(tmp_path / 'o'))}]))"
+    env = os.environ | {"LC_ALL": "C", "PYTHONUTF8": "0", "PYTHONIOENCODING": ""}
+    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, errors="replace", timeout=300)
+    assert run.returncode == 0, run.stderr
+    module = tmp_path / "o" / "terrain_cfg.py"
+    module.read_bytes().decode("utf-8")
+    assert load_module(module).PROVENANCE["source"] == prompt
+    assert TerrainSpec.load(tmp_path / "o" / "spec.json").source["text"] == prompt
+
+
+@pytest.mark.parametrize("failing", ["save_preview", "save_mesh"])
+def test_a_failed_emit_leaves_no_partial_file(tmp_path, monkeypatch, failing):
+    import importlib
+
+    emit_module = importlib.import_module("legged_gente.generation.emit")  # the package's ``emit`` is the function
+
+    def fail(*args, **kwargs):
+        raise OSError("No space left on device")
+
+    monkeypatch.setattr(emit_module, failing, fail)
+    spec, _ = generate_spec("stairs", size_x=4.0, size_y=4.0)
+    with pytest.raises(OSError, match="No space left"):
+        emit(spec, tmp_path / "new" / "o", mesh="obj")
+    assert not (tmp_path / "new" / "o").exists()
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "spec.json").write_text("the earlier terrain")
+    with pytest.raises(OSError, match="No space left"):
+        emit(spec, old, mesh="obj")
+    assert [p.name for p in old.iterdir()] == ["spec.json"] and (old / "spec.json").read_text() == "the earlier terrain"
+
+
+def test_bad_input_is_refused_before_any_request(tmp_path, capsys):
+    """An unreadable image, a bad --base and an --out below a file: exit 2, one line, and the model is never asked."""
+    image = tmp_path / "photo.png"
+    image.write_text("not an image")
+    (tmp_path / "FILE").write_text("")
+    cases = [
+        (["--image", str(image)], f"gente-generate: error: --image: {image} could not be read as an image "
+                                  f"(UnidentifiedImageError); pass a PNG or JPEG file."),
+        (["--text", "x", "--base", "no_such_module_xyz:Cfg"],
+         "gente-generate: error: --base: base module 'no_such_module_xyz' cannot be imported (No module named "
+         "'no_such_module_xyz'); pass --base with an importable module."),
+        (["--text", "x", "--base", "os; import sys:Cfg"],
+         "gente-generate: error: --base: base 'os; import sys:Cfg' must look like 'package.module:Class.nested'; "
+         f"e.g. {DEFAULT_BASE!r}."),
+        (["--text", "x", "--out", str(tmp_path / "FILE" / "o")],
+         f"gente-generate: error: --out {tmp_path / 'FILE' / 'o'}: {tmp_path / 'FILE'} is a file; give a folder "
+         f"to write to"),
+    ]
+    for flags, message in cases:
+        with FakeServer([]) as srv:
+            line = _flag_error(capsys, ["--backend", "openai", "--base-url", srv.url, "--model", "m",
+                                        "--out", str(tmp_path / "o"), *flags])
+        assert line == message and srv.requests == []
+    assert not (tmp_path / "o").exists()

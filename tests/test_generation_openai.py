@@ -212,3 +212,64 @@ def test_timeout_must_be_a_finite_positive_number(timeout):
     with pytest.raises(ValueError) as info:
         OpenAIBackend("http://127.0.0.1:9/v1", "m", timeout=timeout)
     assert str(info.value) == f"timeout must be > 0 and at most 86400 seconds, got {timeout}."
+
+
+def _bumps_call(height, region="full", mode="add", i=0):
+    return _tool_call("test_bumps", {"height": height, "region": region, "mode": mode}, i)
+
+
+def _summary(result):
+    return [(c.params["height"], c.region, c.mode) for c in result.calls]
+
+
+def test_a_correction_round_does_not_apply_accepted_calls_twice():
+    """A model that re-sends its accepted call with the corrected one gets each applied once."""
+    first = _completion([_bumps_call(0.1, i=0), _bumps_call(9.0, i=1)])
+    second = _completion([_bumps_call(0.1, i=2), _bumps_call(0.2, i=3)])
+    with FakeServer([ok(first), ok(second)]) as srv:
+        result = _backend(srv).generate(text="x")
+    assert _summary(result) == [(0.1, "full", "add"), (0.2, "full", "add")]
+    assert len(srv.requests) == 2
+    assert "round 2: test_bumps (call_2) repeats the call accepted in round 1 (call_0); applied once" in result.warnings
+    # in one answer, two identical calls are two calls
+    with FakeServer([ok(_completion([_bumps_call(0.1, i=0), _bumps_call(0.1, i=1)]))]) as srv:
+        assert len(_backend(srv).generate(text="x").calls) == 2
+
+
+def test_a_corrected_call_takes_the_place_of_the_rejected_one():
+    """Calls apply in order: a correction goes where its rejected call was, not after the calls that followed it."""
+    first = _completion([_bumps_call(9.0, mode="set", i=0), _bumps_call(0.1, region="front_left", i=1)])
+    second = _completion([_bumps_call(0.3, mode="set", i=2)])
+    with FakeServer([ok(first), ok(second)]) as srv:
+        result = _backend(srv).generate(text="x")
+    assert _summary(result) == [(0.3, "full", "set"), (0.1, "front_left", "add")]
+
+
+def test_a_correction_round_must_answer_each_rejected_call_once():
+    """Two new calls for one rejected call cannot be placed: the round is rejected and the model told why."""
+    first = _completion([_bumps_call(0.1, i=0), _bumps_call(9.0, i=1)])
+    second = _completion([_bumps_call(0.2, i=2), _bumps_call(0.3, i=3)])
+    third = _completion([_bumps_call(0.2, i=4)])
+    with FakeServer([ok(first), ok(second), ok(third)]) as srv:
+        result = _backend(srv).generate(text="x")
+    assert _summary(result) == [(0.1, "full", "add"), (0.2, "full", "add")]
+    replies = [m["content"] for m in srv.requests[2]["messages"] if m["role"] == "tool" and m["tool_call_id"] in ("call_2", "call_3")]
+    expected = ("REJECTED: this answer has 2 new call(s) for 1 rejected call(s) (call_1); answer with exactly one "
+                "corrected call per rejected call, in their order, and do not repeat accepted calls.")
+    assert replies == [expected, expected]
+    with FakeServer([ok(first), ok(second)]) as srv:
+        with pytest.raises(GenerationError, match=r"still invalid after 1 correction.*2 new call\(s\) for 1 rejected"):
+            _backend(srv, max_retries=1).generate(text="x")
+
+
+def test_an_answer_that_only_repeats_accepted_calls_is_told_what_is_missing():
+    first = _completion([_bumps_call(0.1, i=0), _bumps_call(9.0, i=1)])
+    repeat = _completion([_bumps_call(0.1, i=2)])
+    with FakeServer([ok(first), ok(repeat), ok(_completion([_bumps_call(0.2, i=3)]))]) as srv:
+        result = _backend(srv).generate(text="x")
+    assert _summary(result) == [(0.1, "full", "add"), (0.2, "full", "add")]
+    *_, answer, told = srv.requests[2]["messages"]
+    assert answer["tool_call_id"] == "call_2" and answer["content"].startswith("ALREADY APPLIED: identical to call_0")
+    assert told == {"role": "user", "content": "this answer has 0 new call(s) for 1 rejected call(s) (call_1); answer "
+                                               "with exactly one corrected call per rejected call, in their order, "
+                                               "and do not repeat accepted calls."}

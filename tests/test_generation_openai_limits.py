@@ -138,3 +138,20 @@ def test_malformed_http_names_the_server(reply, detail):
             OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
     assert str(info.value) == (f"the server at {srv.url} answered malformed HTTP ({detail}); point --base-url at "
                                f"its OpenAI-compatible API, e.g. http://localhost:8000/v1.")
+
+
+@pytest.mark.parametrize("status", [301, 302, 303, 307, 308])
+def test_a_redirect_is_not_followed(monkeypatch, status):
+    """Following it would send the API key (and the prompt) to whatever host the Location names."""
+    monkeypatch.setenv("GENTE_API_KEY", "sk-SECRET")
+    seen = []
+    with RawServer(lambda write, stop: seen.append("request")) as elsewhere:
+        target = elsewhere.url.replace("127.0.0.1", "localhost") + "/chat/completions"
+        reply = f"HTTP/1.1 {status} Moved\r\nLocation: {target}\r\nContent-Length: 0\r\n\r\n".encode()
+        with RawServer(lambda write, stop: write(reply)) as srv:
+            with pytest.raises(GenerationError) as info:
+                OpenAIBackend(srv.url, "m", timeout=5.0).generate(text="x")
+    assert str(info.value) == (f"the server at {srv.url} answered HTTP {status}, a redirect to {target}; redirects "
+                               f"are not followed (they would carry the API key to another address): point --base-url "
+                               f"at the final address.")
+    assert seen == []

@@ -225,12 +225,13 @@ def test_cli_toolset_gente(tmp_path, capsys):
 
     reply = _completion([_gcall("flat_ground_terrain", {"height": 0.2, "part": 4}, 0),
                          _gcall("stairs_terrain", {"step_width": 0.3, "step_height": 30, "part": 1}, 1)])
-    with FakeServer([ok(reply)]) as srv:
+    corrected = _completion([_gcall("stairs_terrain", {"step_width": 0.3, "step_height": 0.2, "part": 1}, 2)])
+    with FakeServer([ok(reply), ok(corrected)]) as srv:
         code = main(["--text", "made-up prompt", "--backend", "openai", "--base-url", srv.url, "--model", "m",
                      "--toolset", "gente", "--out", str(tmp_path / "g")])
     captured = capsys.readouterr()
     assert code == 0 and "flat(" in captured.out and "stairs(" in captured.out
-    assert "step_height=30" in captured.err  # the clamp is a printed warning
+    assert "rejected: stairs_terrain: step_height=30" in captured.err  # the rejection is a printed warning
     spec = TerrainSpec.load(tmp_path / "g" / "spec.json")
     assert spec.source["toolset"] == "gente" and [c.region for c in spec.calls] == ["front_left", "back_right"]
     with pytest.raises(SystemExit):
@@ -291,3 +292,21 @@ def test_integer_arguments_must_be_whole_numbers(name, args, message):
     assert t.blocked and not t.calls and [(i.kind, i.message) for i in t.issues] == [("bad_value", message)]
     whole = translate_call("natural_ground_terrain", {"octaves": 3.0, "part": 1}, None).calls[0].params["octaves"]
     assert whole == 3 and isinstance(whole, int)
+
+
+def test_a_live_model_corrects_values_outside_our_range_that_an_import_clamps():
+    """A live model is told the range and corrects the value; a recorded transcript cannot be, so it is clamped."""
+    call = {"step_width": 0.3, "step_height": 30, "part": 1}
+    first = _completion([_gcall("flat_ground_terrain", {"height": 0.2, "part": 4}, 0), _gcall("stairs_terrain", call, 1)])
+    second = _completion([_gcall("stairs_terrain", call | {"step_height": 0.2}, 2)])
+    with FakeServer([ok(first), ok(second)]) as srv:
+        result = OpenAIBackend(srv.url, "m", toolset="gente", timeout=5.0).generate(text="x")
+    assert [(c.tool, c.params.get("step_height")) for c in result.calls] == [("flat", None), ("stairs", 0.2)]
+    (rejection,) = [m["content"] for m in srv.requests[1]["messages"] if m["role"] == "tool" and m["tool_call_id"] == "g1"]
+    assert rejection.startswith("REJECTED: stairs_terrain: step_height=30 gives stairs.step_height=30 m, outside our "
+                                "range [0.0, 0.3]; send a value inside it.")
+    assert not any("imported as" in w for w in result.warnings)
+    imported = import_transcript({"tool_calls": [_gcall("stairs_terrain", call)]}, "t", "multi")
+    assert imported.spec.calls[0].params["step_height"] == 0.3
+    assert [(i.kind, i.message) for i in imported.issues] == [
+        ("clamped", "step_height=30 gives stairs.step_height=30 m, outside our range [0.0, 0.3]; imported as 0.3.")]

@@ -15,6 +15,9 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +42,7 @@ def class_name_for(name: str) -> str:
     return "".join(w[:1].upper() + w[1:] for w in name.split("_") if w) + "TerrainCfg"
 
 
-def _resolve_base(base: str) -> tuple[str, str, type]:
+def resolve_base(base: str) -> tuple[str, str, type]:
     """Split ``module:Attr.path`` and check it imports to a class; return (module, attribute path, class)."""
     module_name, sep, attr_path = base.partition(":")
     dotted = lambda text: all(part.isidentifier() for part in text.split("."))  # noqa: E731
@@ -122,14 +125,38 @@ def emit(
     class_name: str | None = None,
     mesh: str | None = None,
 ) -> EmitResult:
-    """Write ``terrain_cfg.py``, ``spec.json``, ``preview.png`` (and ``terrain.<mesh>`` if ``mesh`` is a suffix)."""
-    base_module, base_attr, _ = _resolve_base(base)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    """Write ``terrain_cfg.py``, ``spec.json``, ``preview.png`` (and ``terrain.<mesh>`` if ``mesh`` is a suffix).
+
+    The files are made in a temporary folder inside ``out_dir`` and moved into place only once all of them are
+    made, so a failure (a spec that does not build, a full disk) leaves ``out_dir`` as it was.
+    """
+    base_module, base_attr, _ = resolve_base(base)
     class_name = class_name or class_name_for(spec.name)
     if not class_name.isidentifier():
         raise ValueError(f"class name {class_name!r} is not a Python identifier; pass a name like 'ForestTerrainCfg'.")
-    spec_path = spec.save(out / "spec.json")
+    out = Path(out_dir)
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    mesh_name = f"terrain.{mesh.lstrip('.')}" if mesh else None
+    stage = Path(tempfile.mkdtemp(prefix=".gente-emit-", dir=out))
+    try:
+        _write(spec, stage, base_module, base_attr, class_name, mesh_name)
+        for name in ("spec.json", "preview.png", mesh_name, "terrain_cfg.py"):  # the module, which names spec.json, last
+            if name:
+                os.replace(stage / name, out / name)
+    except BaseException:
+        shutil.rmtree(out if created else stage, ignore_errors=True)  # a folder made here holds only the stage
+        raise
+    shutil.rmtree(stage)  # left in it: the bytecode cache of the mesh's import
+    mesh_path = out / mesh_name if mesh_name else None
+    return EmitResult(out / "terrain_cfg.py", out / "spec.json", out / "preview.png", mesh_path, class_name)
+
+
+def _write(
+    spec: TerrainSpec, folder: Path, base_module: str, base_attr: str, class_name: str, mesh_name: str | None,
+) -> None:
+    """Write the files of :func:`emit` into ``folder``."""
+    spec.save(folder / "spec.json")
     source = spec.source.get("text") or (f"image sha256 {spec.source['image_sha256'][:12]}" if "image_sha256" in spec.source else "calls")
     provenance = {"backend": str(spec.backend), "model": None if spec.model is None else str(spec.model),
                   "source": str(source)[:200]}
@@ -143,12 +170,8 @@ def emit(
         size_y=float(spec.size_y),
         resolution=float(spec.resolution),
     )
-    module_path = out / "terrain_cfg.py"
-    module_path.write_text(text)
+    (folder / "terrain_cfg.py").write_text(text, encoding="utf-8")  # Python reads source as UTF-8, whatever the locale
     heights, material = spec.build()
-    preview = save_preview(heights, material, spec.resolution, out / "preview.png", title=spec.name)
-    mesh_path = None
-    if mesh:
-        cfg_class = getattr(load_module(module_path), class_name)
-        mesh_path = save_mesh(cfg_class, out / f"terrain.{mesh.lstrip('.')}")
-    return EmitResult(module_path, spec_path, preview, mesh_path, class_name)
+    save_preview(heights, material, spec.resolution, folder / "preview.png", title=spec.name)
+    if mesh_name:
+        save_mesh(getattr(load_module(folder / "terrain_cfg.py"), class_name), folder / mesh_name)

@@ -10,7 +10,9 @@ what GenTe's code does with them), written from GenTe's code and schema; :func:`
 it to a model (``gente-generate --toolset gente``) so prompts written for GenTe work unchanged, and
 :func:`translate_call` maps one GenTe call to validated calls of ours. Nothing is dropped silently: a tool
 GenTe never declared, a GenTe tool we cannot express, an argument we ignore and a value moved into our
-range are all reported as :class:`Issue` s. The mapping table is in docs/generation.md ("GenTe tool set").
+range are all reported as :class:`Issue` s; a live model's value outside our range is not moved but rejected
+(``translate_call(..., live=True)``), so the model corrects it. The mapping table is in docs/generation.md
+("GenTe tool set").
 
 Models wrote GenTe's arguments as Python literals (``.5``, implicit string concatenation), which GenTe ran
 with ``eval``; here they are parsed as JSON or, failing that, with ``ast.literal_eval`` (literals only,
@@ -71,7 +73,17 @@ class GenteArg:
     enum: tuple[str, ...] | None = None
 
 
-Translate = Callable[[dict[str, Any], float, float, list[Issue]], list[tuple[str, dict[str, Any]]]]
+class Issues(list):
+    """The issues of one translation; ``live`` says whose call it is. A live model's value outside our range is
+    rejected with the range, so that the model corrects it; a recorded transcript's (nobody left to correct it) is
+    imported at the nearest bound and reported as ``clamped``."""
+
+    def __init__(self, live: bool):
+        super().__init__()
+        self.live = live
+
+
+Translate = Callable[[dict[str, Any], float, float, Issues], list[tuple[str, dict[str, Any]]]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,12 +99,16 @@ class GenteTool:
 
 
 # ------------------------------------------------------------------------------------------ translation helpers
-def _fit(tool: str, param: str, value: float, source: str, issues: list[Issue]) -> float:
-    """``value`` inside our parameter's range; a value moved into it is reported (never a silent clamp)."""
+def _fit(tool: str, param: str, value: float, source: str, issues: Issues) -> float:
+    """``value`` inside our parameter's range: a live model's value outside it raises ValueError with the range; a
+    transcript's is moved into it and reported (never a silent clamp)."""
     p = ATOMIC_TERRAINS[tool].params[param]
     lo = -math.inf if p.low is None else p.low
     hi = math.inf if p.high is None else p.high
     fitted = min(max(value, lo), hi)
+    if fitted != value and issues.live:
+        raise ValueError(f"{source}={value:g} gives {tool}.{param}={value:g} {p.unit}, outside our range "
+                         f"[{p.low}, {p.high}]; send a value inside it")
     if fitted != value:
         issues.append(Issue("clamped", f"{source}={value:g} gives {tool}.{param}={value:g} {p.unit}, outside our range "
                                        f"[{p.low}, {p.high}]; imported as {fitted:g}."))
@@ -117,7 +133,7 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _offset(height: float, source: str, issues: list[Issue]) -> list[tuple[str, dict[str, Any]]]:
+def _offset(height: float, source: str, issues: Issues) -> list[tuple[str, dict[str, Any]]]:
     """A ``flat`` call that lifts the region by ``height`` m (GenTe's shapes start at 0 where ours are centred)."""
     if abs(height) < 1e-9:
         return []
@@ -473,14 +489,18 @@ def _region(args: dict[str, Any], schema: str | None, issues: list[Issue]) -> st
 
 def translate_call(
     name: Any, arguments: Any, schema: str | None = "multi", size_x: float = GENTE_TILE, size_y: float = GENTE_TILE,
+    live: bool = False,
 ) -> Translation:
     """Translate one GenTe call (``schema``: the tool list it was served, ``single`` or ``multi``; None: either).
 
-    Never raises for bad input: everything is reported in ``issues``; blocked calls have no ``calls``.
+    ``live``: the call of a model that can correct it (``--toolset gente``), so a value outside our range blocks
+    the call (``bad_value``, with the range) instead of being imported at the nearest bound (``clamped``, for
+    recorded transcripts). Never raises for bad input: everything is reported in ``issues``; blocked calls have
+    no ``calls``.
     """
     tool_name = name if isinstance(name, str) else repr(name)
     tool_name = tool_name[:80]
-    issues: list[Issue] = []
+    issues = Issues(live)
     tool = GENTE_TOOLS.get(name) if isinstance(name, str) else None
     if tool is None:
         issues.append(Issue("invented_tool", f"{tool_name!r} is not a tool GenTe declares; GenTe's tools are {sorted(GENTE_TOOLS)}."))

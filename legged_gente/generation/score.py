@@ -75,7 +75,7 @@ def load_items(root: Path, kind: str) -> list[dict]:
     path = root / ("texts.json" if kind == "text" else "photos/manifest.json")
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found; pass --set with a folder holding texts.json and photos/manifest.json.")
-    items = json.loads(path.read_text())["items"]
+    items = json.loads(path.read_text(encoding="utf-8"))["items"]
     for i, item in enumerate(items):
         bad = sorted(set(item["labels"]) - set(FEATURES))
         if bad:

@@ -5,6 +5,9 @@ Examples::
     gente-generate --text "a forest trail along a knee-deep stream" --out terrains/forest
     gente-generate --image sketch.png --out terrains/sketch
     gente-generate --text "a rocky beach" --backend openai --base-url http://localhost:8000/v1 --model qwen --out terrains/beach
+
+Exit status 2: bad input (a flag, the image, --base, --out, the API key's variable), refused before any model is
+asked where it can be; 1: the server or the model failed.
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ import sys
 from pathlib import Path
 
 from legged_gente.generation.backends import MAX_TIMEOUT, GenerationError
-from legged_gente.generation.emit import DEFAULT_BASE, emit
+from legged_gente.generation.backends.image import open_image
+from legged_gente.generation.emit import DEFAULT_BASE, emit, resolve_base
 from legged_gente.generation.pipeline import BACKENDS, generate_spec
 from legged_gente.generation.validation import (
     MAX_STRING_CHARS,
@@ -25,7 +29,7 @@ from legged_gente.generation.validation import (
     spec_field_problem,
     tile_problem,
 )
-from legged_gente.utils.args import flag, one_line
+from legged_gente.utils.args import Parser, check_output, flag, one_line
 
 
 def _positive(most: float = math.inf):
@@ -54,8 +58,13 @@ def _seed(text: str) -> int:
     return value
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="gente-generate", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def _error(exc: BaseException, code: int) -> int:
+    print(f"gente-generate: error: {printable(one_line(exc))}", file=sys.stderr)
+    return code
+
+
+def build_parser() -> Parser:
+    p = Parser(prog="gente-generate", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_argument_group("input (at least one)")
     src.add_argument("--text", help="scene description, e.g. 'a knee-deep river in a forest'")
     src.add_argument("--image", type=Path, help="photo or colour-coded sketch map (PNG/JPEG); see docs/generation.md")
@@ -86,8 +95,6 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--text is empty; describe the scene, e.g. --text 'a knee-deep river in a forest'.")
     if not args.text and args.image is None:
         parser.error("give --text, --image, or both.")
-    if args.out.exists() and not args.out.is_dir():
-        parser.error(f"--out {args.out} is a file; give a folder (new or existing) for the terrain.")
     if args.image is not None and not args.image.is_file():
         parser.error(f"--image {args.image} is not a file.")
     if args.backend == "openai" and not (args.base_url and args.model):
@@ -107,6 +114,20 @@ def main(argv: list[str] | None = None) -> int:
     problem = tile_problem(args.size, args.size, args.resolution)
     if problem:
         parser.error(f"--size {args.size:g} with --resolution {args.resolution:g}: {problem}.")
+    # the inputs and the output folder, checked before any model is asked
+    try:
+        check_output(args.out, "--out")
+    except ValueError as exc:
+        parser.error(one_line(exc))
+    try:
+        if args.image is not None:
+            open_image(args.image.read_bytes(), args.image)
+    except (ValueError, OSError) as exc:
+        parser.error(f"--image: {one_line(exc)}")
+    try:
+        resolve_base(args.base)
+    except ValueError as exc:
+        parser.error(f"--base: {one_line(exc)}")
     try:
         spec, result = generate_spec(
             args.text, args.image, args.backend, seed=args.seed, size_x=args.size, size_y=args.size,
@@ -122,9 +143,10 @@ def main(argv: list[str] | None = None) -> int:
         for warning in result.warnings:
             print(f"warning: {printable(warning)}", file=sys.stderr)
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
-    except (ValidationError, GenerationError, ValueError) as exc:
-        print(f"gente-generate: error: {printable(one_line(exc))}", file=sys.stderr)
-        return 1
+    except (ValidationError, GenerationError) as exc:  # the server or the model failed
+        return _error(exc, 1)
+    except (ValueError, OSError) as exc:  # the user's input (e.g. the API key's variable) or the output folder
+        return _error(exc, 2)
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0
 

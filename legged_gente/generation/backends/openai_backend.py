@@ -9,17 +9,26 @@ message, and the model gets at most ``max_retries`` correction rounds after its 
 at the first round whose calls are all valid; if calls are still invalid after the last round, a
 :class:`GenerationError` names them. There are no hidden retries, so the number of requests is bounded.
 
+A correction round answers the rejected calls only: its calls take the rejected calls' places, in order (calls
+apply in order, so a correction must not move behind the calls that followed it). A call identical to one
+accepted in an earlier round is a repeat, applied once and reported; if the other calls do not number exactly
+the rejected ones, none of them can be placed and the round is rejected. The result never depends on the model
+re-sending (or not) its accepted calls.
+
 Every request is bounded whatever the server does: ``timeout`` is the deadline of the whole request
 (connection, headers and body, not of each read: a server dripping one byte at a time cannot hold it
 longer), an answer is at most :data:`MAX_RESPONSE_BYTES`, and an answer that is not a chat completion (an
 HTML page, a proxy's error, truncated JSON) is a :class:`GenerationError` naming the server. The request
 runs in a worker thread so that the deadline holds even while the server drips its headers; the JSON is
-read into the ``openai`` package's ``ChatCompletion`` type, which checks its structure.
+read into the ``openai`` package's ``ChatCompletion`` type, which checks its structure. A redirect (3xx) is not
+followed: it would carry the API key and the prompt to the address the server names; it is a
+:class:`GenerationError` naming that address.
 """
 
 from __future__ import annotations
 
 import base64
+import dataclasses
 import http.client
 import json
 import os
@@ -27,6 +36,7 @@ import re
 import threading
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 from pathlib import Path
 from typing import Any, Mapping
@@ -79,8 +89,30 @@ def system_prompt(size_x: float, size_y: float) -> str:
         f"{{x0, y0, x1, y1}} in metres. Calls apply in order: first geometric terrains (heights; mode 'set' "
         f"replaces the region's heights, 'add' adds to them), then physical terrains (water, soil, friction) "
         f"over the ground they lie on. Issue all calls at once, using only the tools' declared arguments "
-        f"and ranges. If a call is rejected, re-issue only the rejected calls, corrected."
+        f"and ranges. If calls are rejected, answer with one corrected call per rejected call, in their order; "
+        f"accepted calls stay applied: do not send them again."
     )
+
+
+@dataclasses.dataclass
+class _Slot:
+    """The place of one call of the model's first answer with tool calls: its calls once accepted (None while
+    rejected), the tool name the model called, the round that accepted it and the id of the call that last filled it."""
+
+    calls: list[ToolCall] | None = None
+    name: str = ""
+    round: int = 0
+    call_id: str = ""
+
+
+class _NoRedirect(urllib.request.HTTPRedirectHandler):
+    """Hands a 3xx answer back as an HTTPError instead of following it (with the Authorization header)."""
+
+    def redirect_request(self, req, fp, code, msg, headers, newurl):
+        return None
+
+
+_OPENER = urllib.request.build_opener(_NoRedirect)
 
 
 class OpenAIBackend:
@@ -114,6 +146,7 @@ class OpenAIBackend:
             raise ValueError("the gente toolset translates into the global terrain registry; pass no registry.")
         self.toolset, self.resolution = toolset, resolution
         self.base_url, self.model = base_url, model
+        self.endpoint = base_url.rstrip("/") + "/chat/completions"
         self.vision_model = vision_model or model
         self.max_retries, self.two_phase, self.timeout = max_retries, two_phase, timeout
         self.tool_choice, self.temperature = tool_choice, temperature
@@ -124,15 +157,15 @@ class OpenAIBackend:
             raise ValueError(f"the API key in the environment variable {api_key_env} holds whitespace, control or "
                              f"non-ASCII characters (a trailing newline?); set {api_key_env} to the key alone.")
 
-    def _post(self, payload: dict[str, Any], deadline: float) -> tuple[int, str, bytes]:
-        """(Worker thread) POST ``payload`` to ``{base_url}/chat/completions``; (status, content type, body up to the cap + 1 byte)."""
+    def _post(self, payload: dict[str, Any], deadline: float) -> tuple[int, http.client.HTTPMessage, bytes]:
+        """(Worker thread) POST ``payload`` to ``{base_url}/chat/completions``; (status, headers, body up to the cap + 1 byte)."""
         request = urllib.request.Request(
-            self.base_url.rstrip("/") + "/chat/completions", data=json.dumps(payload).encode(), method="POST",
+            self.endpoint, data=json.dumps(payload).encode(), method="POST",
             headers={"Content-Type": "application/json", "Authorization": f"Bearer {self.api_key}"},
         )
         try:
-            response = urllib.request.urlopen(request, timeout=self.timeout)
-        except urllib.error.HTTPError as err:  # 4xx/5xx: the body explains, read it like any other
+            response = _OPENER.open(request, timeout=self.timeout)
+        except urllib.error.HTTPError as err:  # 3xx/4xx/5xx: the body explains, read it like any other
             response = err
         with response:
             read = getattr(response, "read1", response.read)
@@ -144,7 +177,7 @@ class OpenAIBackend:
                 if not chunk:
                     break
                 body += chunk
-            return response.status, response.headers.get("Content-Type", ""), bytes(body)
+            return response.status, response.headers, bytes(body)
 
     def _create(self, **payload: Any) -> ChatCompletion:
         """One chat-completions request within the deadline; every failure is a GenerationError naming the server."""
@@ -179,7 +212,15 @@ class OpenAIBackend:
                                   f"{printable(str(error)[:200])}); check --base-url and that the server runs.")
         if error is not None:
             raise error
-        status, content_type, body = box["answer"]
+        status, headers, body = box["answer"]
+        if 300 <= status < 400:
+            location = headers.get("Location")
+            target = (printable(urllib.parse.urljoin(self.endpoint, location)[:300]) if location
+                      else "no address (no Location header)")
+            raise GenerationError(f"the server at {self.base_url} answered HTTP {status}, a redirect to {target}; redirects "
+                                  f"are not followed (they would carry the API key to another address): point --base-url "
+                                  f"at the final address.")
+        content_type = headers.get("Content-Type", "")
         if len(body) > MAX_RESPONSE_BYTES:
             raise GenerationError(f"the server at {self.base_url} sent more than {MAX_RESPONSE_BYTES} bytes; a chat "
                                   f"completion is a few kB: check --base-url.")
@@ -205,26 +246,81 @@ class OpenAIBackend:
                 f"starting {text[:80]!r}); check --base-url and --model."
             ) from None
 
-    def _accept(self, name: Any, arguments: Any, accepted: list[ToolCall]) -> tuple[list[ToolCall], list[str]]:
-        """Validate (``ours``) or translate (``gente``) one call against those accepted so far; (calls, notes).
+    def _translate(self, name: Any, arguments: Any) -> tuple[list[ToolCall], list[str]]:
+        """Validate (``ours``) or translate (``gente``, a value outside our range rejected) one call; (calls, notes).
 
-        Raises ValidationError with what the model must change (including stacked heights and the call count).
+        Raises ValidationError with what the model must change.
         """
-        notes: list[str] = []
         if self.toolset == "gente":
             from legged_gente.generation.gente_compat import translate_call
 
-            translation = translate_call(name, arguments, "multi", self.size_x, self.size_y)
+            translation = translate_call(name, arguments, "multi", self.size_x, self.size_y, live=True)
             if translation.blocked:
                 raise ValidationError([i.message for i in translation.issues])
-            new = translation.calls
-            notes = [f"{translation.gente_tool}: {i.message}" for i in translation.issues]
-        else:
-            new = [validate_call(name, arguments, self.size_x, self.size_y, self.registry, self.resolution)]
-        if len(accepted) + len(new) > MAX_CALLS:
+            return translation.calls, [f"{translation.gente_tool}: {i.message}" for i in translation.issues]
+        return [validate_call(name, arguments, self.size_x, self.size_y, self.registry, self.resolution)], []
+
+    def _check_terrain(self, calls: list[ToolCall]) -> None:
+        """Raise ValidationError if ``calls``, in order, are too many or can stack heights beyond the bound."""
+        if len(calls) > MAX_CALLS:
             raise ValidationError([f"a terrain holds at most {MAX_CALLS} calls; stop calling tools or merge regions."])
-        check_height_stack(accepted + new, self.size_x, self.size_y, self.registry)
-        return new, notes
+        check_height_stack(calls, self.size_x, self.size_y, self.registry)
+
+    def _take_calls(
+        self, round_: int, tool_calls: list[Any], slots: list[_Slot], warnings: list[str],
+    ) -> tuple[list[dict[str, Any]], list[str]]:
+        """Validate one answer's tool calls and place them in ``slots`` (the first answer makes one slot per call;
+        see the module docstring for a correction round); (the messages that answer the model, the problems left)."""
+        results: dict[int, str] = {}  # the tool result of tool_calls[i]
+        # the calls to place: (i, tool name, its calls or why it is rejected, notes)
+        fresh: list[tuple[int, str, list[ToolCall] | ValidationError, list[str]]] = []
+        for i, tc in enumerate(tool_calls):
+            function = getattr(tc, "function", None)
+            try:
+                if function is None:
+                    raise ValidationError([f"tool call {tc.id!r} is not a function call; call the terrain functions."])
+                new, notes = self._translate(function.name, function.arguments)
+            except ValidationError as exc:
+                fresh.append((i, "", exc, []))
+                continue
+            repeat = next((s for s in slots if s.calls is not None and (s.name, s.calls) == (function.name, new)), None)
+            if repeat is None:
+                fresh.append((i, function.name, new, notes))
+                continue
+            warnings.append(f"round {round_}: {function.name} ({tc.id}) repeats the call accepted in round "
+                            f"{repeat.round} ({repeat.call_id}); applied once")
+            results[i] = (f"ALREADY APPLIED: identical to {repeat.call_id}, accepted in round {repeat.round}; it is "
+                          f"applied once. Send only corrections of the rejected calls.")
+        if not slots:
+            slots.extend(_Slot() for _ in fresh)
+        open_slots = [s for s in slots if s.calls is None]
+        rejected: list[str] = []
+        follow_up: list[dict[str, Any]] = []
+        if len(fresh) != len(open_slots):  # the new calls cannot be placed: none is applied
+            problem = (f"this answer has {len(fresh)} new call(s) for {len(open_slots)} rejected call(s) "
+                       f"({', '.join(s.call_id for s in open_slots)}); answer with exactly one corrected call per "
+                       f"rejected call, in their order, and do not repeat accepted calls.")
+            rejected = [problem]
+            results |= {i: f"REJECTED: {problem}" for i, *_ in fresh}
+            if not fresh:  # an answer of repeats only: no call of it to carry the reason
+                follow_up = [{"role": "user", "content": problem}]
+            open_slots, fresh = [], []
+        for slot, (i, name, outcome, notes) in zip(open_slots, fresh):
+            slot.call_id = tool_calls[i].id
+            try:
+                if isinstance(outcome, ValidationError):
+                    raise outcome
+                self._check_terrain([c for s in slots for c in (outcome if s is slot else s.calls or [])])
+            except ValidationError as exc:
+                rejected.append(str(exc))
+                results[i] = f"REJECTED: {exc} Re-issue this call corrected."
+                continue
+            slot.name, slot.calls, slot.round = name, outcome, round_
+            warnings += notes
+            results[i] = f"OK: {', '.join(f'{c.tool} on {c.region_json()}' for c in outcome) or 'nothing to apply'}." + (
+                f" Notes: {' '.join(notes)}" if notes else "")
+        answers = [{"role": "tool", "tool_call_id": tc.id, "content": results[i]} for i, tc in enumerate(tool_calls)]
+        return answers + follow_up, rejected
 
     def describe(self, image: str | Path | bytes, text: str | None = None) -> str:
         """Phase one of two: the vision model's description of the image as terrain."""
@@ -265,44 +361,30 @@ class OpenAIBackend:
             messages = [{"role": "system", "content": system_prompt(self.size_x, self.size_y)},
                         {"role": "user", "content": content}]
             tools = tool_schemas(self.size_x, self.size_y, self.registry)
-        calls: list[ToolCall] = []
+        slots: list[_Slot] = []  # one per call of the first answer with tool calls, in its order
         warnings: list[str] = early_warnings
         rejected: list[str] = []
-        for round_ in range(self.max_retries + 1):
+        for round_ in range(1, self.max_retries + 2):
             resp = self._create(model=self.model, messages=messages, tools=tools, tool_choice=self.tool_choice)
             if not resp.choices:
                 raise GenerationError(f"the server at {self.base_url} returned no choices.")
             msg = resp.choices[0].message
             tool_calls = msg.tool_calls or []
             if len(tool_calls) > MAX_TOOL_CALLS_PER_ANSWER:
-                rejected = [f"round {round_ + 1}: the model sent {len(tool_calls)} tool calls in one answer; at most "
+                rejected = [f"round {round_}: the model sent {len(tool_calls)} tool calls in one answer; at most "
                             f"{MAX_TOOL_CALLS_PER_ANSWER} are read"]
                 messages.append({"role": "user", "content": f"Send at most {MAX_TOOL_CALLS_PER_ANSWER} tool calls."})
                 continue
             messages.append(msg.model_dump(exclude_none=True))
             if not tool_calls:
-                rejected = [f"round {round_ + 1}: the model answered without calling a tool ({(msg.content or '')[:200]!r})"]
+                rejected = [f"round {round_}: the model answered without calling a tool ({(msg.content or '')[:200]!r})"]
                 messages.append({"role": "user", "content": "Answer by calling the terrain tools, not in text."})
                 continue
-            rejected = []
-            for tc in tool_calls:
-                function = getattr(tc, "function", None)
-                try:
-                    if function is None:
-                        raise ValidationError([f"tool call {tc.id!r} is not a function call; call the terrain functions."])
-                    new, notes_ = self._accept(function.name, function.arguments, calls)
-                except ValidationError as exc:
-                    rejected.append(str(exc))
-                    result = f"REJECTED: {exc} Re-issue this call corrected."
-                else:
-                    calls += new
-                    warnings += notes_
-                    result = f"OK: {', '.join(f'{c.tool} on {c.region_json()}' for c in new) or 'nothing to apply'}." + (
-                        f" Notes: {' '.join(notes_)}" if notes_ else "")
-                messages.append({"role": "tool", "tool_call_id": tc.id, "content": result})
+            answers, rejected = self._take_calls(round_, tool_calls, slots, warnings)
+            messages += answers
             if not rejected:
-                return GenerationResult(calls, warnings, notes, self.model)
-            warnings += [f"round {round_ + 1}: rejected: {r}" for r in rejected]
+                return GenerationResult([c for s in slots for c in s.calls], warnings, notes, self.model)
+            warnings += [f"round {round_}: rejected: {r}" for r in rejected]
         raise GenerationError(
             f"the model's tool calls were still invalid after {self.max_retries} correction round(s): "
             + " | ".join(rejected[:5]) + (f" | ... and {len(rejected) - 5} more" if len(rejected) > 5 else "")
