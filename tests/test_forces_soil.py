@@ -266,7 +266,11 @@ def test_soil_forces_act_at_the_contact_plane():
     d.qvel.assign(q)
     mjw.step(m, d)
     fx = f.foot_force.numpy()[0, 0, 0]
-    assert fx < -1.0  # bulldozing against +x
+    # Bekker's bulldozing b (bulldoze_c z + bulldoze_g z^2) against +x (0.3 m/s, above the 0.05 m/s fade): b the
+    # soil face across the motion, the sole's 0.09 m width; z the rut the step's forces used
+    z = f.foot_sinkage.numpy()[0, 0]
+    assert z > 0.005
+    assert fx == pytest.approx(-0.09 * (1.4e4 * z + 2.6e5 * z * z), rel=1e-4)
     # the force acts at the spheres' lowest points: 2 cm (their radius) below their centres (body origin)
     contact_z = d.xpos.numpy()[0, 1, 2] - 0.02
     com = d.xipos.numpy()[0, 1]
