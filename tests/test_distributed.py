@@ -85,7 +85,7 @@ def test_parse_args_under_torchrun(monkeypatch):
 def test_runner_rejects_a_device_of_another_rank(monkeypatch):
     torchrun_env(monkeypatch, 1, 1, 2)
     with pytest.raises(ValueError, match="'cuda:0' does not belong to torchrun LOCAL_RANK 1"):
-        GenteOnPolicyRunner(None, {"seed": 1}, device="cuda:0")  # fails before the env or a process group
+        GenteOnPolicyRunner(None, {"seed": 1, "algorithm": {}}, device="cuda:0")  # fails before the env or a process group
     assert not torch.distributed.is_initialized()
 
 

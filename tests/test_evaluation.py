@@ -151,9 +151,11 @@ def test_one_evaluation_runs_several_times():
         assert result.traces["pos"].shape[1] == round(0.2 / 0.02)
     # the episode is 0.2 s, 10 steps of 0.02 s: settling through it leaves nothing to measure, and 0.195 s rounds
     # to the 10th step
-    for settle_s in (-0.1, 0.2, 1.0, 0.195):
+    for settle_s in (0.2, 1.0, 0.195):
         with pytest.raises(ValueError, match=f"settle_s {settle_s} s leaves nothing"):
             evaluation.run(still, progress=False, settle_s=settle_s)
+    with pytest.raises(ValueError, match="settle_s must be >= 0 s, got -0.1"):
+        evaluation.run(still, progress=False, settle_s=-0.1)
     with pytest.raises(ValueError, match="speed must be > 0"):
         evaluation.make_task(speed=-1.0)
 
