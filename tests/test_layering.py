@@ -76,3 +76,26 @@ def test_the_check_finds_upward_imports(tmp_path):
         "terrain/a.py:2 (terrain) imports legged_gente.generation.spec.TerrainSpec (generation)",
         "utils/b.py:1 (utils) imports legged_gente.envs.task_registry (envs)",
     ]
+
+
+def test_evaluation_loads_no_generation_pipeline_at_run_time():
+    """What the static scan cannot see: a package's __init__ importing its modules. Importing evaluation (which
+    reads generation's spec format) must not load generation's pipeline or backends."""
+    import subprocess
+    import sys
+
+    code = ("import sys, legged_gente.evaluation.benchmark, legged_gente.evaluation.evaluator; "
+            "print(sorted(m for m in sys.modules if m.startswith('legged_gente.generation')))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "legged_gente.generation.spec" in loaded, loaded
+    for module in ("pipeline", "backends"):
+        assert f"legged_gente.generation.{module}" not in loaded, loaded
+
+
+def test_the_generation_package_still_exports_its_api():
+    import legged_gente.generation as generation
+    from legged_gente.generation.emit import emit
+    from legged_gente.generation.pipeline import generate_spec
+
+    assert generation.emit is emit and generation.generate_spec is generate_spec
+    assert all(callable(getattr(generation, name)) for name in generation.__all__)
