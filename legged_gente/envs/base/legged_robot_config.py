@@ -258,7 +258,8 @@ class LeggedRobotCfgPPO(BaseConfig):
         # iterations train the fresh critic alone, the actor held fixed (GentePPO.freeze_actor). Meanwhile the
         # shipped actor carries the restarted curriculum up (to level ~10 of the biped's 0-15 by iteration 800):
         # an actor released on the bottom levels specialises to them and lost 3x more on gente_original
-        # (docs/performance.md). Ignored when training from scratch or resuming.
+        # (docs/performance.md; chosen on that evaluation set, which biases its score there). Ignored when
+        # training from scratch or resuming.
         critic_warmup_iterations = 800
         resume = False
         load_run = -1  # -1: the latest run
