@@ -115,6 +115,10 @@ def test_stairs_have_steps_of_the_declared_height():
     profile = h[:, 0]
     rises = np.diff(profile)[np.diff(profile) != 0]
     assert np.allclose(rises, 0.15, atol=1e-6)
+    # Treads between two rises: 0.5 m / 0.1 m = 5 cells; the landing 1.2 m (the default platform) = 12 cells. The
+    # 80 cells hold 6 whole treads each side of the landing, then a cut one (4 cells) at each end.
+    edges = np.flatnonzero(np.diff(profile))
+    assert np.diff(edges).tolist() == [5] * 6 + [12] + [5] * 6
     down = heights("stairs", {"step_height": 0.15, "step_width": 0.5, "direction": "down"})
     assert np.allclose(down, -h)
 
@@ -260,8 +264,19 @@ def test_composition_errors_are_clear():
     with pytest.raises(ValueError, match="malformed"):
         TileSpec.from_dict({"size_x": 8})
     stacked = [Part(Region(0, 0, 8, 8), [Operation("pyramid_stairs", {"step_height": 0.3, "step_width": 0.15}, "add")] * 2)]
-    with pytest.raises(ValueError, match=f"> {MAX_ABS_HEIGHT} m"):
+    with pytest.raises(ValueError, match=f"> {MAX_ABS_HEIGHT} m; its 'add' operations stack"):
         build_tile(TileSpec(8, 8, RES, 0, stacked))
+
+
+def test_one_operation_over_the_height_bound_names_the_parameters_to_change():
+    """Steps of 0.3 m every 0.15 m around a 1.2 m platform on a 20 m tile: its edge cell lies 9.95 m from the centre,
+    ceil((9.95 - 0.6) / 0.15) = 63 steps up, 18.9 m. No 'add' is involved: lower the rise, or widen the treads or
+    the platform (fewer steps fit)."""
+    alone = [Part(Region(0, 0, 20, 20), [Operation("pyramid_stairs", {"step_height": 0.3, "step_width": 0.15})])]
+    with pytest.raises(ValueError, match=r"^part 0 \(\['pyramid_stairs'\]\) makes \|height\| reach 18.90 m > 10.0 m; "
+                                         r"pyramid_stairs alone does: lower its step_height or raise its step_width, "
+                                         r"platform\.$"):
+        build_tile(TileSpec(20, 20, RES, 0, alone))
 
 
 def test_docs_table_lists_every_atomic_with_intact_columns():

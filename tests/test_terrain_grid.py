@@ -1,5 +1,6 @@
 """The Terrain grid: modes, curriculum layout, spawn points, height sampling, material map, export, preview."""
 
+import re
 import warnings
 
 import numpy as np
@@ -71,6 +72,23 @@ def test_parse_terrain_type():
         parse_terrain_type("stairs:step_height=2")
 
 
+@pytest.mark.parametrize("value", ["inf", "-inf", "nan"])
+@pytest.mark.parametrize("entry, expected", [
+    ("natural_ground:octaves", r"natural_ground: octaves={} is not a finite number; choose a value in \[1, 6\] 1\."),
+    ("stairs:step_height", r"stairs: step_height={} is not a finite number; choose a value in \[0.0, 0.3\] m\."),
+], ids=["octaves", "step_height"])
+def test_a_non_finite_parameter_names_the_terrain_the_parameter_and_its_range(value, entry, expected):
+    """octaves is a whole number in [1, 6] (unit 1), step_height a length in [0, 0.3] m: inf and nan are neither."""
+    with pytest.raises(ValueError, match=f"^{expected.format(value)}$"):
+        parse_terrain_type(f"{entry}={value}")
+
+
+def test_a_whole_number_too_large_for_a_float_is_out_of_range():
+    """A spec's JSON may hold any integer: 10**400 is finite, and above octaves' 6."""
+    with pytest.raises(ValueError, match=r"^natural_ground: octaves=1000*0 1 is outside \[1, 6\] 1; choose"):
+        ATOMIC_TERRAINS["natural_ground"].check_params({"octaves": 10**400})
+
+
 def test_curriculum_layout(curriculum):
     t = curriculum
     assert t.height_field.shape == (3 * 40 + 20, 6 * 40 + 20) and t.height_field.dtype == np.float32
@@ -111,6 +129,42 @@ def test_max_difficulty_errors_name_the_terrain_and_the_fix():
                 num_robots=2)
     Terrain(cfg(num_cols=1, terrain_types=["stepping_stones:stone_size=0.5"], terrain_proportions=[1.0],
                 max_difficulty=1.6), num_robots=2)  # the fix the message names
+
+
+def one_tile(terrain_type):
+    """A terrain of one 4 m tile (40 x 40 cells, no border) of ``terrain_type`` at difficulty 0."""
+    return Terrain(cfg(num_rows=1, num_cols=1, border_size=0.0, terrain_types=[terrain_type], terrain_proportions=[1.0]),
+                   num_robots=1)
+
+
+def test_a_plus_entry_adds_its_geometric_atomics_in_order():
+    """An entry "a+b" is b on a: the first geometric atomic sets the heights, each later one adds to them."""
+    assert np.allclose(one_tile("flat:height=0.5+flat:height=0.25").height_field, 0.75, atol=1e-6)
+    # A pyramid slope of 0.3 rad with its 1.2 m platform on ground raised 0.5 m: cell i lies at
+    # x = (i - 19.5) * 0.1 m from the tile centre; it rises tan(0.3) per metre beyond 0.6 m (Chebyshev distance).
+    x = (np.arange(40) - 19.5) * 0.1
+    distance = np.maximum(np.abs(x)[:, None], np.abs(x)[None, :])
+    expected = 0.5 + np.tan(0.3) * np.maximum(distance - 0.6, 0.0)
+    assert np.allclose(one_tile("flat:height=0.5+pyramid_slope:slope=0.3").height_field, expected, atol=1e-5)
+    assert np.allclose(one_tile("pyramid_slope:slope=0.3+flat:height=0.5").height_field, expected, atol=1e-5)
+    # A physical atomic between them changes no height: the water lies on the summed ground.
+    t = one_tile("flat:height=0.5+water:depth=0.2+flat:height=0.25")
+    assert np.allclose(t.height_field, 0.75, atol=1e-6)
+    assert np.allclose(t.material.water_surface, 0.75 + 0.2, atol=1e-6)
+
+
+def test_a_plus_entry_higher_than_the_tile_bound_names_the_entry():
+    """Six 2 m raises stack to 12 m, over the 10 m bound."""
+    entry = "+".join(["flat:height=2"] * 6)
+    with pytest.raises(ValueError, match=rf"tile \(0, 0\) '{re.escape(entry)}': .*reach 12.00 m > 10.0 m"):
+        one_tile(entry)
+
+
+def test_a_border_of_part_of_a_cell_is_refused():
+    with pytest.raises(ValueError, match=r"^border_size=0.25 m is not a whole number of resolution=0.1 m cells; "
+                                         r"adjust it.$"):
+        Terrain(cfg(border_size=0.25), 1)
+    assert Terrain(cfg(border_size=0.3), 1).origin_xy == pytest.approx((-0.3, -0.3))
 
 
 def test_curriculum_materials(curriculum):

@@ -12,6 +12,7 @@ from legged_gente.envs.terrain_arg import apply_terrain_arg
 from legged_gente.generation.gente_compat import heightmap_spec
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.generation.validation import ValidationError
+from legged_gente.terrain.heightmap import heightmap_heights
 from legged_gente.terrain.terrain import Terrain
 
 CELL, SCALE = 0.1, 0.005  # GenTe's 0.1 m cells and 0.005 m per int16 unit
@@ -91,6 +92,21 @@ def test_overflowed_int16_heightmap_is_refused(tmp_path):
         Terrain(one_tile_cfg(path, 4.0), 1)
     with pytest.raises(ValidationError, match="wrapped around the int16 range"):
         TerrainSpec.load(path)
+
+
+def test_an_8_bit_map_with_a_tall_block_keeps_its_heights():
+    """A 2 x 2 block of 150 uint8 units at 0.01 m per unit is a 1.5 m block, not a wrap-around: 8-bit maps span
+    too few units to tell one from the other (half the uint8 range is 1.28 m here), so none is refused."""
+    raw = np.zeros((4, 4), np.uint8)
+    raw[1:3, 1:3] = 150
+    expected = np.zeros((4, 4))
+    expected[1:3, 1:3] = 1.5
+    assert np.allclose(heightmap_heights(raw, 0.01, 10.0), expected, atol=1e-6)
+    signed = np.array([[-100, 100], [100, -100]], np.int8)  # neighbours 200 units (2 m) apart
+    assert np.allclose(heightmap_heights(signed, 0.01, 10.0), [[-1.0, 1.0], [1.0, -1.0]], atol=1e-6)
+    wrapped = np.array([[32767, -32768], [32767, -32768]], np.int16)  # +32767 + 1 wrapped: 2 edges
+    with pytest.raises(ValueError, match="wrapped around the int16 range at 2 cell edges"):
+        heightmap_heights(wrapped, SCALE, 10.0)
 
 
 @pytest.mark.parametrize("raw, size, expected", [

@@ -318,6 +318,23 @@ def _seam_weight(lo: int, hi: int, pad: int, resolution: float) -> np.ndarray:
     return np.maximum(np.maximum(lo - idx, idx - (hi - 1)), 0) * resolution
 
 
+def _height_advice(atomic: AtomicTerrain, params: dict[str, Any], shape: tuple[int, int], resolution: float) -> str:
+    """Which parameters to lower or raise to shrink ``atomic``'s declared heights on a region of ``shape`` cells:
+    those whose bound (lowest or highest value) gives a smaller peak of its ``height_bounds``."""
+    size = (shape[0] * resolution, shape[1] * resolution)
+
+    def peak(changed: dict[str, Any]) -> float:
+        lo, hi = atomic.height_bounds({**params, **changed}, *size)
+        return max(-lo, hi)
+
+    now = peak({})
+    numeric = {k: p for k, p in atomic.params.items() if p.choices is None}
+    lower = [k for k, p in numeric.items() if peak({k: p.low}) < now]
+    higher = [k for k, p in numeric.items() if peak({k: p.high}) < now]
+    return " or ".join(filter(None, [lower and f"lower its {', '.join(lower)}",
+                                     higher and f"raise its {', '.join(higher)}"]))
+
+
 def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray, MaterialMap]:
     """Heights (float32 (nx, ny), m) and MaterialMap of ``spec``; rigid ground has ``ground_friction``."""
     nx, ny = _shape(spec)
@@ -365,10 +382,13 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
         heights[ti, tj] = heights[ti, tj] * (1.0 - w[ci, cj]) + work[ci, cj] * w[ci, cj]
         peak = float(np.abs(heights).max())
         if peak > MAX_ABS_HEIGHT:
-            raise ValueError(
-                f"part {k} ({[o.terrain for o in part.ops]}) makes |height| reach {peak:.2f} m > {MAX_ABS_HEIGHT} m; "
-                f"lower its heights/slopes or use 'set' instead of stacking 'add' operations."
-            )
+            if any(op.mode == "add" for op, *_ in geometric):
+                advice = "its 'add' operations stack their heights on those below: lower them or stack fewer"
+            else:  # the last 'set' alone made these heights: the seam blend never leaves the range of both sides
+                op, atomic, params, _ = geometric[-1]
+                advice = f"{op.terrain} alone does: {_height_advice(atomic, params, work.shape, res)}"
+            raise ValueError(f"part {k} ({[o.terrain for o in part.ops]}) makes |height| reach {peak:.2f} m > "
+                             f"{MAX_ABS_HEIGHT} m; {advice}.")
 
     heights = heights.astype(np.float32)
     for i0, j0, i1, j1, op, atomic, params, rng in physical:

@@ -5,7 +5,9 @@ A heightmap is a 2-D array, axis 0 along x and axis 1 along y, one value per cel
 0.1 m cells and 0.005 m per unit. Integer maps built by adding heights without a range check wrap around
 (int16: +32767 + 1 -> -32768); a wrap shows as a jump of more than half the integer range between
 neighbouring cells, which no terrain makes (half the int16 range is 164 m at 0.005 m per unit). Such a map
-is refused, naming how high it would reach unwrapped, never built with its garbage heights.
+is refused, naming how high it would reach unwrapped, never built with its garbage heights. 8-bit maps are not
+checked: half their range is 128 units, 1.28 m at 0.01 m per unit, a step real terrains have, so a jump that
+large tells nothing.
 """
 
 from __future__ import annotations
@@ -19,8 +21,9 @@ MAX_HEIGHTMAP_CELLS = 4_000_000
 
 
 def wrap_edges(raw: np.ndarray) -> int:
-    """Neighbour pairs of an integer array whose difference exceeds half the dtype's range (wrap-arounds)."""
-    if not np.issubdtype(raw.dtype, np.integer):
+    """Neighbour pairs of a 16-bit or wider integer array whose difference exceeds half the dtype's range
+    (wrap-arounds); 0 for float and 8-bit maps, whose range is too small to tell a wrap from a real step."""
+    if not np.issubdtype(raw.dtype, np.integer) or raw.dtype.itemsize < 2:
         return 0
     half = (int(np.iinfo(raw.dtype).max) - int(np.iinfo(raw.dtype).min) + 1) // 2
     a = raw.astype(np.int64)

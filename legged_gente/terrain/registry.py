@@ -50,15 +50,17 @@ class Param:
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ValueError(f"{terrain}: {name} must be a number ({self.unit}), got {type(value).__name__} {value!r}.")
-        if self.integer and float(value) != int(value):
-            raise ValueError(f"{terrain}: {name} must be a whole number, got {value!r}.")
-        if not np.isfinite(value):
-            raise ValueError(f"{terrain}: {name} must be finite, got {value!r}.")
+        # Finite and in range before the whole-number test: int() of inf or nan, float() of a huge int, raise.
+        if not isinstance(value, (int, np.integer)) and not np.isfinite(value):
+            raise ValueError(f"{terrain}: {name}={value!r} is not a finite number; choose a value in "
+                             f"[{self.low}, {self.high}] {self.unit}.")
         if (self.low is not None and value < self.low) or (self.high is not None and value > self.high):
             raise ValueError(
                 f"{terrain}: {name}={value!r} {self.unit} is outside [{self.low}, {self.high}] {self.unit}; "
                 f"choose a value in that range."
             )
+        if self.integer and float(value) != int(value):
+            raise ValueError(f"{terrain}: {name} must be a whole number, got {value!r}.")
         return int(value) if self.integer else float(value)
 
 

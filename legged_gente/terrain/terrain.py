@@ -9,8 +9,9 @@ Cell (i, j) of ``height_field`` lies at world ``origin_xy + (i, j) * resolution`
 A ``terrain_types`` entry is an atomic terrain name, optionally with fixed parameters after a colon:
 ``"stairs:direction=down"`` or ``"water:flow=current,speed=0.5"``; the curriculum sets the others. Several
 atomics joined by ``+`` are applied in order to the whole tile, each at the tile's difficulty:
-``"river+water"`` (a filled channel), ``"hills+soil:preset=dry_sand"`` (dunes). Physical terrains alone
-(water, soil, low_friction) lie on flat ground.
+``"river+water"`` (a filled channel), ``"hills+soil:preset=dry_sand"`` (dunes). The first geometric atomic sets
+the heights and each later one adds to them: ``"hills+rocks"`` is rocks on hills. Physical terrains alone
+(water, soil, low_friction) lie on flat ground. Tile sizes and the border are whole numbers of cells.
 """
 
 from __future__ import annotations
@@ -116,7 +117,7 @@ class Terrain:
             _cells(cfg.terrain_length, self.resolution, "terrain_length"),
             _cells(cfg.terrain_width, self.resolution, "terrain_width"),
         )
-        self.border = int(round(cfg.border_size / self.resolution))
+        self.border = _cells(cfg.border_size, self.resolution, "border_size") if cfg.border_size > 0 else 0
         self.origin_xy = (-self.border * self.resolution, -self.border * self.resolution)
         tnx, tny = self.tile_cells
         shape = (self.num_rows * tnx + 2 * self.border, self.num_cols * tny + 2 * self.border)
@@ -148,20 +149,34 @@ class Terrain:
     def _tile_seed(self, r: int, c: int) -> int:
         return int(np.random.SeedSequence(int(self.cfg.seed), spawn_key=(r, c)).generate_state(1)[0])
 
-    def _atomic_tile(self, r: int, c: int, ops: list[tuple[str, dict[str, Any]]], difficulty: float | None):
-        """Builder of a tile made of ``ops`` on the whole tile, at ``difficulty`` (None: the params as given)."""
-        operations = []
+    def _atomic_tile(self, r: int, c: int, entry: str, ops: list[tuple[str, dict[str, Any]]],
+                     difficulty: float | None):
+        """Builder of the tile ``entry``: ``ops`` on the whole tile, at ``difficulty`` (None: the params as given).
+
+        The first geometric atomic sets the heights and each later one adds to them ("hills+rocks": rocks on
+        hills); physical atomics paint the final ground.
+        """
+        operations, heights_set = [], False
         for name, fixed in ops:
             atomic = ATOMIC_TERRAINS[name]
             if difficulty is None:
                 params = atomic.check_params(fixed)
             else:
                 params = atomic.params_for_difficulty(difficulty, fixed)
-            operations.append(Operation(name, params))
+            geometric = atomic.kind == "geometric"
+            operations.append(Operation(name, params, "add" if geometric and heights_set else "set"))
+            heights_set = heights_set or geometric
         size_x, size_y = self.tile_size
         spec = TileSpec(size_x, size_y, self.resolution, self._tile_seed(r, c),
                         [Part(Region(0.0, 0.0, size_x, size_y), operations)])
-        return lambda: build_tile(spec, float(self.cfg.static_friction))
+
+        def build():
+            try:
+                return build_tile(spec, float(self.cfg.static_friction))
+            except ValueError as exc:  # e.g. the height bound: say which tile and entry, the part is the whole tile
+                raise ValueError(f"tile ({r}, {c}) {entry!r}: {exc}") from None
+
+        return build
 
     def _plan(self) -> dict[tuple[int, int], tuple[str, Any]]:
         """(row, col) -> (tile name, zero-argument builder of (heights, material))."""
@@ -185,7 +200,8 @@ class Terrain:
                 difficulty = top * r / (rows - 1) if rows > 1 else 0.0
                 for c in range(cols):
                     k = column_type[c]
-                    plan[r, c] = (cfg.terrain_types[k], self._atomic_tile(r, c, types[k], difficulty))
+                    entry = cfg.terrain_types[k]
+                    plan[r, c] = (entry, self._atomic_tile(r, c, entry, types[k], difficulty))
         elif self.mode == "random":
             p = normalised_proportions(cfg.terrain_proportions)
             rng = np.random.default_rng(int(cfg.seed))
@@ -194,7 +210,8 @@ class Terrain:
             for r in range(rows):
                 for c in range(cols):
                     k = kinds[r, c]
-                    plan[r, c] = (cfg.terrain_types[k], self._atomic_tile(r, c, types[k], float(difficulties[r, c])))
+                    entry = cfg.terrain_types[k]
+                    plan[r, c] = (entry, self._atomic_tile(r, c, entry, types[k], float(difficulties[r, c])))
         elif self.mode == "selected":
             name = cfg.selected_terrain
             if name not in ATOMIC_TERRAINS:
@@ -202,7 +219,7 @@ class Terrain:
             ops = [(name, dict(cfg.selected_params or {}))]
             for r in range(rows):
                 for c in range(cols):
-                    plan[r, c] = (name, self._atomic_tile(r, c, ops, None))
+                    plan[r, c] = (name, self._atomic_tile(r, c, name, ops, None))
         else:  # generated
             paths = [Path(p) for p in cfg.generated_specs or []]
             if not paths:
