@@ -159,11 +159,16 @@ def test_run_time_settings_live_in_device_tensors(env):
     finally:
         env.set_param("commands.ranges.lin_vel_x", [-1.0, 1.0])
         env.set_param("commands.still_fraction", 0.1)
+    alive, sigma = env.cfg.rewards.scales.alive, env.cfg.rewards.tracking_sigma
     env.set_param("rewards.scales.alive", 2.0)
-    i = [name for name, _ in env.reward_functions].index("alive")
-    assert env.reward_scale_vec[i].item() == pytest.approx(2.0 * env.dt)
     env.set_param("rewards.tracking_sigma", 0.5)
-    assert env.params.rewards.tracking_sigma.item() == 0.5
+    try:
+        i = [name for name, _ in env.reward_functions].index("alive")
+        assert env.reward_scale_vec[i].item() == pytest.approx(2.0 * env.dt)
+        assert env.params.rewards.tracking_sigma.item() == 0.5
+    finally:  # the module's env is shared by the tests after this one
+        env.set_param("rewards.scales.alive", alive)
+        env.set_param("rewards.tracking_sigma", sigma)
     # the soft joint limits follow their setting: the left knee's 0..2 rad range shrunk to half is 0.5..1.5 rad,
     # so a knee at 1.7 rad (the other joints mid-range) is penalised 0.2
     knee = env.layout.joint_names.index("left_knee")

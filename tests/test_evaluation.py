@@ -435,3 +435,63 @@ def test_a_robot_at_its_tiles_edge_ends_its_measured_episode_there_with_a_tile_e
     assert m["time_s"][3] == pytest.approx(3 * env.dt) and m["time_s"][2] == pytest.approx(10 * env.dt)
     m = run(None)
     assert not m["left_tile"].any() and m["time_s"][3] == pytest.approx(10 * env.dt)
+
+
+def test_an_evaluation_meets_the_same_soil_and_water_each_run_and_for_its_seed():
+    """On a mud item (the robots stand in soil, whose per-env draws decide their sinkage): one evaluation run
+    twice, and a second evaluation with the same seed, give the same trajectories and energy; the force fields'
+    seed follows the evaluation's seed."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    items = load_benchmark(str(BENCHMARK), ["text_29_mud_field_deep_puddles"])
+    first = Evaluation("gente_biped", items, 2, "cpu", 0.4, seed=0)
+    assert first.env.forces is not None
+
+    def run(evaluation):
+        return evaluation.run(lambda obs: torch.zeros(2, evaluation.env.num_actions), settle_s=0.04, progress=False)
+
+    a, b = run(first), run(first)
+    np.testing.assert_array_equal(a.traces["qpos"], b.traces["qpos"])
+    np.testing.assert_array_equal(a.metrics["energy"], b.metrics["energy"])
+    second = Evaluation("gente_biped", items, 2, "cpu", 0.4, seed=0)
+    assert second.env.forces.seed == first.env.forces.seed
+    np.testing.assert_array_equal(run(second).traces["qpos"], a.traces["qpos"])
+
+
+def test_energy_counts_the_torque_a_robot_applied_whatever_other_robots_do():
+    """env.torques after a step are the actuator forces of its last substep in every world: the forward after
+    another robot's reset (which recomputes every world's) leaves those of the worlds not reset as they were."""
+    from legged_gente.envs.task_registry import task_registry
+
+    def torques_after(reset_other: bool):
+        torch.manual_seed(0)
+        env_cfg, _ = task_registry.get_cfgs("gente_biped_flat")
+        env_cfg.env.num_envs = 2
+        env_cfg.domain_rand.push_robots = False
+        env, _ = task_registry.make_env("gente_biped_flat", env_cfg=env_cfg)
+        actions = torch.Generator().manual_seed(1)
+        for step in range(6):
+            if step == 5 and reset_other:
+                env.episode_length_buf[1] = env.max_episode_length - 1  # robot 1 times out in this step
+            env.step(0.5 * torch.randn(2, env.num_actions, generator=actions))
+        assert bool(env.reset_buf[1]) is reset_other
+        return env.torques[0].clone(), env.sim.qpos[0].clone()
+
+    (alone, qpos_alone), (beside_reset, qpos_beside) = torques_after(False), torques_after(True)
+    assert torch.equal(qpos_alone, qpos_beside)
+    assert torch.equal(alone, beside_reset)
+
+
+def test_the_stand_still_group_counts_the_terrains_it_has_robots_on():
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+    from legged_gente.evaluation.report import build_report
+
+    items = load_benchmark(str(BENCHMARK), ITEMS)
+    evaluation = Evaluation("gente_biped", items, 2, "cpu", 0.1)
+    result = evaluation.run(lambda obs: torch.zeros(4, evaluation.env.num_actions), settle_s=0.04, progress=False)
+    assert result.tile.tolist() == [0, 0, 1, 1]
+    result.metrics["standing"] = np.array([True, False, False, False])  # one standing robot, on the first terrain
+    group = build_report(result, items)["groups"]["stand_still"]
+    assert group["robots"] == 1 and group["terrains"] == 1

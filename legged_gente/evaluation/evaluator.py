@@ -225,6 +225,7 @@ class Evaluation:
             env_cfg.commands.heading_command = True  # waypoints steer through the heading
         self.env_cfg = env_cfg
         env_class = task_registry.tasks[task][0]
+        torch.manual_seed(self.seed)  # the env's own draws (the force fields' seed among them) follow the seed
         self.env = env_class(env_cfg, device=device, train_cfg_steps_per_env=self.train_cfg.runner.num_steps_per_env)
         self.task_name = task
         self.robots_per_terrain = robots_per_terrain
@@ -275,6 +276,8 @@ class Evaluation:
                              f"measure (steps of {self.dt:g} s); give a value in [0, episode_s - one step).")
         task = task or self.make_task()
         torch.manual_seed(self.seed)
+        if env.forces is not None:
+            env.forces.restart_draws()  # every run meets the same soil and water draws
         first = torch.arange(0, env.num_envs, self.robots_per_terrain, device=env.device)
 
         def command():

@@ -135,7 +135,7 @@ def build_report(result, items: list[Item], tracking_threshold: float = TRACKING
     groups = {g: {"terrains": sum(1 for t in terrains if g in (t["kind"], *t["categories"])),
                   **summarize_robots(*select(group_masks[g]))} for g in order if g in group_masks}
     if standing.any():
-        groups[STAND_GROUP] = {"terrains": len(items),
+        groups[STAND_GROUP] = {"terrains": len(np.unique(result.tile[standing])),  # those with a standing robot
                                **summarize_robots({k: v[standing] for k, v in result.metrics.items()}, ok[standing])}
     everything = np.ones_like(ok)
     return {

@@ -486,6 +486,11 @@ class TerrainForces:
             )
 
     # ------------------------------------------------------------------ env calls
+    def restart_draws(self) -> None:
+        """Replay the per-env draws (soil scatter, drag noise, flow noise) from the seed's first: the device-side
+        counter they are drawn at goes back to 0, so a repeated evaluation meets the same soil and water."""
+        self.counter.zero_()
+
     def after_substep(self):
         """After each ``mjw.step``: sum the feet's normal forces, update slip since touchdown, write obs."""
         if not self.nfoot:

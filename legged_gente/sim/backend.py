@@ -87,9 +87,11 @@ class Simulation:
         self.after_reset: list[Callable[[torch.Tensor], None]] = []  # called with the reset mask (torch bool)
         self._graph = None
         self._make_views()
-        # what :meth:`forward` refreshes for the worlds it is given (each (num_worlds, ...)), and what the
-        # callbacks and after_substep hooks integrate from one substep to the next, which it leaves as it was
-        self.observed: list[torch.Tensor] = [self.body_contact_force]
+        # what :meth:`forward` refreshes for the worlds it is given (each (num_worlds, ...)): the others keep their
+        # last substep's (the actuator forces it applied, not the forward's recomputation from the new state);
+        # and what the callbacks and after_substep hooks integrate from one substep to the next, which it leaves as
+        # it was
+        self.observed: list[torch.Tensor] = [self.body_contact_force, self.actuator_force]
         self.substep_state: list[torch.Tensor] = []
         # the next substep's first half, computed ahead (see the module docstring): per substep-state array, its
         # value as the stage leaves it and as it was before; the version counters of the inputs the stage was

@@ -656,6 +656,7 @@ class LeggedRobot(VecEnv):
         return self.obs_buf.clone()
 
     def _push_robots(self) -> None:
+        """An impulse: U(-max_push_vel_xy, max_push_vel_xy) m/s added to the base's x and y velocity."""
         v = self.max_push_vel_xy
         self.sim.qvel[:, 0:2] += rand_uniform(-v, v, (self.num_envs, 2), self.device)
 

@@ -103,6 +103,8 @@ class LeggedRobotCfg(BaseConfig):
         added_mass_range = [-1.0, 3.0]  # kg
         push_robots = True
         push_interval_s = 15.0
+        # a push is an impulse: it adds U(-max, max) m/s to the base's x and y velocity (legged_gym sets the
+        # velocity to that draw instead, so a walking robot's push there can also slow it)
         max_push_vel_xy = 1.0  # m/s
 
     class rewards:
