@@ -329,7 +329,7 @@ def test_a_reset_leaves_the_critics_force_observation_fresh(env):
         env.step(torch.zeros(env.num_envs, env.num_actions))
         state = [t.clone() for t in env.sim.substep_state]
         observed = [t.clone() for t in env.sim.observed]
-        assert len(state) >= 8 and len(observed) == 2
+        assert len(state) >= 8 and len(observed) == 3  # contact forces, actuator forces, force observation
         env.sim.forward(torch.tensor([False, False, False, True, False]))
         assert all(torch.equal(a, b) for a, b in zip(state, env.sim.substep_state))
         assert all(torch.equal(a[[0, 1, 2, 4]], b[[0, 1, 2, 4]]) for a, b in zip(observed, env.sim.observed))
