@@ -207,13 +207,18 @@ def test_missing_checkpoint(capsys, tmp_path):
     assert "no such file or run folder" in line
 
 
-def test_checkpoint_of_another_task(capsys, tmp_path):
-    """A quadruped checkpoint played as the biped: the tasks and action counts, not torch's size mismatch."""
-    args = parse_args(build_parser("test"), ["--task", "gente_quadruped_flat", *CPU])
+def small_runner(task: str):
+    """The task's runner on the CPU with 8-wide networks (quick to save and load)."""
+    args = parse_args(build_parser("test"), ["--task", task, *CPU])
     env, _ = task_registry.make_env(args.task, args)
     _, train_cfg = task_registry.get_cfgs(args.task)
     train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
-    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    return task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)[0]
+
+
+def test_checkpoint_of_another_task(capsys, tmp_path):
+    """A quadruped checkpoint played as the biped: the tasks and action counts, not torch's size mismatch."""
+    runner = small_runner("gente_quadruped_flat")
     run = tmp_path / "gente_biped_flat" / "2026-01-01_00-00-00"
     run.mkdir(parents=True)
     runner.save(str(run / "model_0.pt"))
@@ -339,11 +344,7 @@ def test_network_sizes_are_positive_layer_widths(capsys, monkeypatch, override):
 
 def test_a_checkpoint_without_config_json_is_evaluated_with_set(capsys, tmp_path):
     """The size-mismatch error tells gente-evaluate's user to pass --set actor.hidden_dims=[...]: that works."""
-    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", *CPU])
-    env, _ = task_registry.make_env(args.task, args)
-    _, train_cfg = task_registry.get_cfgs(args.task)
-    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
-    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    runner = small_runner("gente_biped_flat")
     runner.save(str(tmp_path / "model_0.pt"))  # no config.json beside it
     flags = ["--task", "gente_biped_flat", "--checkpoint", str(tmp_path / "model_0.pt"), "--benchmark", "flat",
              "--robots_per_terrain", "1", "--episode_s", "0.1", "--settle_s", "0", "--device", "cpu",
