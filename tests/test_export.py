@@ -20,7 +20,8 @@ def exported(tmp_path_factory):
     env, _ = task_registry.make_env(args.task, args)
     _, train_cfg = task_registry.get_cfgs(args.task)
     train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [16, 16]
-    runner, _, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    runner, made_cfg, _ = task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)
+    assert made_cfg.algorithm.use_mixed_precision is False  # what ran on the CPU: what the run's config.json says
     policy = runner.alg.get_policy()
     with torch.no_grad():  # a non-trivial normaliser and weights, as after training
         policy.obs_normalizer._mean.uniform_(-0.5, 0.5)

@@ -77,6 +77,27 @@ def test_a_checkpoint_with_a_float_learning_rate_still_adapts():
     assert float(ours._learning_rate_tensor()) == pytest.approx(2e-3)
 
 
+@pytest.mark.parametrize("saved_by", [PPO, GentePPO])
+def test_a_loaded_checkpoint_keeps_the_optimizer_as_gente_ppo_builds_it(saved_by):
+    """torch's load_state_dict takes every Adam setting from the checkpoint: one saved by rsl-rl's PPO (fused
+    off, a float rate) or on the CPU (capturable False) could not be captured in a CUDA graph. After GentePPO's
+    load its Adam has the settings it was built with, its rate is a device tensor with the saved value, its step
+    counts are float tensors on the parameters' device, and the update still runs and adapts the rate."""
+    saved, _ = updated(saved_by, 1e-3)
+    checkpoint = saved.save()
+    alg = algorithm(GentePPO, 5e-3, torch.Generator().manual_seed(1))
+    built = {key: alg.optimizer.param_groups[0][key] for key in ("fused", "foreach", "capturable")}
+    alg.load(copy.deepcopy(checkpoint), None, True)
+    group = alg.optimizer.param_groups[0]
+    assert {key: group[key] for key in built} == built == {"fused": True, "foreach": None, "capturable": False}
+    assert isinstance(group["lr"], torch.Tensor) and float(group["lr"]) == pytest.approx(saved.learning_rate)
+    steps = [alg.optimizer.state[p]["step"] for p in group["params"]]
+    assert all(step.dtype == torch.float32 and step.device == p.device for step, p in zip(steps, group["params"]))
+    before = float(group["lr"])
+    rollout_and_update(alg, torch.Generator().manual_seed(2))
+    assert alg.learning_rate != pytest.approx(before)  # the adaptive schedule moved it on the device
+
+
 def test_sync_free_gaussian_samples_the_same_distribution():
     from rsl_rl.modules.distribution import GaussianDistribution
 

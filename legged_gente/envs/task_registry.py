@@ -155,6 +155,8 @@ class TaskRegistry:
             log_dir = str(experiment_root / (stamp + (f"_{runner_cfg.run_name}" if runner_cfg.run_name else "")))
         runner = GenteOnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=log_dir, device=env.device)
         runner.task_name = name
+        # the config (and the run's config.json) says what runs: bf16 applies on CUDA only (GenteOnPolicyRunner)
+        train_cfg.algorithm.use_mixed_precision = runner.alg.use_mixed_precision
         if runner.gpu_global_rank != 0:
             log_dir = None  # under torchrun only rank 0 writes the run folder (rsl-rl logs from rank 0 only)
         if runner_cfg.resume:

@@ -186,9 +186,24 @@ class GentePPO(PPO):
     def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
         """rsl-rl's load; a run saved during its critic warm-up (with its optimizer state) resumes the warm-up."""
         iteration = super().load(loaded_dict, load_cfg, strict)
+        if self.device_side_update:
+            self._keep_optimizer_settings()
         if (load_cfg is None or load_cfg.get("optimizer")) and loaded_dict.get("frozen_actor_updates", 0):
             self.freeze_actor(int(loaded_dict["frozen_actor_updates"]))
         return iteration
+
+    def _keep_optimizer_settings(self) -> None:
+        """Adam as built here after a checkpoint's optimizer state is loaded: torch takes every setting of a param
+        group from the checkpoint, and one saved on the CPU or by rsl-rl's PPO (capturable False, fused off, a float
+        rate) cannot be captured in the CUDA graph. Its step counts go to the parameters' device, as fused and
+        capturable Adam keep them."""
+        for group in self.optimizer.param_groups:
+            group.update(fused=True, foreach=None, capturable=self._graphed)
+            for parameter in group["params"]:
+                state = self.optimizer.state.get(parameter, {})
+                if "step" in state:
+                    state["step"] = state["step"].to(parameter.device, torch.float32)
+        self._learning_rate_tensor()
 
     def _act_step(self) -> None:
         super().act(self._act_observations)
