@@ -80,6 +80,20 @@ def test_truncated_and_garbage_files_are_unreadable_checkpoints(runner, tmp_path
         load_checkpoint(plain)
 
 
+def test_a_flipped_bit_in_a_name_of_torchs_is_a_corrupt_checkpoint_not_an_unsafe_one(runner, tmp_path):
+    """A bit flipped in the pickled name torch._utils._rebuild_tensor_v2 (the zip's checksum misses it) makes the
+    safe loader refuse a GLOBAL that names nothing: corrupt (resume moves on to an older checkpoint), not
+    unsafe (a GLOBAL naming a real object, os.system, is still unsafe: test_a_checkpoint_cannot_run_code)."""
+    good = tmp_path / "good.pt"
+    runner.save(str(good))
+    raw = good.read_bytes()
+    i = raw.index(b"_rebuild_tensor_v2") + 5  # the "l"
+    flipped = tmp_path / "flipped.pt"
+    flipped.write_bytes(raw[:i] + bytes([raw[i] ^ 4]) + raw[i + 1:])  # "l" -> "h"
+    with pytest.raises(UnreadableCheckpoint, match="unreadable"):
+        load_checkpoint(flipped)
+
+
 def test_resume_falls_back_to_the_newest_readable_checkpoint(runner, tmp_path, capsys):
     root = tmp_path / "gente_biped_flat"
     older, newer = root / "2026-01-01_00-00-00", root / "2026-01-02_00-00-00"
