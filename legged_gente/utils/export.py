@@ -19,13 +19,15 @@ import torch
 ONNX_OPSET = 18
 
 
-def policy_observation_layout(env) -> list[tuple[str, float]]:
-    """(name, scale) of each entry of the env's ``policy`` observation, from the env's observation term table
-    (``cfg.observations.policy``, resolved by the env): the observation is ``scale * term`` (clipped first where
-    the term says so)."""
+def policy_observation_layout(env) -> list[tuple[str, float, list[float] | None]]:
+    """(name, scale, clip) of each entry of the env's ``policy`` observation, from the env's observation term table
+    (``cfg.observations.policy``, resolved by the env): the observation is ``scale * term``, the term clamped to
+    ``clip`` ([low, high]; None: not clamped) first."""
     names = env.observation_names["policy"]
     scales = torch.cat([entry[2] for entry in env._obs_groups["policy"]]).tolist()
-    return list(zip(names, scales))
+    clips = [None if clip is None else [float(clip[0]), float(clip[1])]
+             for _, _, scale, clip, _ in env._obs_groups["policy"] for _ in range(len(scale))]
+    return list(zip(names, scales, clips))
 
 
 def deployment_metadata(env, checkpoint: str | None = None, task: str | None = None) -> dict[str, str]:
@@ -33,16 +35,18 @@ def deployment_metadata(env, checkpoint: str | None = None, task: str | None = N
     layout = policy_observation_layout(env)
     num_obs = int(env.get_observations()["policy"].shape[1])
     if len(layout) != num_obs:  # a subclass changed the observation: keep the scales out rather than lie
-        layout = [(f"obs_{i}", float("nan")) for i in range(num_obs)]
+        layout = [(f"obs_{i}", float("nan"), None) for i in range(num_obs)]
     mjm = env.mjm
     stiffness = mjm.actuator_gainprm[:, 0]  # position actuators: force = kp (ctrl - q) - kd qdot
     damping = -mjm.actuator_biasprm[:, 2]
     meta = {
         "task": task or "",
         "checkpoint": str(checkpoint or ""),
-        "observation_names": [name for name, _ in layout],
-        "observation_scales": [float(scale) for _, scale in layout],
+        "observation_names": [name for name, _, _ in layout],
+        "observation_scales": [float(scale) for _, scale, _ in layout],
+        "observation_clips": [clip for _, _, clip in layout],  # [low, high] on the term before its scale, or null
         "clip_observations": float(env.cfg.normalization.clip_observations),
+        "clip_actions": float(env.cfg.normalization.clip_actions),  # on the network's output, before action_scale
         "action_names": list(env.layout.joint_names),
         "action_scale": float(env.cfg.control.action_scale),
         "default_joint_pos": [float(x) for x in env.default_dof_pos[0].tolist()],
