@@ -54,6 +54,15 @@ def test_resume_continues_from_checkpoint(trained):
     assert resumed.current_learning_iteration == 2
     for a, b in zip(runner.alg.get_policy().state_dict().values(), resumed.alg.get_policy().state_dict().values()):
         assert torch.equal(a, b)
+    # the rest of the learner too: the critic, Adam's moments and step counts, the adapted learning rate
+    for a, b in zip(runner.alg.critic.state_dict().values(), resumed.alg.critic.state_dict().values()):
+        assert torch.equal(a, b)
+    saved, loaded = runner.alg.optimizer.state_dict()["state"], resumed.alg.optimizer.state_dict()["state"]
+    assert saved.keys() == loaded.keys() and saved
+    for key in saved:
+        for name in ("exp_avg", "exp_avg_sq", "step"):
+            assert torch.equal(saved[key][name], loaded[key][name]), (key, name)
+    assert float(resumed.alg.learning_rate) == float(runner.alg.learning_rate)
     resumed.learn(1)
     assert resumed.current_learning_iteration == 2
     assert (find_checkpoint(tmp_path / "gente_biped_flat")).name == "model_2.pt"
