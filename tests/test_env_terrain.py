@@ -409,3 +409,23 @@ def test_the_forwards_stage_gives_the_steps_own_numbers():
     with patch.object(Simulation, "_substeps", _plain_substeps), patch.object(Simulation, "recompute", _plain_recompute):
         plain = run()
     assert all(torch.equal(a, b) for a, b in zip(staged, plain, strict=True))
+
+
+def test_play_draws_every_terrain_type_of_the_task_not_its_first_five_columns():
+    """gente-play and gente-view --play (task_registry.get_play_cfgs) build a 5 x 5 grid: as a curriculum its five
+    columns would be the first five of the biped's types only (with a warning); drawn by the task's proportions
+    its tiles show types from all over the list, and nothing warns."""
+    import warnings
+
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.terrain.terrain import Terrain
+
+    env_cfg, _ = task_registry.get_play_cfgs("gente_biped", 16)
+    assert env_cfg.env.num_envs == 16 and not env_cfg.noise.add_noise and not env_cfg.domain_rand.push_robots
+    assert (env_cfg.terrain.num_rows, env_cfg.terrain.num_cols, env_cfg.terrain.mode) == (5, 5, "random")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        terrain = Terrain(env_cfg.terrain, 16)
+    types = list(env_cfg.terrain.terrain_types)
+    shown = {types.index(name) for name in terrain.tile_names.flatten()}
+    assert len(shown) > 5 and max(shown) >= 5, sorted(shown)

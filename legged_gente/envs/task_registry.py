@@ -112,6 +112,22 @@ class TaskRegistry:
         _, env_cfg, train_cfg = self.tasks[name]
         return env_cfg(), train_cfg()
 
+    def get_play_cfgs(self, name: str, num_envs: int) -> tuple[LeggedRobotCfg, LeggedRobotCfgPPO]:
+        """The task's configs for watching a policy (gente-play, gente-view --play), as legged_gym's play: at most
+        ``num_envs`` robots, no observation noise or pushes, a grid of at most 5 x 5 tiles whose terrain types are
+        drawn by the task's proportions (a curriculum's columns would show only its first five types)."""
+        env_cfg, train_cfg = self.get_cfgs(name)
+        env_cfg.env.num_envs = min(env_cfg.env.num_envs, num_envs)
+        env_cfg.noise.add_noise = False
+        env_cfg.domain_rand.push_robots = False
+        env_cfg.terrain.num_rows = min(env_cfg.terrain.num_rows, 5)
+        env_cfg.terrain.num_cols = min(env_cfg.terrain.num_cols, 5)
+        if env_cfg.terrain.mode == "curriculum":
+            env_cfg.terrain.mode = "random"
+        env_cfg.terrain.curriculum = False
+        env_cfg.sim.torch_compile = False  # for a few robots the compile (~20 s) costs more than it saves
+        return env_cfg, train_cfg
+
     def make_env(self, name: str, args=None, env_cfg: LeggedRobotCfg | None = None):
         """The task's env with ``args`` (argparse namespace from utils.args) applied to its config."""
         default_env_cfg, train_cfg = self.get_cfgs(name)

@@ -76,14 +76,7 @@ def play(args) -> dict:
     if getattr(args, "pretrained", False):
         pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
         check_log_root(args.log_root, default_log_root())  # its exports go there
-    env_cfg, train_cfg = task_registry.get_cfgs(args.task)
-    env_cfg.env.num_envs = min(env_cfg.env.num_envs, 16)
-    env_cfg.noise.add_noise = False
-    env_cfg.domain_rand.push_robots = False
-    env_cfg.terrain.num_rows = min(env_cfg.terrain.num_rows, 5)
-    env_cfg.terrain.num_cols = min(env_cfg.terrain.num_cols, 5)
-    env_cfg.terrain.curriculum = False
-    env_cfg.sim.torch_compile = False  # for 16 robots the compile (~20 s) costs more than it saves
+    env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, 16)
     apply_args(args, env_cfg, train_cfg)
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
     log_root = Path(args.log_root) if getattr(args, "log_root", None) else default_log_root()

@@ -120,14 +120,8 @@ def _make_play(args):
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.viewer.rollout import Recorder
 
-    env_cfg, train_cfg = task_registry.get_cfgs(args.task)
+    env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, args.num_envs or args.robots)
     env_cfg.env.num_envs = args.num_envs or args.robots
-    env_cfg.noise.add_noise = False
-    env_cfg.domain_rand.push_robots = False
-    env_cfg.terrain.num_rows = min(env_cfg.terrain.num_rows, 5)
-    env_cfg.terrain.num_cols = min(env_cfg.terrain.num_cols, 5)
-    env_cfg.terrain.curriculum = False
-    env_cfg.sim.torch_compile = False
     apply_args(args, env_cfg, train_cfg)
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
     if args.policy == "zero":
