@@ -56,8 +56,8 @@ class SyncFreeGaussianDistribution(GaussianDistribution):
 def mixed_precision_on_cuda_only(train_cfg: dict, device: str | torch.device) -> None:
     """``algorithm.use_mixed_precision`` (bf16 autocast of the update's forward pass) applies on CUDA devices only,
     as ``runner.matmul_precision`` does: on the CPU bf16 autocast made the update slower, so the update stays
-    fp32 there. Rewrites the setting before the algorithm is built, so the run's saved config holds what ran;
-    the runner and the CUDA-graph check both apply it here."""
+    fp32 there. Rewrites the setting in the runner's config before the algorithm is built (the task registry
+    copies the outcome into the run's config.json); the runner and the CUDA-graph check both apply it here."""
     algorithm = train_cfg["algorithm"]
     algorithm["use_mixed_precision"] = (bool(algorithm.get("use_mixed_precision"))
                                         and torch.device(device).type == "cuda")
@@ -197,8 +197,9 @@ class GentePPO(PPO):
         group from the checkpoint, and one saved on the CPU or by rsl-rl's PPO (capturable False, fused off, a float
         rate) cannot be captured in the CUDA graph. Its step counts go to the parameters' device, as fused and
         capturable Adam keep them."""
+        built = {key: self.optimizer.defaults[key] for key in ("fused", "foreach", "capturable")}  # load keeps these
         for group in self.optimizer.param_groups:
-            group.update(fused=True, foreach=None, capturable=self._graphed)
+            group.update(built)
             for parameter in group["params"]:
                 state = self.optimizer.state.get(parameter, {})
                 if "step" in state:
