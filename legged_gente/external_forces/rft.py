@@ -19,7 +19,8 @@ from __future__ import annotations
 import warp as wp
 
 from legged_gente.external_forces.contact import surface_height_fn
-from legged_gente.external_forces.kernels import MODEL, ZETA, apply_force, bulldozing_width_fn, point_velocity
+from legged_gente.external_forces.kernels import (
+    MODEL, ZETA, apply_force, bulldozing_width_fn, point_velocity, sole_point)
 from legged_gente.external_forces.models import RFT_GENERIC
 
 NX, NY = 4, 2
@@ -156,7 +157,7 @@ def rft_force_kernel(
                 total = total + force
     foot_support[w, f] = support / float(NX * NY)
     if rft != 0:
-        p = xpos[w, b] + xm @ (foot_offset[f] - wp.vec3(0.0, 0.0, foot_drop[f]))
+        p = sole_point(xpos, xmat, w, b, foot_offset[f] - wp.vec3(0.0, 0.0, foot_drop[f]))
         v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
         depth = surface_height_fn(heights, hf_origin, hf_res, p[0], p[1])[3] - p[2]
         face = bulldozing_width_fn(xm, wp.vec3(v[0], v[1], 0.0), sole_length, sole_width, sole_disc)
