@@ -135,7 +135,7 @@ def test_the_sole_contacts_are_timed_apart_and_the_force_timing_leaves_the_state
     env, _ = task_registry.make_env("gente_biped", env_cfg=cfg, args=argparse.Namespace(device="cpu"))
     benchmark.settle(env, 0.3)
     sim, forces = env.sim, env.forces
-    sim.recompute()  # the contacts of the current state
+    sim.recompute(torch.ones(3, dtype=torch.bool))  # the contacts of the current state
     nacon = int(sim.d.nacon.numpy()[0])
     state = [t.clone() for t in sim.substep_state]
     before = sim.d.contact.geom.numpy()[:nacon].copy()

@@ -373,8 +373,8 @@ def _plain_substeps(sim, decimation):
     sim._contact_forces()
 
 
-def _plain_recompute(sim):
-    """The reference forward: MuJoCo-Warp's own, then the hooks; what they integrate put back."""
+def _plain_recompute(sim, mask):
+    """The reference forward: MuJoCo-Warp's own in every world, then the hooks; what they integrate put back."""
     with sim.substep_state_kept():
         mjw.forward(sim.m, sim.d)
         for hook in sim.after_substep:

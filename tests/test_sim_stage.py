@@ -115,6 +115,37 @@ def test_writes_between_the_forward_and_the_step_are_seen():
     _assert_same_state(sim, d)
 
 
+def test_the_forward_solves_the_constraints_of_the_worlds_it_is_given_only():
+    """The forward's constraint solve serves the worlds in its mask (a step's resets) only: the others keep their
+    last substep's contact forces, so their rows are left unsolved. The reset world's constraint forces are those
+    of ``mjw.forward``, the row counts are the staged first half's, and the next step is bitwise ``mjw.step``'s."""
+    sim, m, d = _pair("implicitfast")
+    ctrl = torch.full((WORLDS, 1), 0.3)
+    sim.ctrl.copy_(ctrl)
+    for _ in range(20):  # landed: every world has contact rows
+        sim.step(DECIMATION)
+        _reference_step(m, d, ctrl)
+    nefc = wp.to_torch(d.nefc).clone()
+    assert (nefc > 0).all()
+    last_substep = wp.to_torch(sim.d.efc.force).clone()
+
+    first = torch.tensor([True, False, False])
+    sim.forward(first)
+    with wp.ScopedDevice("cpu"):
+        mjw.forward(m, d)
+    solved, reference = wp.to_torch(sim.d.efc.force), wp.to_torch(d.efc.force)
+    assert torch.equal(sim.nefc, wp.to_torch(d.nefc))
+    assert torch.equal(solved[0, :nefc[0]], reference[0, :nefc[0]])
+    for world in (1, 2):
+        rows = slice(0, int(nefc[world]))
+        assert not torch.equal(reference[world, rows], last_substep[world, rows])  # a full forward would solve them
+        assert torch.equal(solved[world, rows], last_substep[world, rows])
+
+    sim.step(DECIMATION)
+    _reference_step(m, d, ctrl)
+    _assert_same_state(sim, d)
+
+
 def test_what_the_two_stage_substep_does_not_run_is_refused_with_the_fix():
     mjm = mujoco.MjModel.from_xml_string(HOPPER.format(integrator="RK4"))
     with pytest.raises(ValueError, match="integrator mjINT_RK4 .* set sim.integrator to 'euler' or 'implicitfast'"):

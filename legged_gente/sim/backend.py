@@ -60,6 +60,15 @@ def _body_contact_forces(
     wp.atomic_sub(body_force, world, geom_bodyid[geoms[0]], f)
 
 
+@wp.kernel
+def _keep_rows_of(worlds: wp.array[bool], nefc: wp.array[int], kept: wp.array[int]):
+    """Keep each world's constraint-row count; leave rows only in ``worlds``: the solver skips the others."""
+    world = wp.tid()
+    kept[world] = nefc[world]
+    if not worlds[world]:
+        nefc[world] = 0
+
+
 class Simulation:
     """``nworld`` copies of one MjModel on a Warp device, stepped ``decimation`` substeps at a time."""
 
@@ -76,6 +85,7 @@ class Simulation:
             self.m.opt.warn_overflow &= ~(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
             self.d = mjw.make_data(mjm, nworld=num_worlds, nconmax=sim_cfg.nconmax, njmax=sim_cfg.njmax)
             self.body_contact_force_wp = wp.zeros((num_worlds, mjm.nbody), dtype=wp.vec3)
+            self._nefc_kept = wp.zeros_like(self.d.nefc)
         opt = self.m.opt
         if opt.integrator not in SPLIT_INTEGRATORS:
             raise ValueError(f"Simulation: integrator {mujoco.mjtIntegrator(opt.integrator).name} is not run by the "
@@ -262,7 +272,7 @@ class Simulation:
         if not self.wp_device.is_cuda and not bool(mask.any()):
             return
         last = [t.clone() for t in self.observed]
-        self.recompute()
+        self.recompute(mask)
         for t, old in zip(self.observed, last):
             t.copy_(torch.where(mask.view(-1, *[1] * (t.dim() - 1)), t, old))
 
@@ -276,14 +286,21 @@ class Simulation:
             for t, old in zip(self.substep_state, kept):
                 t.copy_(old)
 
-    def recompute(self) -> None:
-        """The Warp work of :meth:`forward`, in every world: the next substep's first half, computed ahead and
-        kept for it (with the force fields' callbacks); the second half of MuJoCo's forward, the
-        ``after_substep`` hooks and the per-body contact forces. ``substep_state`` is left as it was."""
+    def recompute(self, mask: torch.Tensor) -> None:
+        """The Warp work of :meth:`forward`: the next substep's first half in every world, computed ahead and kept
+        for it (with the force fields' callbacks); the second half of MuJoCo's forward, the ``after_substep``
+        hooks and the per-body contact forces, with the constraints solved in the worlds in ``mask`` only (the
+        others' constraint forces are not observed: they keep their last substep's). ``substep_state`` is left as
+        it was."""
         with wp.ScopedDevice(self.wp_device):
             self._stage()
             self._use_stage()
+            # no rows, no solver work: the solver's iterations and line searches run per constraint row. The row
+            # counts go back before anything reads them (the next substep solves the staged rows)
+            wp.launch(_keep_rows_of, dim=self.num_worlds, inputs=[wp.from_torch(mask.contiguous(), dtype=wp.bool),
+                                                                   self.d.nefc, self._nefc_kept])
             self._acceleration()
+            wp.copy(self.d.nefc, self._nefc_kept)
             for hook in self.after_substep:
                 hook()
             self._contact_forces()
