@@ -214,6 +214,14 @@ def test_timeout_must_be_a_finite_positive_number(timeout):
     assert str(info.value) == f"timeout must be > 0 and at most 86400 seconds, got {timeout}."
 
 
+@pytest.mark.parametrize("max_retries", [-1, 11, 10**6])
+def test_correction_rounds_are_bounded(max_retries):
+    """Each round is a request of up to ``timeout`` seconds: their number is capped so a run's time is bounded."""
+    with pytest.raises(ValueError) as info:
+        OpenAIBackend("http://127.0.0.1:9/v1", "m", max_retries=max_retries)
+    assert str(info.value) == f"max_retries must be between 0 and 10, got {max_retries}."
+
+
 def _bumps_call(height, region="full", mode="add", i=0):
     return _tool_call("test_bumps", {"height": height, "region": region, "mode": mode}, i)
 

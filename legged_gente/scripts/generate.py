@@ -18,7 +18,7 @@ import math
 import sys
 from pathlib import Path
 
-from legged_gente.generation.backends import MAX_TIMEOUT, GenerationError
+from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, GenerationError
 from legged_gente.generation.backends.image import open_image
 from legged_gente.generation.emit import DEFAULT_BASE, emit, resolve_base
 from legged_gente.generation.pipeline import BACKENDS, generate_spec
@@ -78,7 +78,7 @@ def build_parser() -> Parser:
                    help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
     p.add_argument(*flag("--api-key-env"), default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
     p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), default=60.0, help="request timeout in seconds (default 60)")
-    p.add_argument(*flag("--max-retries"), type=int, default=3, help="correction rounds for invalid tool calls (default 3)")
+    p.add_argument(*flag("--max-retries"), type=int, default=3, help=f"correction rounds for invalid tool calls (default 3, at most {MAX_RETRIES})")
     p.add_argument("--seed", type=_seed, default=0, help="terrain seed (default 0)")
     p.add_argument("--size", type=_positive(), default=20.0, help="tile side in metres (default 20)")
     p.add_argument("--resolution", type=_positive(), default=0.1, help="cell size in metres (default 0.1)")
@@ -101,8 +101,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--backend openai needs --base-url and --model.")
     if args.backend == "planner" and (args.base_url or args.model or args.two_phase or args.toolset != "ours"):
         parser.error("--base-url/--model/--two-phase/--toolset are for --backend openai.")
-    if args.max_retries < 0:
-        parser.error("--max-retries must be >= 0.")
+    if not 0 <= args.max_retries <= MAX_RETRIES:
+        parser.error(f"--max-retries must be between 0 and {MAX_RETRIES}, got {args.max_retries}.")
     # the spec's own limits, checked before anything is generated
     if args.text is not None and len(args.text) > MAX_STRING_CHARS:
         parser.error(f"--text: has {len(args.text)} characters; at most {MAX_STRING_CHARS} are allowed.")

@@ -12,6 +12,9 @@ from legged_gente.generation.validation import ToolCall
 
 MAX_TIMEOUT = 86_400.0
 """Longest deadline of a request to a server, in seconds (a day; the socket layer overflows near 1e10 s)."""
+MAX_RETRIES = 10
+"""Most correction rounds after a model's first answer: each is a request of up to the timeout, so a run's time
+stays bounded (a model that cannot fix its calls in ten rounds does not in a hundred)."""
 
 
 class GenerationError(RuntimeError):

@@ -43,7 +43,7 @@ from typing import Any, Mapping
 
 from openai.types.chat import ChatCompletion
 
-from legged_gente.generation.backends import MAX_TIMEOUT, GenerationError, GenerationResult
+from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, GenerationError, GenerationResult
 from legged_gente.generation.backends.image import open_image
 from legged_gente.generation.tools import named_regions, tool_schemas
 from legged_gente.generation.validation import (
@@ -136,8 +136,8 @@ class OpenAIBackend:
         resolution: float = 0.1,
         toolset: str = "ours",
     ):
-        if max_retries < 0:
-            raise ValueError(f"max_retries must be >= 0, got {max_retries}.")
+        if not 0 <= max_retries <= MAX_RETRIES:
+            raise ValueError(f"max_retries must be between 0 and {MAX_RETRIES}, got {max_retries}.")
         if not 0 < timeout <= MAX_TIMEOUT:  # also refuses nan
             raise ValueError(f"timeout must be > 0 and at most {MAX_TIMEOUT:g} seconds, got {timeout}.")
         if toolset not in TOOLSETS:
