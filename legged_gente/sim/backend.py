@@ -146,17 +146,22 @@ class Simulation:
         if self._stage_versions != self._input_versions():
             with wp.ScopedDevice(self.wp_device):
                 self._stage()
+                self._put_back()
 
     def _stage(self) -> None:
         """The next substep's first half, ahead of it: its results stay in ``d``, and the substep state it
-        integrated is kept aside for the substep (``substep_state`` itself is put back)."""
+        integrated is kept aside for the substep, as is the state before it (``recompute`` puts that back)."""
         for state, _, before in self._stage_buffers:
             wp.copy(before, state)
         self._position_and_velocity()
-        for state, staged, before in self._stage_buffers:
+        for state, staged, _ in self._stage_buffers:
             wp.copy(staged, state)
-            wp.copy(state, before)
         self._stage_versions = self._input_versions()
+
+    def _put_back(self) -> None:
+        """The substep state as it was before the stage (the substep takes the stage's with ``_use_stage``)."""
+        for state, _, before in self._stage_buffers:
+            wp.copy(state, before)
 
     def _use_stage(self) -> None:
         """The substep state as the stage left it (``d`` holds the stage's results already)."""
@@ -293,8 +298,7 @@ class Simulation:
         others' constraint forces are not observed: they keep their last substep's). ``substep_state`` is left as
         it was."""
         with wp.ScopedDevice(self.wp_device):
-            self._stage()
-            self._use_stage()
+            self._stage()  # leaves the substep state as the stage integrated it, as the second half expects
             # no rows, no solver work: the solver's iterations and line searches run per constraint row. The row
             # counts go back before anything reads them (the next substep solves the staged rows)
             wp.launch(_keep_rows_of, dim=self.num_worlds, inputs=[wp.from_torch(mask.contiguous(), dtype=wp.bool),
@@ -304,8 +308,7 @@ class Simulation:
             for hook in self.after_substep:
                 hook()
             self._contact_forces()
-            for state, _, before in self._stage_buffers:
-                wp.copy(state, before)
+            self._put_back()
 
     @torch.compiler.disable
     def set_const(self) -> None:
