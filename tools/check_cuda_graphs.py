@@ -14,8 +14,8 @@ Any mismatch, of the env, the evaluation or PPO (a NaN difference included), exi
 
 Evaluation: ``gente-evaluate``'s rollout (the shipped policy of the task on two benchmark terrains) through the
 env's default step (whole-step graph, compiled) twice, the second run after a reset that follows the capture,
-and once with plain launches: the diverged and fallen robots must be the same, the mean tracking error and
-distance agree within STATISTICS_TOLERANCE.
+and once with plain launches: the diverged robots must be the same, the number of falls within one robot
+(FALLS_TOLERANCE), the mean tracking error and distance agree within STATISTICS_TOLERANCE.
 
 PPO update: GentePPO with its mini-batch graphs and rsl-rl's PPO update the same networks on the same
 synthetic rollouts (one mini-batch per epoch, so the shuffling draws do not matter); parameters, losses and
@@ -252,6 +252,9 @@ def main() -> None:
 
 ENV_TOLERANCE = 1e-3  # largest accepted difference of the first steps' observations and rewards
 STATISTICS_TOLERANCE = 0.1  # largest accepted relative difference of the run's mean reward
+# falls may differ by one robot: two runs of the same launches on a GPU order the contacts differently (atomics), so
+# a robot at the edge of falling may fall in one and not the other (seen once between two runs through the graph)
+FALLS_TOLERANCE = 1
 
 
 def largest(differences: list[float]) -> float:
@@ -318,8 +321,9 @@ def evaluation_agrees(task: str, robots_per_terrain: int = 32, episode_s: float 
 
 
 def compare_evaluations(runs: dict[str, dict], reference: str) -> bool:
-    """True when every run has the reference run's diverged and fallen robots, and its mean tracking error and
-    distance over the robots that did not diverge agree within STATISTICS_TOLERANCE (+ 0.02)."""
+    """True when every run has the reference run's diverged robots, its number of falls within
+    ``FALLS_TOLERANCE``, and its mean tracking error and distance over the robots that did not diverge within
+    STATISTICS_TOLERANCE (+ 0.02)."""
     def summary(m):
         kept = ~m["diverged"]
         return {"diverged": int(m["diverged"].sum()), "falls": int(m["fell"].sum()),
@@ -331,7 +335,7 @@ def compare_evaluations(runs: dict[str, dict], reference: str) -> bool:
     for name, metrics in runs.items():
         got = summary(metrics)
         print(f"evaluation, {name:>15}: " + ", ".join(f"{k} {v:.4g}" for k, v in got.items()))
-        agree &= (got["diverged"] == ref["diverged"] and got["falls"] == ref["falls"]
+        agree &= (got["diverged"] == ref["diverged"] and abs(got["falls"] - ref["falls"]) <= FALLS_TOLERANCE
                   and all(abs(got[k] - ref[k]) <= STATISTICS_TOLERANCE * abs(ref[k]) + 0.02
                           for k in ("tracking_error", "distance")))
         agree &= bool((metrics["diverged"] == runs[reference]["diverged"]).all())
