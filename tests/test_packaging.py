@@ -99,7 +99,7 @@ def test_shipped_data_is_found_from_any_directory(tmp_path, monkeypatch):
     assert resolve_path(biped) == Path(biped)
     with pytest.raises(FileNotFoundError, match="robot file 'my_robot.xml' not found"):
         resolve_path("my_robot.xml")
-    with pytest.raises(FileNotFoundError, match=r"shipped benchmark: \['flat', 'gente100', 'gente_original', 'steps'\]"):
+    with pytest.raises(FileNotFoundError, match=r"shipped benchmark: \['flat', 'gente100', 'gente_original', 'gente_val', 'steps'\]"):
         load_benchmark("gente1000")
 
 

@@ -1,7 +1,12 @@
-"""Rebuild the gente100 benchmark: 50 text prompts + 50 images -> planner specs, previews, manifest.
+"""Rebuild a benchmark of our own: text prompts + images -> planner specs, previews, manifest.
 
     python legged_gente/benchmarks/gente100/build.py            # rewrite images/, specs/, previews_*.png, manifest.json
     python legged_gente/benchmarks/gente100/build.py --check    # and run the checker on every item (non-zero exit on failure)
+    python legged_gente/benchmarks/gente100/build.py --set gente_val   # the validation set (see SETS)
+
+``gente100`` (50 prompts, 50 images) is for measuring; ``gente_val`` (30 prompts of its own, 20 images drawn from
+other seeds) is for choosing between training candidates, so that the scores reported on gente100 and
+gente_original are not those of a choice made on them.
 
 Everything is deterministic: the images are drawn from fixed seeds (half colour-coded sketch maps with the
 planner's LEGEND colours, half procedurally rendered scene pictures), and the offline planner backend maps
@@ -12,6 +17,7 @@ Heightfields are not stored: every consumer rebuilds them from the specs.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -26,6 +32,7 @@ from legged_gente.generation.spec import spec_name
 from legged_gente.terrain.terrain import preview_rgb
 
 ROOT = Path(__file__).resolve().parent
+BENCHMARKS = ROOT.parent
 TILE = 20.0  # m, side of every tile (the planner's default)
 RESOLUTION = 0.1  # m
 IMAGE_SIZE = 128  # px
@@ -166,6 +173,24 @@ def _scene(seed: int) -> tuple[str, Image.Image, list[str]]:
 
 
 # ------------------------------------------------------------------------------------------------- build
+@dataclasses.dataclass(frozen=True)
+class BenchmarkSet:
+    """Where a set's items come from: its prompts file (in its folder), the pictures' seeds (sketch maps, then
+    scene pictures) and the first spec seed of its text and image items."""
+
+    sketches: range
+    scenes: range
+    text_seed: int
+    image_seed: int
+
+
+SETS = {
+    "gente100": BenchmarkSet(sketches=range(25), scenes=range(25), text_seed=0, image_seed=100),
+    # other pictures (seeds after gente100's) and other spec seeds: no item shares a terrain with gente100
+    "gente_val": BenchmarkSet(sketches=range(25, 35), scenes=range(25, 35), text_seed=1000, image_seed=1100),
+}
+
+
 def read_prompts(path: Path = ROOT / "prompts.txt") -> list[str]:
     lines = [ln.strip() for ln in path.read_text().splitlines()]
     return [ln for ln in lines if ln and not ln.startswith("#")]
@@ -203,23 +228,25 @@ def _contact_sheet(tiles: list[Image.Image], cols: int, path: Path) -> None:
     sheet.save(path, optimize=True)
 
 
-def build(root: Path = ROOT) -> list[dict]:
+def build(name: str = "gente100") -> list[dict]:
+    root, plan = BENCHMARKS / name, SETS[name]
     (root / "specs").mkdir(exist_ok=True)
     (root / "images").mkdir(exist_ok=True)
     items, text_tiles, image_tiles = [], [], []
     for k, prompt in enumerate(read_prompts(root / "prompts.txt")):
         item_id = f"text_{k:02d}_{spec_name(prompt)}"
-        spec, _ = generate_spec(prompt, seed=k, size_x=TILE, size_y=TILE, resolution=RESOLUTION, name=item_id)
+        spec, _ = generate_spec(prompt, seed=plan.text_seed + k, size_x=TILE, size_y=TILE, resolution=RESOLUTION,
+                                name=item_id)
         spec.save(root / "specs" / f"{item_id}.json")
         items.append({"id": item_id, "kind": "text", "prompt": prompt, "spec": f"specs/{item_id}.json"})
         text_tiles.append(_thumbnail(spec, 96))
-    pictures = [_sketch(k) + (None,) for k in range(25)] + [_scene(k) for k in range(25)]
+    pictures = [_sketch(k) + (None,) for k in plan.sketches] + [_scene(k) for k in plan.scenes]
     for k, (stem, image, names) in enumerate(pictures):
         item_id = f"image_{k:02d}_{stem}"
         image_path = root / "images" / f"{item_id}.png"
         image.save(image_path, optimize=True)
         names = sketch_names(image) if names is None else names
-        spec, _ = generate_spec(image=image_path, seed=100 + k, size_x=TILE, size_y=TILE, resolution=RESOLUTION,
+        spec, _ = generate_spec(image=image_path, seed=plan.image_seed + k, size_x=TILE, size_y=TILE, resolution=RESOLUTION,
                                 name=item_id)
         spec.save(root / "specs" / f"{item_id}.json")
         items.append({"id": item_id, "kind": "image", "image": f"images/{item_id}.png", "names": names,
@@ -230,24 +257,26 @@ def build(root: Path = ROOT) -> list[dict]:
         image_tiles.append(pair)
     _contact_sheet(text_tiles, 10, root / "previews_text.png")
     _contact_sheet(image_tiles, 10, root / "previews_image.png")
-    manifest = {"name": "gente100", "tile_size": [TILE, TILE], "resolution": RESOLUTION, "items": items}
+    manifest = {"name": name, "tile_size": [TILE, TILE], "resolution": RESOLUTION, "items": items}
     (root / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
     return items
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--set", choices=sorted(SETS), default="gente100", help="which benchmark to build")
     parser.add_argument("--check", action="store_true", help="run the checker on every item after building")
     args = parser.parse_args(argv)
-    items = build()
-    print(f"built {len(items)} items in {ROOT}")
+    root = BENCHMARKS / args.set
+    items = build(args.set)
+    print(f"built {len(items)} items in {root}")
     if not args.check:
         return 0
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.generation.checker import check_item
 
     failed = 0
-    for item in load_benchmark(ROOT):
+    for item in load_benchmark(root):
         result = check_item(item)
         if not result.ok:
             failed += 1
