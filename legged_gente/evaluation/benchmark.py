@@ -46,6 +46,11 @@ class Item:
         return TerrainSpec.load(self.spec_path)
 
 
+def shipped_benchmarks() -> list[str]:
+    """The names of the benchmarks shipped with the package."""
+    return sorted(p.parent.name for p in SHIPPED.glob("*/manifest.json"))
+
+
 def benchmark_root(root: str | Path) -> Path:
     """A benchmark folder as given, else a shipped one by name (``gente100``) or by ``benchmarks/<name>``."""
     given = Path(root).expanduser()
@@ -63,7 +68,7 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     manifest = root / "manifest.json"
     if not manifest.is_file():
         raise FileNotFoundError(f"{manifest} not found; pass a benchmark folder with a manifest.json, or a shipped "
-                                f"benchmark: {sorted(p.parent.name for p in SHIPPED.glob('*/manifest.json'))}.")
+                                f"benchmark: {shipped_benchmarks()}.")
     try:
         data = json.loads(manifest.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:

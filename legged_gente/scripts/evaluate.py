@@ -21,7 +21,7 @@ from legged_gente.utils.args import (
 
 import_mujoco("gente-evaluate")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
-from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN
+from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN, shipped_benchmarks
 
 
 def edge_margin(text: str) -> float | None:
@@ -43,7 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--exported", help="policy.onnx exported by gente-play (run with onnxruntime on the CPU)")
     src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
-    p.add_argument("--benchmark", default="gente100", help="a shipped benchmark (gente100) or a folder with a manifest.json")
+    p.add_argument("--benchmark", default="gente100", help=f"a shipped benchmark ({', '.join(shipped_benchmarks())}; gente_val is for choosing "
+                                                   "between candidates) or a folder with a manifest.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
     p.add_argument(*flag("--robots_per_terrain"), type=int, default=16)
