@@ -10,7 +10,8 @@ gente_original are not those of a choice made on them.
 
 Everything is deterministic: the images are drawn from fixed seeds (half colour-coded sketch maps with the
 planner's LEGEND colours, half procedurally rendered scene pictures), and the offline planner backend maps
-prompts and images to specs without randomness (each spec's own seed is its item number).
+prompts and images to specs without randomness (each spec's own seed is its set's first seed plus its item
+number, ``SETS``).
 Heightfields are not stored: every consumer rebuilds them from the specs.
 """
 
@@ -246,8 +247,8 @@ def build(name: str = "gente100") -> list[dict]:
         image_path = root / "images" / f"{item_id}.png"
         image.save(image_path, optimize=True)
         names = sketch_names(image) if names is None else names
-        spec, _ = generate_spec(image=image_path, seed=plan.image_seed + k, size_x=TILE, size_y=TILE, resolution=RESOLUTION,
-                                name=item_id)
+        spec, _ = generate_spec(image=image_path, seed=plan.image_seed + k, size_x=TILE, size_y=TILE,
+                                resolution=RESOLUTION, name=item_id)
         spec.save(root / "specs" / f"{item_id}.json")
         items.append({"id": item_id, "kind": "image", "image": f"images/{item_id}.png", "names": names,
                       "spec": f"specs/{item_id}.json"})
