@@ -150,7 +150,7 @@ class Simulation:
 
     def _stage(self) -> None:
         """The next substep's first half, ahead of it: its results stay in ``d``, and the substep state it
-        integrated is kept aside for the substep, as is the state before it (``recompute`` puts that back)."""
+        integrated is kept aside for the substep, as is the state before it (``_put_back`` restores that)."""
         for state, _, before in self._stage_buffers:
             wp.copy(before, state)
         self._position_and_velocity()
@@ -267,7 +267,9 @@ class Simulation:
         contacts (the force fields' contact filter included: ground friction, soil, analytic sole contacts),
         passive forces, constraint forces; then the ``after_substep`` hooks (the force fields' observation) and
         the per-body contact forces. The worlds in ``mask`` take the new values of every ``observed`` tensor; the
-        others keep their last substep's.
+        others keep their last substep's. Only the masked worlds' constraints are solved, so what derives from the
+        solve in ``d`` (qacc, constraint forces, acceleration sensors) is the forward's in those worlds only: a
+        subclass that observes such a value registers its tensor in ``observed``.
 
         Physics-neutral: the solver's warm start and everything in ``substep_state`` (what the callbacks and
         hooks integrate once per substep, e.g. soil ruts, slip) stay as they were, in every world. Its first
