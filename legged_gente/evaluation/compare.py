@@ -1,0 +1,89 @@
+"""Two evaluations of the same benchmark, compared terrain by terrain: is one policy better, or is the difference
+within what two evaluations of one policy already differ by?
+
+    python -m legged_gente.evaluation.compare eval_a/report.csv eval_b/report.csv [--metric success_rate]
+
+For each terrain the difference B - A of the metric; their mean (each terrain weighs the same) and its standard
+error, sample SD / sqrt(n) (a paired comparison: the terrains' own difficulty cancels). Per group too: the item
+kinds and the categories of ``report.py``. A difference is "resolved" when it exceeds two standard errors.
+Choose between training candidates on ``gente_val`` this way, and report on gente100 and gente_original.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+from legged_gente.evaluation.benchmark import KINDS
+from legged_gente.evaluation.report import CATEGORIES
+
+RESOLVED_AT = 2.0
+"""A mean difference counts as resolved beyond this many standard errors (about 95 % two-sided)."""
+
+
+def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], float]]:
+    """Terrain name -> (its groups: kind and categories, the metric), from a gente-evaluate report.csv."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file; give the report.csv that gente-evaluate --out wrote.")
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows or not {"row", "name", "kind", "categories", metric} <= set(rows[0]):
+        raise ValueError(f"{path} is not a gente-evaluate report.csv with a {metric!r} column (row, name, kind, "
+                         f"categories, {metric}); give the report.csv that gente-evaluate --out wrote.")
+    terrains = {}
+    for row in rows:
+        if row["row"] == "terrain":
+            value = float(row[metric]) if row[metric] else math.nan
+            terrains[row["name"]] = ({row["kind"], *filter(None, row["categories"].split("+"))}, value)
+    return terrains
+
+
+def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") -> dict[str, dict]:
+    """Per group ("all", the kinds, the categories present): terrains, mean of A, mean of B, mean difference
+    B - A, its standard error (NaN for one terrain) and whether it is resolved."""
+    first, second = read_terrains(a, metric), read_terrains(b, metric)
+    if first.keys() != second.keys():
+        raise ValueError(f"compare evaluations of the same benchmark: {b} lacks {sorted(first.keys() - second.keys())}, "
+                         f"has {sorted(second.keys() - first.keys())} that {a} has not.")
+    pairs = {name: (groups, first[name][1], value) for name, (groups, value) in second.items()
+             if math.isfinite(first[name][1]) and math.isfinite(value)}
+    out = {}
+    for group in ("all", *KINDS, *CATEGORIES):
+        chosen = [(x, y) for groups, x, y in pairs.values() if group == "all" or group in groups]
+        if not chosen:
+            continue
+        n = len(chosen)
+        differences = [y - x for x, y in chosen]
+        mean = sum(differences) / n
+        se = math.sqrt(sum((d - mean) ** 2 for d in differences) / (n - 1) / n) if n > 1 else math.nan
+        out[group] = {"terrains": n, "a": sum(x for x, _ in chosen) / n, "b": sum(y for _, y in chosen) / n,
+                      "difference": mean, "se": se, "resolved": bool(abs(mean) > RESOLVED_AT * se)}
+    return out
+
+
+def main(argv=None) -> None:
+    from legged_gente.utils.args import Parser, run_command
+
+    parser = Parser(prog="python -m legged_gente.evaluation.compare", description=__doc__.split("\n\n")[0])
+    parser.add_argument("a", help="report.csv of evaluation A")
+    parser.add_argument("b", help="report.csv of evaluation B (differences are B - A)")
+    parser.add_argument("--metric", default="success_rate", help="a report column (default success_rate)")
+    args = parser.parse_args(argv)
+
+    def show(args) -> None:
+        rows = compare_reports(args.a, args.b, args.metric)
+        scale, unit = (100.0, " points") if args.metric.endswith("_rate") else (1.0, "")
+        print(f"{args.metric}, per terrain, B - A{unit} (A: {args.a}, B: {args.b})")
+        print(f"{'group':>18} {'terrains':>8} {'A':>8} {'B':>8} {'B - A':>8} {'SE':>7}")
+        for group, r in rows.items():
+            verdict = "resolved" if r["resolved"] else "not resolved"
+            print(f"{group:>18} {r['terrains']:>8d} {scale * r['a']:>8.2f} {scale * r['b']:>8.2f} "
+                  f"{scale * r['difference']:>+8.2f} {scale * r['se']:>7.2f}  {verdict}")
+
+    run_command(parser.prog, show, args)
+
+
+if __name__ == "__main__":
+    main()
