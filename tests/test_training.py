@@ -68,7 +68,7 @@ def test_resume_continues_from_checkpoint(trained):
     assert (find_checkpoint(tmp_path / "gente_biped_flat")).name == "model_2.pt"
 
 
-def test_play_exports_onnx_with_same_actions(trained, monkeypatch):
+def test_play_exports_onnx_with_same_actions(trained, monkeypatch, capsys):
     tmp_path = trained[0]
     # play builds the task's default train cfg: give it the tiny network the checkpoint holds
     original = task_registry.get_cfgs
@@ -83,6 +83,7 @@ def test_play_exports_onnx_with_same_actions(trained, monkeypatch):
     args = tiny_args(tmp_path)
     args.steps, args.video = 10, False
     out = play_script.play(args)
+    assert "curriculum" not in capsys.readouterr().out  # play has none: nothing to say about the checkpoint's
     assert out["onnx"].is_file() and out["plot"].is_file()
     # per run: beside the checkpoint it came from, one file (no policy.onnx.data)
     assert out["onnx"].parent == out["checkpoint"].parent / "exported"

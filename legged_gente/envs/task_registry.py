@@ -178,7 +178,8 @@ class TaskRegistry:
         if runner_cfg.resume:
             runner.loaded_checkpoint = load_newest_readable(runner, experiment_root, runner_cfg.load_run,
                                                             runner_cfg.checkpoint)
-            print(runner.curriculum_message)
+            if env.terrain_curriculum:  # play's and flat tasks' envs have none: nothing to say
+                print(runner.curriculum_message)
             # a checkpoint stores the last *finished* iteration; continue with the next one
             runner.current_learning_iteration += 1
         elif pretrained is not None:
