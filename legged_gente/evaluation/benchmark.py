@@ -16,6 +16,7 @@ Manifest format (written by ``legged_gente/benchmarks/gente100/build.py``)::
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import importlib.resources
 import json
@@ -63,7 +64,7 @@ def benchmark_root(root: str | Path) -> Path:
 
 
 def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]:
-    """The items of the benchmark at ``root`` (all, or those in ``ids``, in manifest order)."""
+    """The items of the benchmark at ``root``: all, in manifest order, or those in ``ids``, in that order."""
     root = benchmark_root(root)
     manifest = root / "manifest.json"
     if not manifest.is_file():
@@ -83,7 +84,15 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     except (KeyError, TypeError) as exc:
         raise ValueError(f"{manifest} is not a benchmark manifest ({type(exc).__name__}: {exc}): it needs "
                          f'{{"items": [{{"id", "kind", "spec", ...}}, ...]}} (docs/evaluation.md).') from None
+    repeated = _repeated([i.id for i in items])
+    if repeated:
+        raise ValueError(f"{manifest} lists item ids {repeated} more than once; give every item its own id (report "
+                         f"rows are named by it).")
     if ids is not None:
+        repeated = _repeated(ids)
+        if repeated:
+            raise ValueError(f"items {repeated} are given more than once; list each once (report rows are named by "
+                             f"their id).")
         known = {i.id: i for i in items}
         missing = [i for i in ids if i not in known]
         if missing:
@@ -92,6 +101,11 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     if not items:
         raise ValueError(f"{manifest} lists no items.")
     return items
+
+
+def _repeated(ids: list[str]) -> list[str]:
+    """The ids that occur more than once, each once, in order."""
+    return [i for i, count in collections.Counter(ids).items() if count > 1]
 
 
 def tile_geometry(specs: list[TerrainSpec]) -> tuple[float, float, float]:

@@ -93,6 +93,12 @@ def settle_steps(settle_s: float, dt: float) -> int:
     return int(round(settle_s / dt))
 
 
+def episode_steps(episode_s: float, dt: float) -> int:
+    """The policy steps of an evaluated episode, a partial last step counted whole. The quotient is rounded first:
+    0.14 s / 0.02 s is 7.000000000000001 in binary floating point, which is 7 steps, not 8."""
+    return math.ceil(round(episode_s / dt, 9))
+
+
 class Recorder:
     """Per-robot accumulators on the env's device, updated after every policy step from what the step left."""
 
@@ -207,6 +213,8 @@ class Evaluation:
             raise ValueError(f"robots_per_terrain must be >= 1, got {robots_per_terrain}.")
         if not episode_length_s > 0:
             raise ValueError(f"episode_s must be > 0 s, got {episode_length_s}.")
+        if not math.isfinite(episode_length_s):
+            raise ValueError(f"episode_s must be a finite time in s, got {episode_length_s}.")
         if mode not in ("velocity", "waypoints"):
             raise ValueError(f"mode {mode!r}: use 'velocity' or 'waypoints'.")
         self.items, self.mode, self.seed = list(items), mode, seed
@@ -214,7 +222,7 @@ class Evaluation:
         _, cols = lay_out_items(env_cfg.terrain, self.items)
         env_cfg.env.num_envs = len(self.items) * robots_per_terrain
         self.dt = env_cfg.sim.dt * env_cfg.control.decimation
-        self.num_steps = int(math.ceil(episode_length_s / self.dt))
+        self.num_steps = episode_steps(episode_length_s, self.dt)
         """Policy steps of the evaluated episode."""
         env_cfg.env.episode_length_s = episode_length_s + 1.0  # the env times no robot out inside it
         env_cfg.noise.add_noise = False
@@ -271,6 +279,8 @@ class Evaluation:
         env = self.env
         if not settle_s >= 0.0:
             raise ValueError(f"settle_s must be >= 0 s, got {settle_s}.")
+        if not math.isfinite(settle_s):
+            raise ValueError(f"settle_s must be a finite time in s, got {settle_s}.")
         if settle_steps(settle_s, self.dt) >= self.num_steps:
             raise ValueError(f"settle_s {settle_s} s leaves nothing of the {self.num_steps * self.dt:g} s episode to "
                              f"measure (steps of {self.dt:g} s); give a value in [0, episode_s - one step).")

@@ -93,6 +93,8 @@ class WaypointTask:
             raise ValueError(f"reach_distance must be > 0 m, got {reach_distance}.")
         if not speed > 0:
             raise ValueError(f"speed must be > 0 m/s, got {speed}.")
+        if not math.isfinite(speed):
+            raise ValueError(f"speed must be a finite speed in m/s, got {speed}.")
         self.waypoints = waypoints
         self.reach_distance = float(reach_distance)
         self.speed = float(speed)
@@ -143,6 +145,8 @@ def waypoint_episode_s(speed: float, count: int = WAYPOINTS, spacing: float = WA
     """s; the waypoint task's default episode: ``WAYPOINT_TIME_SLACK`` times the zigzag's length over ``speed``."""
     if not speed > 0:
         raise ValueError(f"speed must be > 0 m/s, got {speed}.")
+    if not math.isfinite(speed):
+        raise ValueError(f"speed must be a finite speed in m/s, got {speed}.")
     return WAYPOINT_TIME_SLACK * zigzag_length(count, spacing, lateral) / speed
 
 

@@ -1,0 +1,68 @@
+"""gente-evaluate's episode timing and its bad inputs: whole episodes get no extra step, and a time, a speed or an
+item list it cannot use is a one-line error, never a traceback or a silent run."""
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import torch
+
+BENCHMARK = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks" / "gente100"
+ITEM = "image_05_sketch_blocks"
+
+
+def test_an_episode_of_whole_policy_steps_gets_no_extra_step():
+    """gente_biped's policy step is sim.dt 0.005 s x decimation 4 = 0.02 s: 0.14 s is 7 steps (0.14 / 0.02 is
+    7.000000000000001 in binary floating point), 2.22 s is 111; a partial last step counts whole: 0.15 s is 8."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation, episode_steps
+
+    dt = 0.005 * 4
+    assert [episode_steps(s, dt) for s in (0.14, 2.22, 0.15, 10.0)] == [7, 111, 8, 500]
+    evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), [ITEM]), 1, "cpu", 0.14)
+    assert evaluation.num_steps == 7
+    result = evaluation.run(lambda obs: torch.zeros(1, evaluation.env.num_actions), settle_s=0.04, progress=False)
+    assert result.traces["pos"].shape[1] == 7
+    assert result.params["episode_length_s"] == pytest.approx(0.14)
+
+
+def test_an_infinite_episode_or_settle_time_is_a_one_line_error(tmp_path, capsys):
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+    from legged_gente.scripts.evaluate import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(BENCHMARK), "--items", ITEM,
+              "--episode_s", "inf", "--device", "cpu", "--out", str(tmp_path), "--no_progress"])
+    assert exit_info.value.code == 2
+    error = capsys.readouterr().err.strip()
+    assert error.startswith("gente-evaluate: error: episode_s") and "inf" in error and "\n" not in error
+    evaluation = Evaluation("gente_biped", load_benchmark(str(BENCHMARK), [ITEM]), 1, "cpu", 0.1)
+    with pytest.raises(ValueError, match="settle_s must be"):
+        evaluation.run(lambda obs: torch.zeros(1, evaluation.env.num_actions), settle_s=math.inf, progress=False)
+
+
+def test_an_infinite_waypoint_speed_is_refused_by_name():
+    """--speed inf made the default waypoint episode 1.5 * 12.8 m / inf = 0 s, refused as an episode_s nobody
+    gave; with --episode_s given, it commanded every robot an infinite forward velocity."""
+    from legged_gente.evaluation.tasks import WaypointTask, waypoint_episode_s
+
+    with pytest.raises(ValueError, match="speed must be a finite"):
+        waypoint_episode_s(math.inf)
+    with pytest.raises(ValueError, match="speed must be a finite"):
+        WaypointTask(torch.zeros(1, 4, 2), reach_distance=1.0, speed=math.inf)
+
+
+def test_an_item_given_twice_is_refused(tmp_path):
+    """Report rows are named by item id (and compared by it): two tiles of one id cannot be told apart."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    with pytest.raises(ValueError, match=f"{ITEM}.*more than once"):
+        load_benchmark(str(BENCHMARK), [ITEM, "text_02_wide_river_strong_current", ITEM])
+    manifest = json.loads((BENCHMARK / "manifest.json").read_text())
+    first = manifest["items"][0]
+    manifest["items"] = [first, {**first, "spec": manifest["items"][1]["spec"]}]
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(ValueError, match=f"{first['id']}.*more than once"):
+        load_benchmark(tmp_path)
