@@ -87,9 +87,11 @@ def checkpoint_candidates(experiment_root: Path | None, load_run=-1, checkpoint=
 
 
 def _names_nothing(name: str) -> bool:
-    """Whether ``name`` (module.attribute, as a pickle's GLOBAL) is missing from a module already imported; a name
-    whose module is not imported is not looked up (importing it would run its code)."""
+    """Whether ``name`` (module.attribute, as a pickle's GLOBAL) is no dotted Python name or is missing from a module
+    already imported; a name whose module is not imported is not looked up (importing it would run its code)."""
     parts = name.split(".")
+    if not all(part.isidentifier() for part in parts):
+        return True
     for split in range(len(parts) - 1, 0, -1):
         module = sys.modules.get(".".join(parts[:split]))
         if module is not None:
@@ -111,10 +113,10 @@ def load_checkpoint(path: str | Path, map_location=None) -> dict:
     try:
         loaded = torch.load(path, map_location=map_location, weights_only=True)
     except pickle.UnpicklingError as error:
-        # the safe unpickler names a refused object as a GLOBAL; anything else it stumbles on is a broken file,
-        # and so is a GLOBAL naming what does not exist in a module already loaded (a flipped bit in a name of
-        # torch's, which the zip's checksum does not catch)
-        refused = [line.strip() for line in str(error).splitlines() if "global" in line.lower()]
+        # the safe unpickler names a refused object as a GLOBAL; anything else it stumbles on (e.g. "Can only create
+        # new object for nn.Parameter ...") is a broken file, and so is a GLOBAL naming what does not exist in a
+        # module already loaded (a flipped bit in a name of torch's, which the zip's checksum does not catch)
+        refused = [line.strip() for line in str(error).splitlines() if "GLOBAL " in line]
         if refused and not any(_names_nothing(name) for name in re.findall(r"GLOBAL (\S+)", str(error))):
             raise CheckpointError(f"checkpoint {path} holds Python objects that the safe loader refuses ("
                                   f"{refused[0]}); legged_gente loads checkpoints with torch.load(weights_only=True), "
@@ -122,11 +124,17 @@ def load_checkpoint(path: str | Path, map_location=None) -> dict:
                                   ) from None
         reason = [line.strip() for line in str(error).splitlines() if line.strip()][-2:-1] or [type(error).__name__]
         raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (corrupt: {reason[0]}).") from None
-    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError, KeyError, IndexError) as error:
-        # KeyError, IndexError: the legacy unpickler reading bytes that are not a pickle (a text file)
-        first = str(error).splitlines()[0] if str(error) else ""
+    except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError, KeyError, IndexError, TypeError,
+            AttributeError) as error:
+        # KeyError, IndexError: the legacy unpickler reading bytes that are not a pickle (a text file); TypeError,
+        # AttributeError: torch rebuilding a tensor from a corrupt record. Only torch's first sentence: its next
+        # ones advise weights_only=False, with which a file can run code.
+        first = re.split(r"(?<=\.)\s", str(error).strip(), maxsplit=1)[0].split("\n")[0]
         raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (truncated, corrupt or not written by "
                                    f"torch.save: {type(error).__name__} {first}).") from None
+    if isinstance(loaded, dict) and "model_state_dict" in loaded and "actor_state_dict" not in loaded:
+        raise CheckpointError(f"checkpoint {path} is in an older rsl-rl's format (legged_gym's: actor and critic in "
+                              f"one model_state_dict), which rsl-rl-lib 5.5 cannot load; train the task anew here.")
     if not isinstance(loaded, dict) or "actor_state_dict" not in loaded:
         raise CheckpointError(f"checkpoint {path} is not an rsl-rl training checkpoint (no actor_state_dict); "
                               f"gente-play exports policies, checkpoints are the model_<iteration>.pt of a run.")
@@ -149,7 +157,8 @@ def _actor_outputs(state: dict) -> int | str:
     return int(weights[-1].shape[0]) if weights else "?"
 
 
-def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int, actor_state: dict) -> None:
+def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int, actor_state: dict,
+                          strict: bool = True) -> None:
     """A checkpoint made for another task (another robot or observation set) or another network size is a
     one-line error naming both, instead of torch's 'size mismatch' list."""
     saved = loaded["actor_state_dict"]
@@ -161,12 +170,23 @@ def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int
         raise CheckpointError(f"checkpoint {path} is for {checkpoint_summary(loaded)}; this task is "
                               f"{task or 'unnamed'} ({num_actions} actions). Pick a checkpoint of this task, or "
                               f"the task of this checkpoint (--task).")
-    for key, shape in _shapes(actor_state).items():
-        if key in saved and tuple(saved[key].shape) != shape:
-            raise CheckpointError(
-                f"checkpoint {path} does not fit this task's actor: {key} is {tuple(saved[key].shape)} in the "
-                f"checkpoint, {shape} here (another observation set or network size; use the run's own "
-                f"settings, e.g. --set actor.hidden_dims=[...] as recorded in its config.json).")
+    check_state_fits(saved, actor_state, path, "actor", strict)
+
+
+def check_state_fits(saved: dict, state: dict, path, module: str, strict: bool = True) -> None:
+    """The checkpoint's ``module`` (actor or critic) has the tensors of this run's (all of them when ``strict``,
+    as torch's load_state_dict), of the same shapes: else a one-line error naming the first difference, instead
+    of torch's list of missing, unexpected and resized keys."""
+    differences = [f"{key} is {tuple(saved[key].shape)} in the checkpoint, {shape} here"
+                   for key, shape in _shapes(state).items() if key in saved and tuple(saved[key].shape) != shape]
+    if strict:
+        differences += [f"{key} is here, not in the checkpoint" for key in state if key not in saved]
+        differences += [f"{key} is in the checkpoint, not here" for key in saved if key not in state]
+    if differences:
+        raise CheckpointError(
+            f"checkpoint {path} does not fit this task's {module}: {differences[0]} (another observation set or "
+            f"network; use the run's own settings, e.g. --set {module}.hidden_dims=[...] or "
+            f"{module}.obs_normalization=..., as recorded in its config.json).")
 
 
 def _shapes(state: dict) -> dict[str, tuple[int, ...]]:

@@ -194,18 +194,29 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         of another task; also restores the env's curriculum when the checkpoint has one that fits
         (``self.curriculum_message`` says what happened). The tensors go to ``map_location``, by default the
         runner's device: a run trained on a GPU continues on the CPU, or on cuda:1 from cuda:0."""
-        from legged_gente.utils.checkpoints import CheckpointError, check_checkpoint_fits, load_checkpoint
+        from legged_gente.utils.checkpoints import (CheckpointError, check_checkpoint_fits, check_state_fits,
+                                                    load_checkpoint)
 
         loaded = load_checkpoint(path, map_location or self.device)
-        check_checkpoint_fits(loaded, path, self.task_name, self.env.num_actions, self.alg.get_policy().state_dict())
-        if "critic_state_dict" not in loaded and (load_cfg is None or load_cfg.get("critic", False)):
+        check_checkpoint_fits(loaded, path, self.task_name, self.env.num_actions, self.alg.get_policy().state_dict(),
+                              strict)
+        wanted = {"critic": True, "optimizer": True, "iteration": True} if load_cfg is None else load_cfg  # rsl-rl's
+        if "critic_state_dict" not in loaded and wanted.get("critic"):
             raise CheckpointError(
                 f"checkpoint {path} holds only the policy (a shipped model.pt): play or evaluate it (gente-play "
                 f"--pretrained, gente-evaluate --checkpoint) or fine-tune it (gente-train --pretrained); resuming "
                 f"training needs a run's model_<N>.pt.")
+        missing = [key for part, key in (("optimizer", "optimizer_state_dict"), ("iteration", "iter"))
+                   if wanted.get(part) and key not in loaded]
+        if missing:
+            raise CheckpointError(f"checkpoint {path} has no {' or '.join(missing)}: resuming training needs a run's "
+                                  f"model_<N>.pt as gente-train writes it; play or evaluate this one (gente-play "
+                                  f"--load_run, gente-evaluate --checkpoint).")
+        if wanted.get("critic"):
+            check_state_fits(loaded["critic_state_dict"], self.alg.save()["critic_state_dict"], path, "critic", strict)
         if self.alg.load(loaded, load_cfg, strict):
             self.current_learning_iteration = loaded["iter"]
-        infos = loaded["infos"]
+        infos = loaded.get("infos")
         self.curriculum_message = (self.env.load_curriculum_state(infos["curriculum"])
                                    if infos and "curriculum" in infos else "the checkpoint has no curriculum state")
         return infos

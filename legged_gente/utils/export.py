@@ -34,8 +34,8 @@ def deployment_metadata(env, checkpoint: str | None = None, task: str | None = N
     """What a robot-side controller needs besides the network (all values strings; lists as JSON)."""
     layout = policy_observation_layout(env)
     num_obs = int(env.get_observations()["policy"].shape[1])
-    if len(layout) != num_obs:  # a subclass changed the observation: keep the scales out rather than lie
-        layout = [(f"obs_{i}", float("nan"), None) for i in range(num_obs)]
+    if len(layout) != num_obs:  # a subclass changed the observation: scales unknown (null; JSON has no NaN)
+        layout = [(f"obs_{i}", None, None) for i in range(num_obs)]
     mjm = env.mjm
     stiffness = mjm.actuator_gainprm[:, 0]  # position actuators: force = kp (ctrl - q) - kd qdot
     damping = -mjm.actuator_biasprm[:, 2]
@@ -43,7 +43,7 @@ def deployment_metadata(env, checkpoint: str | None = None, task: str | None = N
         "task": task or "",
         "checkpoint": str(checkpoint or ""),
         "observation_names": [name for name, _, _ in layout],
-        "observation_scales": [float(scale) for _, scale, _ in layout],
+        "observation_scales": [None if scale is None else float(scale) for _, scale, _ in layout],
         "observation_clips": [clip for _, _, clip in layout],  # [low, high] on the term before its scale, or null
         "clip_observations": float(env.cfg.normalization.clip_observations),
         "clip_actions": float(env.cfg.normalization.clip_actions),  # on the network's output, before action_scale
@@ -106,14 +106,18 @@ class OnnxPolicy:
             self.session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
         except Exception as error:  # onnxruntime raises its own exception types for a bad file
             raise ValueError(f"--exported {path}: not a readable ONNX policy ({str(error).splitlines()[0]})") from None
-        shape = self.session.get_inputs()[0].shape
-        out = self.session.get_outputs()[0].shape
+        inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
+        if len(inputs) != 1 or len(inputs[0].shape) != 2 or len(outputs[0].shape) != 2:
+            raise ValueError(f"--exported {path} takes {[(i.name, i.shape) for i in inputs]}: not a policy exported by "
+                             f"gente-play, which takes one input obs (batch, num_obs) and gives actions "
+                             f"(batch, num_actions); export it with gente-play")
+        shape, out = inputs[0].shape, outputs[0].shape
         if num_obs is not None and isinstance(shape[1], int) and shape[1] != num_obs:
             raise ValueError(f"--exported {path} takes {shape[1]} observations; this task's policy observation "
                              f"has {num_obs} (a policy of another task?)")
         if num_actions is not None and isinstance(out[1], int) and out[1] != num_actions:
             raise ValueError(f"--exported {path} gives {out[1]} actions; this task has {num_actions}")
-        self.input = self.session.get_inputs()[0].name
+        self.input = inputs[0].name
 
     def __call__(self, obs) -> torch.Tensor:
         x = obs["policy"]
