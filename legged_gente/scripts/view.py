@@ -28,6 +28,11 @@ import_mujoco("gente-view")  # before the imports below load it (a MUJOCO_GL it 
 
 from legged_gente.envs.task_registry import apply_args, default_log_root
 
+DEFAULT_ROBOTS = 4
+"""Robots drawn by ``--play`` when ``--robots`` is not given (fewer if ``--num_envs`` is smaller)."""
+TRACE_KEYS = ("ids", "dt", "qpos", "cmd", "vel", "active")
+"""What ``--traces`` replays from gente-evaluate's traces.npz."""
+
 
 def build_arg_parser():
     p = build_parser("See terrains and rollouts in the browser.", prog="gente-view", training=False)
@@ -43,7 +48,8 @@ def build_arg_parser():
     p.add_argument("--pretrained", action="store_true",
                    help="--play: the policy shipped with the package for --task (resources/policies/<task>/)")
     p.add_argument("--steps", type=int, default=500, help="--play: policy steps")
-    p.add_argument("--robots", type=int, default=4, help="--play: robots drawn and recorded")
+    p.add_argument("--robots", type=int, default=None,
+                   help=f"--play: robots drawn and recorded (default {DEFAULT_ROBOTS}, at most --num_envs)")
     p.add_argument("--record", help="--play: also write the rollout to this .npz")
     p.add_argument("--traces", help="gente-evaluate's traces.npz (with the benchmark folder as source)")
     p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
@@ -81,9 +87,16 @@ def _benchmark_items(root: Path, args):
     from legged_gente.viewer.rollout import open_npz
 
     with open_npz(args.traces) as f:
+        if "version" in f.files:
+            raise ValueError(f"{args.traces} is a rollout recorded by gente-view, not gente-evaluate's traces; open "
+                             f"it as the source: gente-view {args.traces}")
         if "qpos" not in f.files:
             raise ValueError(f"{args.traces} has no qpos (written by an older gente-evaluate); evaluate again to "
                              f"replay the robots.")
+        missing = [key for key in TRACE_KEYS if key not in f.files]
+        if missing:
+            raise ValueError(f"{args.traces} has no {', '.join(missing)}: it is not a traces.npz of gente-evaluate; "
+                             f"give the one it wrote for this benchmark.")
         ids = [str(i) for i in f["ids"]]
         item = args.item or ids[0]
         if item not in ids:
@@ -120,8 +133,9 @@ def _make_play(args):
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.viewer.rollout import Recorder
 
-    env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, args.num_envs or args.robots)
-    env_cfg.env.num_envs = args.num_envs or args.robots
+    robots = args.robots or min(DEFAULT_ROBOTS, args.num_envs or DEFAULT_ROBOTS)
+    env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, args.num_envs or robots)
+    env_cfg.env.num_envs = args.num_envs or robots
     apply_args(args, env_cfg, train_cfg)
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
     if args.policy == "zero":
@@ -135,7 +149,7 @@ def _make_play(args):
         log_root = args.log_root or default_log_root()
         runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=log_root)
         policy = runner.get_inference_policy(device=env.device)
-    return env, policy, Recorder(env, args.task, min(args.robots, env.num_envs))
+    return env, policy, Recorder(env, args.task, robots)
 
 
 def _run_play(env, policy, recorder, steps: int, record: str | None) -> None:
@@ -191,6 +205,9 @@ def main(argv=None) -> None:
                 terrain = items[0].build()
                 items[0].build = lambda: terrain
                 rollout, mjm = _trace_rollout(trace, args.task, terrain), robot_model(args.task)
+                if rollout.qpos.shape[-1] != mjm.nq:  # traces.npz does not name its task
+                    raise ValueError(f"{args.traces} holds robots of {rollout.qpos.shape[-1]} qpos values, the "
+                                     f"--task {args.task} robot {mjm.nq}; pass the --task it was evaluated with.")
         elif source.suffix == ".npz":
             rollout = Rollout.load(source)
             items = [TerrainItem(source.stem, lambda: BareTerrain(rollout.heights, rollout.material,
@@ -253,8 +270,11 @@ def check_flags(parser, args, source: Path | None) -> None:
         parser.error("--step opens a rollout paused: give a rollout .npz, --traces or --play")
     if args.seconds is not None and args.seconds < 0:
         parser.error(f"--seconds {args.seconds} must be >= 0")
-    if args.robots < 1:
+    if args.robots is not None and args.robots < 1:
         parser.error(f"--robots {args.robots} must be >= 1")
+    if args.robots is not None and args.num_envs is not None and args.robots > args.num_envs:
+        parser.error(f"--robots {args.robots} exceeds --num_envs {args.num_envs}: only simulated worlds can be "
+                     f"drawn; raise --num_envs or lower --robots")
 
 
 def _plane():

@@ -208,9 +208,10 @@ class Viewer:
 
 
 def _frames(source) -> dict:
-    """The arrays of ``source`` up to now: a Rollout's, or a live Recorder's stacked."""
+    """The arrays of ``source`` up to now: a Rollout's, or a live Recorder's complete steps (its ``add`` appends
+    one key after another while the player reads them)."""
     if hasattr(source, "frames"):
-        n = len(source.frames["qpos"])
+        n = min(len(v) for v in source.frames.values())
         return {k: v[:n] for k, v in source.frames.items()} | {"labels": source.labels}
     return {"qpos": source.qpos, "cmd": source.cmd, "vel": source.vel, "done": source.done, "fell": source.fell,
             "forces": source.forces, "force_points": source.force_points, "labels": source.force_labels}
@@ -258,6 +259,10 @@ class RolloutPlayer:
             if n != shown_len and n > 0:
                 self.step_gui.max = max(n - 1, 1)
                 self._plot()
+                paused = int(self.step_gui.value)
+                if not self.play_gui.value and shown_len <= paused < n:  # opened at a step not recorded until now
+                    self.draw(paused)
+                    self.focus(paused)
                 shown_len = n
             if self.play_gui.value and n > 0:
                 self.step_gui.value = (int(self.step_gui.value) + 1) % n if not hasattr(self.source, "frames") \
@@ -267,6 +272,8 @@ class RolloutPlayer:
     def focus(self, t: int, distance: float = 2.5) -> None:
         """Point the camera (initial and connected clients') at robot 0's base at step ``t``."""
         f = _frames(self.source)
+        if not len(f["qpos"]):
+            return  # a live recording without steps yet: the play loop focuses once the step is recorded
         base = np.asarray(f["qpos"][min(t, len(f["qpos"]) - 1)][0][:3], np.float64)
         position = base + distance * np.array([-0.6, -0.75, 0.45])
         self.server.initial_camera.look_at = tuple(base)

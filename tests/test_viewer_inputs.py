@@ -1,0 +1,175 @@
+"""gente-view's inputs that went wrong: traces of another robot or not traces at all, more robots than worlds,
+a live rollout opened at a step not recorded yet, and a live recording read halfway through a step."""
+
+from __future__ import annotations
+
+import socket
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from legged_gente.scripts import view as view_script
+from legged_gente.terrain.materials import MaterialMap
+from legged_gente.viewer.rollout import Rollout, robot_model
+
+FLAT_BENCHMARK = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks" / "flat"  # one item: "flat"
+BIPED_NQ = 7 + 10  # free joint (x y z, quaternion w x y z) + the biped's 10 joints
+QUADRUPED_NQ = 7 + 12  # ... + the quadruped's 12 joints
+
+
+class Started(Exception):
+    """The viser server was asked for: the input got past its checks."""
+
+
+def no_server(*args, **kwargs):
+    raise Started
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def one_line_error(capsys, monkeypatch, argv) -> str:
+    import viser
+
+    monkeypatch.setattr(viser, "ViserServer", no_server)
+    with pytest.raises(SystemExit) as exit_info:
+        view_script.main([*argv, "--headless", "--seconds", "0"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "Traceback" not in err, err
+    lines = [line for line in err.splitlines() if line.strip()]
+    return lines[-1]
+
+
+def write_traces(path: Path, nq: int, steps: int = 4) -> Path:
+    """gente-evaluate's traces.npz of the flat benchmark: its one item, the first robot's arrays."""
+    np.savez_compressed(path, ids=np.array(["flat"]), dt=np.array(0.02), qpos=np.zeros((1, steps, nq), np.float32),
+                        cmd=np.zeros((1, steps, 3), np.float32), vel=np.zeros((1, steps, 3), np.float32),
+                        pos=np.zeros((1, steps, 2), np.float32), active=np.ones((1, steps), bool))
+    return path
+
+
+def test_traces_of_another_robot_name_the_task(capsys, monkeypatch, tmp_path):
+    """traces.npz does not say which task made it: a quadruped's traces under the default biped task failed
+    only when a robot was drawn (a traceback from --step, nothing at all from the player's thread)."""
+    traces = write_traces(tmp_path / "traces.npz", QUADRUPED_NQ)
+    line = one_line_error(capsys, monkeypatch, [str(FLAT_BENCHMARK), "--traces", str(traces), "--task",
+                                                "gente_biped_flat", "--step", "0"])
+    assert f"holds robots of {QUADRUPED_NQ} qpos values, the --task gente_biped_flat robot {BIPED_NQ}" in line
+    assert "pass the --task it was evaluated with" in line
+
+
+def test_a_rollout_given_as_traces_says_how_to_open_it(capsys, monkeypatch, tmp_path):
+    steps = 3
+    heights = np.zeros((2, 2), np.float32)
+    rollout = Rollout("gente_biped_flat", 0.02, np.zeros((steps, 1, BIPED_NQ), np.float32), np.zeros((steps, 1, 3)),
+                      np.zeros((steps, 1, 3)), np.zeros((steps, 1), bool), np.zeros((steps, 1), bool), [],
+                      np.zeros((steps, 1, 0, 3), np.float32), np.zeros((steps, 1, 0, 3), np.float32), heights,
+                      (0.0, 0.0), 1.0, MaterialMap.rigid((2, 2))).save(tmp_path / "rollout.npz")
+    line = one_line_error(capsys, monkeypatch, [str(FLAT_BENCHMARK), "--traces", str(rollout)])
+    assert f"is a rollout recorded by gente-view, not gente-evaluate's traces; open it as the source: " \
+           f"gente-view {rollout}" in line
+
+
+def test_traces_without_their_keys_are_named(capsys, monkeypatch, tmp_path):
+    np.savez(tmp_path / "other.npz", qpos=np.zeros((1, 2, BIPED_NQ)), ids=np.array(["flat"]))
+    line = one_line_error(capsys, monkeypatch, [str(FLAT_BENCHMARK), "--traces", str(tmp_path / "other.npz")])
+    assert "has no dt, cmd, vel, active: it is not a traces.npz of gente-evaluate" in line
+
+
+def test_more_robots_than_worlds_is_refused(capsys, monkeypatch):
+    """--robots 8 --num_envs 4 recorded 4 robots without a word."""
+    line = one_line_error(capsys, monkeypatch, ["--task", "gente_biped_flat", "--play", "--policy", "zero",
+                                                "--robots", "8", "--num_envs", "4"])
+    assert line == ("gente-view: error: --robots 8 exceeds --num_envs 4: only simulated worlds can be drawn; "
+                    "raise --num_envs or lower --robots")
+
+
+def test_fewer_worlds_than_the_default_robots_draws_them_all():
+    from legged_gente.utils.args import parse_args
+
+    args = parse_args(view_script.build_arg_parser(), ["--task", "gente_biped_flat", "--device", "cpu", "--play",
+                                                       "--policy", "zero", "--num_envs", "2"])
+    _, _, recorder = view_script._make_play(args)
+    assert len(recorder.robots) == 2  # the default 4 robots, but only 2 worlds
+
+
+def test_play_opened_at_a_step_starts(capsys):
+    """--play --step N focused the camera on a recording that had no step yet: an IndexError traceback."""
+    view_script.main(["--task", "gente_biped_flat", "--play", "--policy", "zero", "--robots", "1", "--num_envs", "1",
+                      "--steps", "3", "--step", "2", "--seconds", "0", "--headless", "--port", str(free_port())])
+    assert "serving" in capsys.readouterr().out
+
+
+class LiveRecording:
+    """What the player reads of a :class:`~legged_gente.viewer.rollout.Recorder` that is filling."""
+
+    dt = 0.02
+
+    def __init__(self):
+        self.frames = {k: [] for k in ("qpos", "cmd", "vel", "done", "fell", "forces", "force_points")}
+        self.labels, self.robots = [], np.arange(1)
+
+    def add(self, qpos, keys=None) -> None:
+        values = {"qpos": qpos[None], "cmd": np.zeros((1, 3)), "vel": np.zeros((1, 3)), "done": np.zeros(1, bool),
+                  "fell": np.zeros(1, bool), "forces": np.zeros((1, 0, 3)), "force_points": np.zeros((1, 0, 3))}
+        for key in keys or values:
+            self.frames[key].append(values[key])
+
+
+def bare_viewer():
+    from legged_gente.viewer.scene import BareTerrain
+    from legged_gente.viewer.server import TerrainItem, Viewer
+
+    plane = BareTerrain(np.zeros((2, 2), np.float32), MaterialMap.rigid((2, 2)), 1.0, (0.0, 0.0))
+    return Viewer([TerrainItem("plane", lambda: plane)], port=free_port(), shadows=False)
+
+
+def test_a_live_rollout_paused_at_a_step_draws_it_once_recorded():
+    """--play --step 3: the robots stayed at the origin after step 3 was recorded, until the slider was moved."""
+    mjm = robot_model("gente_biped_flat")
+    live = LiveRecording()
+    viewer = bare_viewer()
+    try:
+        player = viewer.attach_rollout(live, mjm, play=False)
+        player.step_gui.value = 3
+        player.draw(3)
+        player.focus(3)  # nothing recorded yet: nothing to draw or look at
+        for t in range(5):  # the robot's base at x = t m
+            qpos = mjm.qpos0.copy()
+            qpos[0] = t
+            live.add(qpos)
+        base = int(mjm.jnt_bodyid[0])
+        for _ in range(100):  # the player's loop wakes every dt (0.02 s)
+            if player.bodies[0, base].position[0] == pytest.approx(3.0):
+                break
+            time.sleep(0.05)
+        np.testing.assert_allclose(player.bodies[0, base].position[:2], (3.0, 0.0), atol=1e-6)
+        assert viewer.server.initial_camera.look_at[0] == pytest.approx(3.0)  # the camera on robot 0 at step 3
+    finally:
+        viewer.stop()
+
+
+def test_a_step_being_recorded_is_not_read_halfway():
+    """Recorder.add appends qpos, cmd, ... forces one after the other: a player reading between them took the
+    step whose forces were not there yet (an IndexError in its thread, plot series of unequal lengths)."""
+    from legged_gente.viewer.server import _frames
+
+    mjm = robot_model("gente_biped_flat")
+    live = LiveRecording()
+    live.add(mjm.qpos0.copy())
+    live.add(mjm.qpos0.copy(), keys=("qpos", "cmd", "vel"))  # step 1 halfway: no done, fell, forces yet
+    frames = _frames(live)
+    assert {len(frames[k]) for k in live.frames} == {1}  # the one complete step
+    viewer = bare_viewer()
+    try:
+        player = viewer.attach_rollout(live, mjm, play=False)
+        player.draw(1)  # the newest complete step, 0
+        player._plot()
+        assert [len(series) for series in player.plot_gui.data] == [1] * 7
+    finally:
+        viewer.stop()
