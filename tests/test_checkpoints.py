@@ -255,3 +255,49 @@ def test_config_records_the_resolved_terrain_of_a_heightfield_run(tmp_path):
     env_cfg.terrain.generated_specs = [str(spec)]
     record = resolved_terrain(SimpleNamespace(terrain=terrain, cfg=env_cfg))
     assert record["generated_specs"] == {str(spec): {"version": 1, "calls": []}}
+
+
+TINY = ["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "1", "--max_iterations", "50", "--set",
+        "runner.num_steps_per_env=2", "--set", "algorithm.num_mini_batches=1", "--set", "actor.hidden_dims=[8]",
+        "--set", "critic.hidden_dims=[8]", "--set", "runner.save_interval=1000"]
+
+
+def test_a_stop_before_the_first_iteration_finishes_saves_nothing(tmp_path, monkeypatch, capsys):
+    """Ctrl-C in a run's first iteration: no iteration finished, so no model_0 claiming one (its weights would be
+    the untrained ones, and a --resume would go on at iteration 1)."""
+    from rsl_rl.runners import OnPolicyRunner
+
+    from legged_gente.scripts import train as train_script
+
+    def interrupted(self, *args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    monkeypatch.setattr(OnPolicyRunner, "learn", interrupted)
+    with pytest.raises(SystemExit) as info:
+        train_script.main(TINY)
+    assert info.value.code == 128 + signal.SIGINT
+    assert "Interrupted before the first iteration finished: nothing to save" in capsys.readouterr().out
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert list(run.glob("model_*.pt")) == []
+
+
+def test_a_stop_after_an_iteration_saves_that_iteration(tmp_path, monkeypatch, capsys):
+    """Ctrl-C after iteration 0 was logged: model_0 with iter 0, so --resume goes on at iteration 1."""
+    from legged_gente.scripts import train as train_script
+    from legged_gente.utils.episode_logger import DeferredLogger
+
+    logged = DeferredLogger.log
+
+    def log_then_interrupt(self, *args, **kwargs):
+        logged(self, *args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    monkeypatch.setattr(DeferredLogger, "log", log_then_interrupt)
+    with pytest.raises(SystemExit):
+        train_script.main(TINY)
+    assert "Interrupted: saved" in capsys.readouterr().out
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert [p.name for p in run.glob("model_*.pt")] == ["model_0.pt"]
+    assert load_checkpoint(run / "model_0.pt")["iter"] == 0

@@ -94,11 +94,15 @@ def train(args) -> Path | None:
             signalled = signal.SIGTERM if isinstance(stop, Terminated) else signal.SIGINT
         if main_thread:
             signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the save short
-        if log_dir is not None:
-            path = Path(log_dir) / f"model_{runner.current_learning_iteration}.pt"
+        what = {Terminated: "Terminated (SIGTERM)", TimeLimitReached: f"Time limit of {args.max_minutes} min reached"
+                }.get(type(stop), "Interrupted")
+        finished = runner.logger.last_iteration
+        if log_dir is not None and finished is None:  # a checkpoint would claim an iteration that did not finish
+            print(f"\n{what} before the first iteration finished: nothing to save", flush=True)
+        elif log_dir is not None:
+            runner.current_learning_iteration = finished
+            path = Path(log_dir) / f"model_{finished}.pt"
             runner.save(str(path))
-            what = {Terminated: "Terminated (SIGTERM)", TimeLimitReached: f"Time limit of {args.max_minutes} min reached"
-                    }.get(type(stop), "Interrupted")
             print(f"\n{what}: saved {path}; continue with --resume", flush=True)
     finally:
         if main_thread:

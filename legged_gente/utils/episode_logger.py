@@ -28,6 +28,8 @@ class DeferredLogger(Logger):
         self._finished: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = []
         self.deadline: float | None = None
         """``time.monotonic()`` after which training stops at the end of the iteration (None: never)."""
+        self.last_iteration: int | None = None
+        """The last iteration logged, so finished, in this process (None: none yet): what a stopped run saves."""
 
     def process_env_step(self, rewards: torch.Tensor, dones: torch.Tensor, extras: dict,
                          intrinsic_rewards: torch.Tensor | None = None) -> None:
@@ -58,9 +60,10 @@ class DeferredLogger(Logger):
         self.rewbuffer.extend(returns[done].tolist())
         self.lenbuffer.extend(lengths[done].tolist())
 
-    def log(self, *args, **kwargs) -> None:
+    def log(self, it: int, *args, **kwargs) -> None:
+        self.last_iteration = it
         self.flush()
-        super().log(*args, **kwargs)
+        super().log(it, *args, **kwargs)
         if self.deadline is not None and self._past_deadline():
             raise TimeLimitReached()
 
