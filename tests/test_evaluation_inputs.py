@@ -66,3 +66,20 @@ def test_an_item_given_twice_is_refused(tmp_path):
     (tmp_path / "manifest.json").write_text(json.dumps(manifest))
     with pytest.raises(ValueError, match=f"{first['id']}.*more than once"):
         load_benchmark(tmp_path)
+
+
+def test_waypoint_paths_turn_back_by_the_runs_own_tile_edge_margin():
+    """4 waypoints 1.8 m apart need 7.2 m. A robot 11 m from its tile's low x edge has 9 m ahead: 8.5 m inside a
+    0.5 m margin, enough; 7.0 m inside a 2 m margin, not enough, and 9 m behind it, so with that margin its path
+    runs towards -x (where the measured episode does not end at the margin first)."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    evaluation = Evaluation("gente_biped", load_benchmark("gente100", ["text_02_wide_river_strong_current"]), 1,
+                            "cpu", 0.2, "waypoints")
+    x_lo = float(evaluation.tile_bounds(0.0)[0, 0])
+    evaluation.env.env_origins[0, 0] = x_lo + 11.0
+    ahead = evaluation.make_task(tile_edge_margin=0.5).waypoints[0, :, 0] - (x_lo + 11.0)
+    behind = evaluation.make_task(tile_edge_margin=2.0).waypoints[0, :, 0] - (x_lo + 11.0)
+    assert torch.allclose(ahead, torch.tensor([1.8, 3.6, 5.4, 7.2]))
+    assert torch.allclose(behind, torch.tensor([-1.8, -3.6, -5.4, -7.2]))

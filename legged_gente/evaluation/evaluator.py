@@ -259,12 +259,14 @@ class Evaluation:
 
     def make_task(self, reach_distance: float = 1.0, speed: float = WAYPOINT_SPEED, num_waypoints: int = WAYPOINTS,
                   spacing: float = WAYPOINT_SPACING, lateral: float = WAYPOINT_LATERAL, min_speed: float = 0.3,
-                  stand_fraction: float = 0.1):
+                  stand_fraction: float = 0.1, tile_edge_margin: float | None = TILE_EDGE_MARGIN):
+        """The run's commands: the velocity task, or waypoint paths kept within ``tile_edge_margin`` of their tile
+        where they can turn back (the margin ``run`` ends a measured episode at; None: the tile's edge)."""
         env = self.env
         if self.mode == "velocity":
             return VelocityTask(env.num_envs, self.env_cfg.commands.ranges, self.env_cfg.commands.heading_command,
                                 env.device, seed=self.seed, min_speed=min_speed, stand_fraction=stand_fraction)
-        inside = self.tile_bounds(TILE_EDGE_MARGIN)
+        inside = self.tile_bounds(tile_edge_margin or 0.0)
         points = zigzag_waypoints(env.env_origins[:, :2], num_waypoints, spacing, lateral, seed=self.seed,
                                   x_range=inside[:, [0, 2]])
         return WaypointTask(points, reach_distance, speed)

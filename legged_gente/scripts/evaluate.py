@@ -123,7 +123,7 @@ def evaluate(args) -> dict:
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
                                                args.pretrained)
     task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
-                                stand_fraction=args.stand_fraction)
+                                stand_fraction=args.stand_fraction, tile_edge_margin=args.tile_edge_margin)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress,
                             tile_edge_margin=args.tile_edge_margin)
     meta = {"task": args.task, "benchmark": str(args.benchmark),
