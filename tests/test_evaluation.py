@@ -112,6 +112,8 @@ def test_evaluate_writes_reports(tmp_path, mode):
     assert traces["pos"].shape == (2, steps, 2) and traces["cmd"].shape == (2, steps, 3)
     np.testing.assert_allclose(traces["qpos"][..., :2], traces["pos"], atol=1e-5)  # gente-view --traces replays it
     assert list(traces["ids"]) == ITEMS
+    assert traces["fell"].dtype == bool and traces["fell"].shape == (2,)  # the traced robot of each terrain
+    assert all(fell <= row["falls"] for fell, row in zip(traces["fell"], report["terrains"]))
     if mode == "waypoints":
         assert traces["waypoints"].shape == (2, 4, 2)
 

@@ -173,3 +173,24 @@ def test_a_step_being_recorded_is_not_read_halfway():
         assert [len(series) for series in player.plot_gui.data] == [1] * 7
     finally:
         viewer.stop()
+
+
+class _Terrain:
+    height_field, origin_xy, resolution = np.zeros((4, 4), np.float32), (0.0, 0.0), 0.1
+    material = MaterialMap.rigid((4, 4))
+
+
+def _trace(steps_active: int, fell: bool | None) -> dict:
+    nq, steps = robot_model("gente_biped").nq, 6
+    trace = {"qpos": np.zeros((steps, nq), np.float32), "cmd": np.zeros((steps, 3), np.float32),
+             "vel": np.zeros((steps, 3), np.float32), "active": np.arange(steps) < steps_active, "dt": 0.02}
+    return trace if fell is None else trace | {"fell": np.array(fell)}
+
+
+@pytest.mark.parametrize("fell", [True, False])
+def test_a_replayed_robot_shows_a_fall_only_when_it_fell(fell):
+    """A robot's measured episode also ends at its tile's edge (a success may end there): the replay ends it
+    there, and marks a fall only for a robot that fell."""
+    rollout = view_script._trace_rollout(_trace(4, fell), "gente_biped", _Terrain())
+    assert rollout.qpos.shape[0] == 4 and rollout.done[-1, 0] and bool(rollout.fell[-1, 0]) is fell
+    assert not rollout.done[:-1].any() and not rollout.fell[:-1].any()

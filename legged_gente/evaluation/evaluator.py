@@ -321,6 +321,7 @@ class Evaluation:
         out = {k: v.detach().cpu().numpy() for k, v in metrics.items()}
         traces = {k: torch.stack(v, 1).cpu().numpy() for k, v in r.trace.items()}
         traces["spawn"] = env.env_origins[first].cpu().numpy()
+        traces["fell"] = r.fell[first].cpu().numpy()  # why a traced episode ended: a fall, or the tile's edge, or time
         traces["dt"] = np.array(env.dt)
         params = {"settle_s": settle_s, "dt": env.dt, "episode_length_s": self.num_steps * env.dt,
                   "max_base_speed": MAX_BASE_SPEED, "tile_edge_margin": tile_edge_margin}

@@ -4,7 +4,7 @@
         --benchmark gente100 --robots_per_terrain 16 --out eval/ [--device cuda]
 
 Writes ``report.json``, ``report.csv`` and ``traces.npz`` (the first robot of every terrain: commands,
-velocities, positions, waypoints) to ``--out``. See docs/evaluation.md for the metrics' definitions.
+velocities, positions, falls, waypoints) to ``--out``. See docs/evaluation.md for the metrics' definitions.
 """
 
 from __future__ import annotations

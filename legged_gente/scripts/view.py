@@ -103,6 +103,8 @@ def _benchmark_items(root: Path, args):
             raise ValueError(f"--item {item!r} is not in {args.traces}; it has {ids[:5]}...")
         k = ids.index(item)
         trace = {key: f[key][k] for key in ("qpos", "cmd", "vel", "active")} | {"dt": float(f["dt"])}
+        if "fell" in f.files:  # traces.npz of an older gente-evaluate do not say why an episode ended
+            trace["fell"] = f["fell"][k]
     if item not in specs:
         raise ValueError(f"{args.traces} item {item!r} is not in the benchmark {root}; pass the folder it was "
                          f"evaluated on.")
@@ -119,9 +121,10 @@ def _trace_rollout(trace: dict, task: str, terrain):
     active = trace["active"].astype(bool)
     steps = max(int(active.sum()), 1)  # the robot's first episode
     ended = np.zeros((steps, 1), bool)
-    ended[-1] = steps < len(active)
+    ended[-1] = steps < len(active)  # a fall, or its tile's edge (the measured episode ends there too)
+    fell = ended & bool(trace.get("fell", False))
     return Rollout(task, trace["dt"], trace["qpos"][:steps, None], trace["cmd"][:steps, None],
-                   trace["vel"][:steps, None], ended, ended.copy(), [], np.zeros((steps, 1, 0, 3), np.float32),
+                   trace["vel"][:steps, None], ended, fell, [], np.zeros((steps, 1, 0, 3), np.float32),
                    np.zeros((steps, 1, 0, 3), np.float32), terrain.height_field, terrain.origin_xy,
                    terrain.resolution, terrain.material)
 
