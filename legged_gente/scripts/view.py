@@ -30,6 +30,8 @@ from legged_gente.envs.task_registry import apply_args, default_log_root
 
 DEFAULT_ROBOTS = 4
 """Robots drawn by ``--play`` when ``--robots`` is not given (fewer if ``--num_envs`` is smaller)."""
+DEFAULT_STEPS = 500
+"""Policy steps of ``--play`` when ``--steps`` is not given."""
 TRACE_KEYS = ("ids", "dt", "qpos", "cmd", "vel", "active")
 """What ``--traces`` replays from gente-evaluate's traces.npz."""
 
@@ -43,11 +45,11 @@ def build_arg_parser():
     p.add_argument(*flag("--no_shadows"), action="store_true", help="no shadows (faster in software WebGL)")
     p.add_argument("--seconds", type=float, default=None, help="stop serving after this many seconds")
     p.add_argument("--play", action="store_true", help="roll the task's policy out live (CPU by default)")
-    p.add_argument("--policy", choices=("checkpoint", "zero"), default="checkpoint",
+    p.add_argument("--policy", choices=("checkpoint", "zero"), default=None,
                    help="--play: the run's checkpoint (--load_run/--checkpoint, default the latest) or zero actions")
     p.add_argument("--pretrained", action="store_true",
                    help="--play: the policy shipped with the package for --task (resources/policies/<task>/)")
-    p.add_argument("--steps", type=int, default=500, help="--play: policy steps")
+    p.add_argument("--steps", type=int, default=None, help=f"--play: policy steps (default {DEFAULT_STEPS})")
     p.add_argument("--robots", type=int, default=None,
                    help=f"--play: robots drawn and recorded (default {DEFAULT_ROBOTS}, at most --num_envs)")
     p.add_argument("--record", help="--play: also write the rollout to this .npz")
@@ -199,7 +201,8 @@ def main(argv=None) -> None:
             env, policy, recorder = _make_play(args)
             items = [TerrainItem(f"{args.task} (play)", lambda: env.terrain or BareTerrain(*_plane()))]
             rollout, mjm = recorder, env.mjm
-            play = threading.Thread(target=_run_play, args=(env, policy, recorder, args.steps, args.record), daemon=True)
+            play = threading.Thread(target=_run_play, args=(env, policy, recorder, args.steps or DEFAULT_STEPS,
+                                                            args.record), daemon=True)
         elif source is None:
             items = [TerrainItem(args.task, _task_terrain(args))]
         elif source.is_dir():
@@ -222,7 +225,7 @@ def main(argv=None) -> None:
         else:
             parser.error(f"{source}: pass a spec .json, a terrain_cfg.py, a benchmark folder or a rollout .npz")
         if args.step is not None:
-            steps = args.steps if play is not None else len(rollout.qpos)
+            steps = (args.steps or DEFAULT_STEPS) if play is not None else len(rollout.qpos)
             if not 0 <= args.step < steps:
                 raise ValueError(f"--step {args.step}: the rollout has steps 0..{steps - 1}")
         viewer = Viewer(items, host=args.host, port=args.port, shadows=not args.no_shadows)
@@ -264,6 +267,10 @@ def check_flags(parser, args, source: Path | None) -> None:
         parser.error("--play rolls out on the task's terrain: give --terrain, not a source file")
     if args.record and not args.play:
         parser.error("--record writes the rollout of --play: add --play")
+    play_only = [name for name, value in (("--policy", args.policy), ("--robots", args.robots),
+                                          ("--num_envs", args.num_envs), ("--steps", args.steps)) if value is not None]
+    if play_only and not args.play:
+        parser.error(f"{', '.join(play_only)} set{'s' if len(play_only) == 1 else ''} how --play rolls out: add --play")
     if args.traces and (source is None or not source.is_dir()):
         parser.error("--traces replays gente-evaluate's robots on their benchmark: give its folder as the source "
                      "(gente-view gente100 --traces eval/traces.npz)")
