@@ -95,6 +95,9 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     # other: the geoms the MJCF makes collide (feet) plus, on the bodies whose contacts the task watches but
     # that have no colliding geom, their collision geoms (group 3, MuJoCo's usual collision group) if they
     # have any, else all their geoms (a body with collision geoms keeps its visual meshes non-colliding).
+    # Their sliding friction is the ground's, cfg.terrain.static_friction, as friction randomisation sets it: MuJoCo
+    # takes a pair's friction from the larger (or higher-priority) geom, so the MJCF's foot friction would override
+    # the configured ground friction that the friction observation and the force fields' map scaling assume.
     robot_geoms = [g for g in spec.geoms if g.parent.name != spec.worldbody.name]
     has_collider = {g.parent.name for g in robot_geoms if g.contype or g.conaffinity}
     has_collision_group = {g.parent.name for g in robot_geoms if g.group == COLLISION_GROUP}
@@ -104,6 +107,7 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
                        and (geom.group == COLLISION_GROUP or body not in has_collision_group))
         collides = geom.contype or geom.conaffinity or switched_on
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
+        geom.friction = [cfg.terrain.static_friction, *geom.friction[1:]]
     if owns_sole_contacts(cfg, terrain):
         # the terrain force fields collide sphere / capsule soles with the heightfield analytically
         # (external_forces/contact.py); MuJoCo must not collide them too
@@ -220,7 +224,9 @@ def _add_terrain(spec: mujoco.MjSpec, cfg_terrain, terrain) -> None:
         patch = heights[i:i + cells + 1, j:j + cells + 1]
         nx, ny = patch.shape
         h_min = float(patch.min())
-        span = max(float(patch.max()) - h_min, 1e-3)
+        # MuJoCo rescales any non-flat data to [0, 1] itself, so the elevation must be the patch's exact relief (a
+        # floor on it would raise sub-millimetre relief); a flat patch (data all 0) needs just some elevation > 0
+        span = float(patch.max()) - h_min or 1e-3
         half_x, half_y = (nx - 1) * res / 2, (ny - 1) * res / 2
         name = TERRAIN_GEOM if index == 0 else f"{TERRAIN_GEOM}_{index}"
         # MuJoCo hfield rows run along y and columns along x; elevation data are normalised to [0, 1].

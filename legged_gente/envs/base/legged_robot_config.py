@@ -47,7 +47,7 @@ class LeggedRobotCfg(BaseConfig):
         # levels in the training mix, and a policy that solves every tile then averages level 6.0 of 10), "stay"
         # keeps it on the hardest level (the mean level then climbs towards the top as the policy improves)
         solved_top_level = "random"
-        static_friction = 1.0
+        static_friction = 1.0  # the ground's sliding friction; the robot's geoms get it too (a pair takes the larger)
         seed = 0
         # height scan (m, in the base's yaw frame): the "height_scan" observation on a heightfield
         measure_heights = True
