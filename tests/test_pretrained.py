@@ -75,8 +75,11 @@ def test_ship_policy_keeps_the_actor_and_the_run_config(tmp_path):
     assert set(loaded) == {"actor_state_dict", "iter", "infos"} and loaded["iter"] == 0
     config = json.loads((folder / "config.json").read_text())
     assert config["note"] == "a test" and config["source_checkpoint"] == "run/model_4.pt"
-    with pytest.raises(ValueError, match="is for gente_biped_flat, not gente_quadruped"):
+    with pytest.raises(ValueError, match="is for gente_biped_flat, not gente_quadruped: ship it as --task gente_biped_flat, or pick a checkpoint"):
         ship_policy(run / "model_4.pt", "gente_quadruped", "wrong", destination=tmp_path / "other")
+    (run / "config.json").unlink()
+    with pytest.raises(FileNotFoundError, match="needs its run's config.json .*ship a model_<N>.pt from the run folder"):
+        ship_policy(run / "model_4.pt", SHIPPED, "no config", destination=tmp_path / "other")
 
 
 def test_evaluate_checkpoint_takes_a_shipped_policy_file(tmp_path):

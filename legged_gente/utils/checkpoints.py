@@ -218,10 +218,12 @@ def ship_policy(checkpoint: str | Path, task: str, note: str, destination: Path 
     loaded = load_checkpoint(checkpoint, map_location="cpu")
     infos = loaded.get("infos") or {}
     if infos.get("task") not in (None, task):
-        raise CheckpointError(f"checkpoint {checkpoint} is for {infos['task']}, not {task}")
+        raise CheckpointError(f"checkpoint {checkpoint} is for {infos['task']}, not {task}: ship it as --task "
+                              f"{infos['task']}, or pick a checkpoint of a {task} run")
     config_path = checkpoint.parent / "config.json"
     if not config_path.is_file():
-        raise FileNotFoundError(f"{config_path} not found: a shipped policy needs its run's config.json")
+        raise FileNotFoundError(f"{config_path} not found: a shipped policy needs its run's config.json (network "
+                                f"sizes); ship a model_<N>.pt from the run folder gente-train wrote, beside its config.json")
     folder = Path(destination) if destination is not None else policies_root() / task
     folder.mkdir(parents=True, exist_ok=True)
     actor = {key: value.detach().cpu().clone() for key, value in loaded["actor_state_dict"].items()}
