@@ -57,7 +57,7 @@ def main() -> None:
     import warp as wp
 
     from legged_gente.envs.task_registry import task_registry
-    from legged_gente.scripts.benchmark import RESET_SHARE, force_pass, settle
+    from legged_gente.scripts.benchmark import RESET_SHARE, force_pass, settle, typical_resets
 
     env_cfg, _ = task_registry.get_cfgs(args.task)
     env_cfg.env.num_envs = args.num_envs
@@ -76,8 +76,7 @@ def main() -> None:
         force_total = show("force kernels (one pass)", *kernel_times(force_pass(env), args.calls), top=20)
         wp.copy(sim.d.nacon, nacon)
         substep_total = show("substep with forces", *kernel_times(substep, args.calls), top=30)
-        reset = torch.zeros(args.num_envs, dtype=torch.bool, device=env.device)
-        reset[::round(1 / RESET_SHARE)] = True
+        reset = typical_resets(env)
         show(f"post-reset forward (Simulation.recompute, {RESET_SHARE:.0%} of the worlds reset)",
              *kernel_times(lambda: sim.recompute(reset), args.calls), top=25)
     print(f"force kernels: {force_total / substep_total:.1%} of the substep's kernel time ({args.num_envs} robots, "

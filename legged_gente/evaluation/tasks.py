@@ -91,10 +91,7 @@ class WaypointTask:
             raise ValueError(f"waypoints must be (num_robots, K >= 1, 2) world xy, got {tuple(waypoints.shape)}.")
         if not reach_distance > 0:
             raise ValueError(f"reach_distance must be > 0 m, got {reach_distance}.")
-        if not speed > 0:
-            raise ValueError(f"speed must be > 0 m/s, got {speed}.")
-        if not math.isfinite(speed):
-            raise ValueError(f"speed must be a finite speed in m/s, got {speed}.")
+        _check_speed(speed)
         self.waypoints = waypoints
         self.reach_distance = float(reach_distance)
         self.speed = float(speed)
@@ -140,13 +137,18 @@ def zigzag_length(count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING, lat
     return math.hypot(spacing, lateral) + (count - 1) * math.hypot(spacing, 2 * lateral)
 
 
-def waypoint_episode_s(speed: float, count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING,
-                       lateral: float = WAYPOINT_LATERAL) -> float:
-    """s; the waypoint task's default episode: ``WAYPOINT_TIME_SLACK`` times the zigzag's length over ``speed``."""
+def _check_speed(speed: float) -> None:
+    """A waypoint speed must be positive and finite (an infinite one would make a zero-length episode)."""
     if not speed > 0:
         raise ValueError(f"speed must be > 0 m/s, got {speed}.")
     if not math.isfinite(speed):
         raise ValueError(f"speed must be a finite speed in m/s, got {speed}.")
+
+
+def waypoint_episode_s(speed: float, count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING,
+                       lateral: float = WAYPOINT_LATERAL) -> float:
+    """s; the waypoint task's default episode: ``WAYPOINT_TIME_SLACK`` times the zigzag's length over ``speed``."""
+    _check_speed(speed)
     return WAYPOINT_TIME_SLACK * zigzag_length(count, spacing, lateral) / speed
 
 

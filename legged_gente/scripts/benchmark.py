@@ -148,14 +148,20 @@ def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> fl
 RESET_SHARE = 0.01
 
 
+def typical_resets(env) -> torch.Tensor:
+    """A reset mask of every ``1 / RESET_SHARE``-th world, to time the post-reset forward with."""
+    reset = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
+    reset[::round(1 / RESET_SHARE)] = True
+    return reset
+
+
 def reset_forward_per_s(env, calls: int) -> float:
     """Calls/s of the Warp work of the forward a step runs after its resets (``Simulation.recompute``: MuJoCo's
     forward with the force fields' callbacks, their after-substep hooks and the per-body contact forces), on the
     current state, with every ``1 / RESET_SHARE``-th world reset. On a GPU the step runs it every time, whether a
     world reset or not (deciding would wait for the device); its first half is the next substep's, computed ahead,
     which that substep does not repeat, and the constraints are solved in the reset worlds only."""
-    reset = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
-    reset[::round(1 / RESET_SHARE)] = True
+    reset = typical_resets(env)
     return _timed_calls(env, lambda: env.sim.recompute(reset), calls)
 
 

@@ -189,6 +189,7 @@ def main(argv=None) -> None:
     if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --policy zero, --load_run and --checkpoint")
     check_flags(parser, args, source)
+    play_steps = args.steps or DEFAULT_STEPS
     rollout, mjm, play = None, None, None
     try:
         if args.pretrained:
@@ -201,8 +202,8 @@ def main(argv=None) -> None:
             env, policy, recorder = _make_play(args)
             items = [TerrainItem(f"{args.task} (play)", lambda: env.terrain or BareTerrain(*_plane()))]
             rollout, mjm = recorder, env.mjm
-            play = threading.Thread(target=_run_play, args=(env, policy, recorder, args.steps or DEFAULT_STEPS,
-                                                            args.record), daemon=True)
+            play = threading.Thread(target=_run_play, args=(env, policy, recorder, play_steps, args.record),
+                                    daemon=True)
         elif source is None:
             items = [TerrainItem(args.task, _task_terrain(args))]
         elif source.is_dir():
@@ -225,7 +226,7 @@ def main(argv=None) -> None:
         else:
             parser.error(f"{source}: pass a spec .json, a terrain_cfg.py, a benchmark folder or a rollout .npz")
         if args.step is not None:
-            steps = (args.steps or DEFAULT_STEPS) if play is not None else len(rollout.qpos)
+            steps = play_steps if play is not None else len(rollout.qpos)
             if not 0 <= args.step < steps:
                 raise ValueError(f"--step {args.step}: the rollout has steps 0..{steps - 1}")
         viewer = Viewer(items, host=args.host, port=args.port, shadows=not args.no_shadows)
