@@ -143,3 +143,16 @@ def test_what_the_safe_loader_stumbles_on_without_a_real_global_is_corrupt_not_u
         with_pickle(path, broken)
         with pytest.raises(UnreadableCheckpoint, match="unreadable"):
             load_checkpoint(path)
+
+
+def test_running_out_of_memory_while_loading_is_not_called_a_corrupt_file(tmp_path, monkeypatch):
+    # torch's OutOfMemoryError is a RuntimeError, as a truncated file's is; the file is fine, the device is full
+    path = tmp_path / "model_1.pt"
+    torch.save({"actor_state_dict": {}}, path)
+
+    def out_of_memory(*args, **kwargs):
+        raise torch.OutOfMemoryError("CUDA out of memory. Tried to allocate 2.00 GiB")
+
+    monkeypatch.setattr(torch, "load", out_of_memory)
+    with pytest.raises(torch.OutOfMemoryError):
+        load_checkpoint(path, map_location="cpu")

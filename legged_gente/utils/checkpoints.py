@@ -124,6 +124,8 @@ def load_checkpoint(path: str | Path, map_location=None) -> dict:
                                   ) from None
         reason = [line.strip() for line in str(error).splitlines() if line.strip()][-2:-1] or [type(error).__name__]
         raise UnreadableCheckpoint(f"checkpoint {path} is unreadable (corrupt: {reason[0]}).") from None
+    except torch.OutOfMemoryError:
+        raise  # a RuntimeError too, but the file is fine: the device is full
     except (RuntimeError, EOFError, OSError, zipfile.BadZipFile, ValueError, KeyError, IndexError, TypeError,
             AttributeError) as error:
         # KeyError, IndexError: the legacy unpickler reading bytes that are not a pickle (a text file); TypeError,
