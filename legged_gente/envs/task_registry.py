@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import os
 from datetime import datetime
@@ -220,7 +222,8 @@ class TaskRegistry:
         train_cfg = train_cfg or self.get_cfgs(name)[1]
         train_cfg.runner.resume = False
         network_sizes_from(checkpoint, train_cfg)
-        runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
+        with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints its models and observation sets: for training
+            runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
         runner.load(str(checkpoint), load_cfg={"actor": True}, map_location=env.device)
         runner.loaded_checkpoint = Path(checkpoint)
         return runner
