@@ -13,10 +13,11 @@ The body may rebind its owner's tensor attributes freely (``self.x = self.x + 1`
 the tensors that existed at capture, so at the end of the capture ``StepGraph`` records a copy of every rebound
 tensor into the tensor the attribute held before, and binds the attribute back to it. State carried from one
 step to the next thus stays in one tensor whatever the body does, at the cost of one device copy per rebound
-tensor (none where the body works in place). Rebound non-tensor attributes (e.g. a dict of tensors) are bound to
-the objects the capture made after every replay. Every attribute the capture rebound is bound back after each
-replay, so code run eagerly between replays (a reset, refreshed observations) may rebind them too: the next
-replay's results are where the attributes point afterwards.
+tensor (none where the body works in place; two where it rebinds one attribute to another's tensor, which is
+cloned first so that the copies cannot overwrite each other's sources). Rebound non-tensor attributes (e.g. a dict
+of tensors) are bound to the objects the capture made after every replay. Every attribute the capture rebound is
+bound back after each replay, so code run eagerly between replays (a reset, refreshed observations) may rebind
+them too: the next replay's results are where the attributes point afterwards.
 """
 
 from __future__ import annotations
@@ -100,8 +101,10 @@ class StepGraph:
 
     def _copy_back(self, rebound: dict, before: dict) -> dict:
         """Record (into the graph) a copy of each rebound tensor into the one its attribute held before the
-        capture; those attributes point at their old tensors again."""
-        kept = {}
+        capture; those attributes point at their old tensors again. A new value that shares memory with a tensor
+        some copy writes (``self.last = self.now; self.now = ...``, or a swap) is cloned before any copy is made,
+        so each attribute gets the value the step gave it whatever the order of the copies."""
+        kept, copies = {}, []
         for name, new in rebound.items():
             old = before.get(name)
             if not (isinstance(new, torch.Tensor) and isinstance(old, torch.Tensor)):
@@ -111,6 +114,10 @@ class StepGraph:
                     f"{type(self.owner).__name__}.{name} changes from {tuple(old.shape)} {old.dtype} to "
                     f"{tuple(new.shape)} {new.dtype} in a step captured as a CUDA graph; keep its shape and dtype.")
             if not _same_memory(old, new):
-                old.copy_(new)
+                copies.append((old, new))
             kept[name] = old
+        written = {old.untyped_storage().data_ptr() for old, _ in copies}
+        sources = [new.clone() if new.untyped_storage().data_ptr() in written else new for _, new in copies]
+        for (old, _), source in zip(copies, sources):
+            old.copy_(source)
         return kept

@@ -77,7 +77,8 @@ class GentePPO(PPO):
 
     def __init__(self, actor, critic, storage, *args, optimizer: str = "adam", **kwargs):
         super().__init__(actor, critic, storage, *args, optimizer=optimizer, **kwargs)
-        self.device_side_update = (optimizer == "adam" and self.rnd is None and self.symmetry is None
+        # rsl-rl reads the optimizer's name in any case ("Adam" is its Adam)
+        self.device_side_update = (optimizer.lower() == "adam" and self.rnd is None and self.symmetry is None
                                    and not (actor.is_recurrent or critic.is_recurrent))
         self._act_graph = None
         self._frozen_actor_updates = 0  # the critic warm-up's updates left (freeze_actor)
