@@ -127,6 +127,15 @@ class LeggedRobot(VecEnv):
             bounds = list(getattr(cfg.commands.ranges, name))
             ok = len(bounds) == 2 and bounds[0] <= bounds[1]
             checks.append((ok, f"cfg.commands.ranges.{name}={bounds}; use [low, high], low <= high"))
+        rand = cfg.domain_rand
+        if rand.randomize_friction:
+            bounds = list(rand.friction_range)
+            checks.append((len(bounds) == 2 and 0 <= bounds[0] <= bounds[1],
+                           f"cfg.domain_rand.friction_range={bounds}; use [low, high], 0 <= low <= high"))
+        if rand.randomize_base_mass:
+            bounds = list(rand.added_mass_range)
+            checks.append((len(bounds) == 2 and bounds[0] <= bounds[1],
+                           f"cfg.domain_rand.added_mass_range={bounds}; use [low, high] (kg), low <= high"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
@@ -241,6 +250,8 @@ class LeggedRobot(VecEnv):
         new = torch.as_tensor(value, dtype=torch.float32, device=self.device)
         if new.shape != target.shape:
             raise ValueError(f"{path} takes a value of shape {tuple(target.shape)}, got {value!r}.")
+        if group == "commands" and name in COMMAND_RANGES and not float(new[0]) <= float(new[1]):
+            raise ValueError(f"{path}={list(value)}; use [low, high], low <= high.")
         target.copy_(new)
         owner = self.cfg.commands.ranges if len(parts) == 3 else getattr(self.cfg, group)
         setattr(owner, name, value)
@@ -354,6 +365,10 @@ class LeggedRobot(VecEnv):
         if rand.randomize_base_mass:
             self.added_base_mass = rand_uniform(*rand.added_mass_range, (self.num_envs, 1), self.device)
             mass0 = float(self.mjm.body_mass[self.base])
+            low = float(rand.added_mass_range[0])
+            if mass0 + low <= 0:
+                raise ValueError(f"cfg.domain_rand.added_mass_range={list(rand.added_mass_range)} takes the base mass "
+                                 f"{mass0:.4g} kg to {mass0 + low:.4g} kg; use low > -{mass0:.4g}.")
             ratio = (mass0 + self.added_base_mass[:, 0]) / mass0
             self.sim.body_mass[:, self.base] = mass0 * ratio
             self.sim.body_inertia[:, self.base] = torch.as_tensor(
@@ -377,7 +392,11 @@ class LeggedRobot(VecEnv):
                     raise ValueError(f"{path}.{name}: fn={term.fn!r} but {type(self).__name__} has no _obs_{term.fn} "
                                      f"method; implement it or name an existing one.")
                 width = method().shape[1]
-                scale = torch.as_tensor(term.scale, dtype=torch.float32, device=self.device).expand(width).clone()
+                scale = torch.as_tensor(term.scale, dtype=torch.float32, device=self.device)
+                if scale.numel() not in (1, width):
+                    raise ValueError(f"{path}.{name}.scale has {scale.numel()} values; the term has {width} columns: "
+                                     f"give one number or {width}.")
+                scale = scale.expand(width).clone()
                 entries.append((name, method, scale, term.clip, scale * term.noise * level))
                 self.observation_names.setdefault(group, []).extend(
                     [name] if width == 1 else [f"{name}[{i}]" for i in range(width)])
@@ -486,7 +505,6 @@ class LeggedRobot(VecEnv):
         self.dof_vel = qvel[:, self.dof_adr]
         self.torques = self.sim.actuator_force
         self.contact_forces = self.sim.body_contact_force
-        self.feet_pos = self.sim.xpos[:, self.feet]
 
     def _body_linear_velocity(self, bodies: torch.Tensor) -> torch.Tensor:
         """World linear velocity of body origins from MuJoCo's com-based spatial velocity (rot, lin)."""

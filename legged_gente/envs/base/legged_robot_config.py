@@ -85,7 +85,7 @@ class LeggedRobotCfg(BaseConfig):
         decimation = 4  # physics substeps per policy step
 
     class asset:
-        file = ""  # MJCF path (relative paths are resolved against the project root)
+        file = ""  # MJCF path; a relative one is looked up in the working directory, then in the legged_gente package
         base_body = ""  # the floating base (body with the free joint); "" = the free joint's body
         foot_bodies: list = []  # names or fnmatch patterns
         penalize_contacts_on: list = []  # bodies whose contacts are penalised (and therefore collide)
@@ -182,7 +182,8 @@ class LeggedRobotCfg(BaseConfig):
         # branches on host values); "off" launches everything one by one. Ignored on the CPU.
         cuda_graph = "env_step"
         # on GPU: torch.compile the step's torch logic (rewards, terminations, resets, curriculum, observations),
-        # which fuses its few hundred small operations into a few dozen kernels; compiled at the first step
+        # which fuses its few hundred small operations into a few dozen kernels; compiled at the second step (the
+        # first runs eagerly: StepRunner checks that it reads no cfg)
         torch_compile = True
         # m/s or rad/s; a world moving faster has diverged (real ones reach 1e6+): it is reset (as a time-out, not
         # counted in the curriculum or the episode statistics) and counted in Episode/diverged_resets

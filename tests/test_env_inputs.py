@@ -1,0 +1,69 @@
+"""Bad settings of LeggedRobot are refused with the fix, at construction and at run time (set_param), instead of
+being run as something else: a reversed command range, a randomised base mass that is not positive, a friction
+range that is not one, an observation term whose scale does not fit its columns."""
+
+import pytest
+import torch
+
+from legged_gente.envs.base.terms import ObsTerm
+from legged_gente.envs.gente_biped.gente_biped import GenteBiped
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedFlatCfg
+
+N = 2
+
+
+def cfg_of():
+    cfg = GenteBipedFlatCfg()
+    cfg.env.num_envs = N
+    cfg.domain_rand.push_robots = False
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def env():
+    return GenteBiped(cfg_of(), device="cpu")
+
+
+def test_set_param_refuses_a_reversed_command_range_as_the_config_does(env):
+    """cfg.commands.ranges.ang_vel_yaw = [1, -1] is refused at construction; set at run time it used to be taken,
+    and the heading controller's clamp(yaw_rate, 1, -1) then commands -1 rad/s whatever the heading error."""
+    with pytest.raises(ValueError, match=r"commands.ranges.ang_vel_yaw=\[1.0, -1.0\]; use \[low, high\], low <= high"):
+        env.set_param("commands.ranges.ang_vel_yaw", [1.0, -1.0])
+    assert env.params.commands.ang_vel_yaw.tolist() == [-1.0, 1.0]  # unchanged
+    assert env.cfg.commands.ranges.ang_vel_yaw == [-1.0, 1.0]
+    env.set_param("commands.ranges.ang_vel_yaw", [-0.5, 0.5])  # a valid range is taken
+    try:
+        assert env.params.commands.ang_vel_yaw.tolist() == [-0.5, 0.5]
+    finally:
+        env.set_param("commands.ranges.ang_vel_yaw", [-1.0, 1.0])
+
+
+def test_a_randomised_base_mass_must_stay_positive():
+    """A base of m0 kg with added_mass_range [-m0 - 1, ...] would get a negative mass: every world then diverges
+    at every step (counted, reset, never trained)."""
+    cfg = cfg_of()
+    env = GenteBiped(cfg, device="cpu")
+    mass0 = float(env.mjm.body_mass[env.base])
+    cfg.domain_rand.randomize_base_mass = True
+    cfg.domain_rand.added_mass_range = [-mass0 - 1.0, 1.0]
+    with pytest.raises(ValueError, match=r"added_mass_range=.*base mass .* kg.*low > -"):
+        GenteBiped(cfg, device="cpu")
+
+
+@pytest.mark.parametrize("field, value", [("friction_range", [1.0, 0.5]), ("friction_range", [-0.2, 0.5]),
+                                          ("added_mass_range", [2.0, 1.0])])
+def test_randomisation_ranges_are_low_high_pairs(field, value):
+    cfg = cfg_of()
+    cfg.domain_rand.randomize_friction = field == "friction_range"
+    cfg.domain_rand.randomize_base_mass = field == "added_mass_range"
+    setattr(cfg.domain_rand, field, value)
+    with pytest.raises(ValueError, match=rf"cfg.domain_rand.{field}=.*; use \[low, high\]"):
+        GenteBiped(cfg, device="cpu")
+
+
+def test_an_observation_scale_that_does_not_fit_its_term_names_the_term():
+    cfg = cfg_of()
+    cfg.observations.policy.commands = ObsTerm(fn="commands", scale=(2.0, 2.0))  # the term has 3 columns
+    with pytest.raises(ValueError, match=r"cfg.observations.policy.commands.scale has 2 values; the term has 3 "
+                                         r"columns"):
+        GenteBiped(cfg, device="cpu")
