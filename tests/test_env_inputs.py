@@ -67,3 +67,13 @@ def test_an_observation_scale_that_does_not_fit_its_term_names_the_term():
     with pytest.raises(ValueError, match=r"cfg.observations.policy.commands.scale has 2 values; the term has 3 "
                                          r"columns"):
         GenteBiped(cfg, device="cpu")
+
+
+@pytest.mark.parametrize("section, field", [("commands", "resampling_time"), ("domain_rand", "push_interval_s")])
+def test_an_interval_under_half_a_policy_step_is_refused_not_rounded_up(section, field):
+    """The biped's policy step is 0.005 s x 4 = 0.02 s; 0.005 s would round to no step at all (once made every step)."""
+    cfg = cfg_of()
+    cfg.domain_rand.push_robots = True
+    setattr(getattr(cfg, section), field, 0.005)
+    with pytest.raises(ValueError, match=rf"cfg.{section}.{field}=0.005 s is under half a policy step \(0.02 s\)"):
+        GenteBiped(cfg, device="cpu")

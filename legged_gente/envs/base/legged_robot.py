@@ -136,6 +136,13 @@ class LeggedRobot(VecEnv):
             bounds = list(rand.added_mass_range)
             checks.append((len(bounds) == 2 and bounds[0] <= bounds[1],
                            f"cfg.domain_rand.added_mass_range={bounds}; use [low, high] (kg), low <= high"))
+        dt = cfg.sim.dt * cfg.control.decimation
+        intervals = [("commands.resampling_time", cfg.commands.resampling_time)]
+        if rand.push_robots:
+            intervals.append(("domain_rand.push_interval_s", rand.push_interval_s))
+        for name, seconds in intervals:  # counted in whole policy steps: under half a step would round to none
+            checks.append((seconds >= dt / 2, f"cfg.{name}={seconds} s is under half a policy step ({dt:g} s); use "
+                                              f"at least {dt:g} s"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
@@ -211,8 +218,8 @@ class LeggedRobot(VecEnv):
         self.push_robots, self.max_push_vel_xy = bool(rand.push_robots), float(rand.max_push_vel_xy)
         self.random_init_yaw, self.init_lin_vel_xy_noise = bool(rand.random_init_yaw), float(rand.init_lin_vel_xy_noise)
         self.joint_pos_noise = float(cfg.init_state.joint_pos_noise)
-        self._resample_steps = max(1, int(round(cfg.commands.resampling_time / self.dt)))
-        self._push_steps = max(1, int(round(rand.push_interval_s / self.dt)))
+        self._resample_steps = int(round(cfg.commands.resampling_time / self.dt))  # >= 1 (_validate_cfg)
+        self._push_steps = max(1, int(round(rand.push_interval_s / self.dt)))  # 1 where pushes are off
         init = cfg.init_state
         self.init_base_state = torch.tensor(list(init.pos) + list(init.rot) + list(init.lin_vel) + list(init.ang_vel),
                                             dtype=torch.float32, device=dev)
