@@ -34,6 +34,17 @@ def test_set_overrides_env_and_train_fields_with_their_types():
     ("env.num_envs=1.5", "of type int"),
     ("actor.hidden_dims=[256,128", r"the field is a list; give a list literal .* e.g. actor.hidden_dims=\[512, 256\]"),
     ("terrain.terrain_types=[a,b]", "give a list literal of numbers or quoted strings"),
+    # entries of another type crashed later in torch ("too many dimensions 'str'", "could not convert string")
+    ("commands.ranges.lin_vel_x=['a','b']",
+     r"entries are numbers \(float\), e.g. commands.ranges.lin_vel_x=\[-1.0, 1.0\]"),
+    ("terrain.terrain_types=['flat', 2]", r"entries are str"),
+    ("control.stiffness={'hip': 'x'}", r"values are numbers \(float\)"),
+    # a section given a value, a field used as a section: what the field is and how to set it
+    ("rewards.scales=3", r"rewards.scales is a config section, not a field; set one of its fields, e.g. "
+                         r"--set rewards.scales.\w+=\.\.\."),
+    ("control.stiffness.knee=150", r"control.stiffness is a field \(dict\), not a config section; set it whole: "
+                                   r"--set control.stiffness=\{'hip': 150.0"),
+    ("terrain.curriculum=true", "of type bool; give True or False"),
 ])
 def test_set_rejects_unknown_fields_and_wrong_types(flag, message):
     env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
@@ -52,3 +63,16 @@ def test_set_reaches_the_env_built_by_the_registry():
     args = parsed("--task", "gente_biped_flat", "--num_envs", "2", "--set", "rewards.base_height_target=0.8")
     env, env_cfg = task_registry.make_env("gente_biped_flat", args)
     assert env.cfg.rewards.base_height_target == 0.8
+
+
+def test_set_entries_of_a_number_list_or_dict_become_floats_as_a_number_field_does():
+    env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
+    apply_args(parsed("--set", "commands.ranges.lin_vel_x=[0, 1]",
+                      "--set", "observations.policy.commands.scale=[2, 2, 1]",
+                      "--set", "control.stiffness={'hip': 150, 'knee': 200.5, 'ankle': 80}"), env_cfg, train_cfg)
+    assert env_cfg.commands.ranges.lin_vel_x == [0.0, 1.0]
+    assert all(isinstance(v, float) for v in env_cfg.commands.ranges.lin_vel_x)
+    assert env_cfg.observations.policy.commands.scale == (2.0, 2.0, 1.0)
+    assert all(isinstance(v, float) for v in env_cfg.observations.policy.commands.scale)
+    assert env_cfg.control.stiffness == {"hip": 150.0, "knee": 200.5, "ankle": 80.0}
+    assert all(isinstance(v, float) for v in env_cfg.control.stiffness.values())

@@ -133,7 +133,7 @@ def encode_gif(mp4: Path, path: Path, width: int, fps: int, colours: int) -> Non
                     "-i", str(mp4), "-vf", graph, str(path)], check=True)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path)
     parser.add_argument("--clips", nargs="+", choices=[c.name for c in CLIPS], default=[c.name for c in CLIPS])
@@ -144,16 +144,22 @@ def main() -> None:
     parser.add_argument("--gif_fps", type=int, default=10)
     parser.add_argument("--gif_colours", type=int, default=64)
     parser.add_argument("--seconds", type=float, help="every clip this long (a quick look); default: each clip's own")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
+    if args.seconds is not None and args.seconds <= 0 or args.every < 1:
+        parser.error("--seconds must be > 0 and --every >= 1")
     os.environ.setdefault("MUJOCO_GL", "egl")
     args.out.mkdir(parents=True, exist_ok=True)
     report = []
     for clip in (c for c in CLIPS if c.name in args.clips):
-        if args.seconds:
+        if args.seconds is not None:
             clip = dataclasses.replace(clip, seconds=args.seconds)
         report.append(record_clip(clip, args.out, args.every, tuple(args.size), args.crf))
         print(json.dumps(report[-1]), flush=True)
-    if GIF_CLIP in args.clips:
+    gif_clip = next((c for c in report if c["clip"] == GIF_CLIP), None)
+    if gif_clip is not None and gif_clip["seconds"] < GIF_SECONDS[0] + 0.5:  # ffmpeg fails on a GIF of no frame
+        print(f"no GIF: the {GIF_CLIP} clip ({gif_clip['seconds']:g} s) ends before the GIF's start "
+              f"({GIF_SECONDS[0]:g} s) and half a second")
+    elif gif_clip is not None:
         gif = args.out / f"{GIF_CLIP}.gif"
         encode_gif(args.out / f"{GIF_CLIP}.mp4", gif, args.gif_width, args.gif_fps, args.gif_colours)
         print(f"wrote {gif} ({gif.stat().st_size} bytes)")

@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("csv")
     parser.add_argument("png")
@@ -19,8 +19,15 @@ def main() -> None:
     parser.add_argument("--level_target", type=float, default=6.0, help="terrain level drawn as a dotted line")
     parser.add_argument("--mark", type=float, nargs="*", default=[], help="minutes to mark (e.g. resumes)")
     parser.add_argument("--title", default="")
-    args = parser.parse_args()
-    rows = list(csv.DictReader(open(args.csv)))
+    args = parser.parse_args(argv)
+    with open(args.csv, newline="") as f:
+        reader = csv.DictReader(f)
+        rows = list(reader)
+    needed = ["wall_s", "mean_episode_length", "rew_tracking_lin_vel"] + (["terrain_level"] if args.levels else [])
+    missing = [c for c in needed if c not in (reader.fieldnames or [])]
+    if missing or not rows:
+        what = f"no column {', '.join(missing)}" if missing else "no rows"
+        parser.error(f"{args.csv}: {what}; give a training CSV of docs/results (tools/scalars_to_results.py)")
     t = [float(r["wall_s"]) / 60 for r in rows]
     fig, ax = plt.subplots(figsize=(7, 3.6))
     ax.plot(t, [float(r["mean_episode_length"]) / args.max_episode_length for r in rows], label="episode length / max")

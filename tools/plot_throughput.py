@@ -10,15 +10,20 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("png")
     parser.add_argument("csvs", nargs="+", help="LABEL=PATH")
     parser.add_argument("--skip_raw", nargs="*", default=[], help="labels whose raw column is not plotted")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     styles = ("-", "--", ":")  # one line style per CSV
     if len(args.csvs) > len(styles):
         parser.error(f"{len(args.csvs)} CSVs given; at most {len(styles)} (one line style each) fit one plot")
+    for item in args.csvs:
+        if "=" not in item:
+            parser.error(f"{item!r}: give each CSV as LABEL=PATH, e.g. \"H100=benchmark.csv\"")
+        if not Path(item.split("=", 1)[1]).is_file():
+            parser.error(f"{item!r}: no such file; give a CSV of gente-benchmark --csv")
     fig, ax = plt.subplots(figsize=(10, 4))
     for style, item in zip(styles, args.csvs):
         label, path = item.split("=", 1)

@@ -99,15 +99,16 @@ def screenshot(url: str, path: Path, wait: float = 180.0, min_fraction: float = 
     raise TimeoutError(f"the scene covered {fraction:.1%} of the view after {wait:.0f} s (need {min_fraction:.0%})")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], usage="%(prog)s [-h] [--wait WAIT] out -- "
+                                     "GENTE_VIEW_ARGS...")
     parser.add_argument("out", type=Path)
     parser.add_argument("--wait", type=float, default=240.0, help="s to wait for the scene")
-    argv = sys.argv[1:]
+    argv = sys.argv[1:] if argv is None else list(argv)
+    split = argv.index("--") if "--" in argv else len(argv)
+    args, view_args = parser.parse_args(argv[:split]), argv[split + 1:]  # --help: the usage, before the check below
     if "--" not in argv:
         parser.error("give gente-view's arguments after --")
-    split = argv.index("--")
-    args, view_args = parser.parse_args(argv[:split]), argv[split + 1:]
     port = free_port()
     server = subprocess.Popen([sys.executable, "-m", "legged_gente.scripts.view", *view_args, "--headless",
                                "--no_shadows", "--port", str(port), "--seconds", str(args.wait + 300)])

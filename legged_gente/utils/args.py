@@ -228,6 +228,10 @@ def _override_value(text: str, current, name: str):
     if isinstance(current, str) and not isinstance(value, str):
         value = text
     expected = type(current)
+    if _is_section(current):
+        fields = sorted(n for n in dir(current) if not n.startswith("_"))
+        raise ValueError(f"--set {name}={text}: {name} is a config section, not a field; set one of its fields, e.g. "
+                         f"--set {name}.{fields[0] if fields else 'FIELD'}=...; its fields: {', '.join(fields)}")
     if current is None or isinstance(value, expected) and not (isinstance(value, bool) and expected is int):
         return value
     if expected is float and isinstance(value, int) and not isinstance(value, bool):
@@ -237,8 +241,42 @@ def _override_value(text: str, current, name: str):
     if expected in (list, tuple):
         raise ValueError(f"--set {name}={text}: the field is a list; give a list literal of numbers or quoted "
                          f"strings, e.g. {name}={list(current)[:2]!r}")
-    raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; give a "
-                     f"value of that type")
+    raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; give "
+                     f"{'True or False' if expected is bool else 'a value of that type'}")
+
+
+def _is_section(value) -> bool:
+    """A config section (an instance of a nested config class, or an observation term's record), not a value."""
+    return value is not None and not isinstance(value, (int, float, str, list, tuple, dict))
+
+
+def _entry_kind(entries) -> type | None:
+    """The one type (bool, int, float or str) of a list's entries or a dict's values; None when empty or mixed."""
+    kinds = {type(entry) for entry in entries}
+    return next(iter(kinds)) if len(kinds) == 1 and kinds <= {bool, int, float, str} else None
+
+
+def _typed_entries(value, current, name: str, text: str):
+    """A list's entries or a dict's values of the type of ``current``'s (an int becomes a float where the field's
+    entries are floats, as for a number field): a word among numbers fails in torch, far from the flag."""
+    if not isinstance(value, (list, tuple, dict)) or not isinstance(current, (list, tuple, dict)):
+        return value
+    kind = _entry_kind(current.values() if isinstance(current, dict) else current)
+    if kind is None:
+        return value
+
+    def typed(entry):
+        if kind is float and type(entry) is int:
+            return float(entry)
+        if type(entry) is not kind:
+            what = "values" if isinstance(current, dict) else "entries"
+            noun = f"numbers ({kind.__name__})" if kind in (int, float) else kind.__name__
+            raise ValueError(f"--set {name}={text}: the field's {what} are {noun}, e.g. {name}={current!r}")
+        return entry
+
+    if isinstance(value, dict):
+        return {key: typed(entry) for key, entry in value.items()}
+    return type(value)(typed(entry) for entry in value)
 
 
 def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
@@ -253,18 +291,22 @@ def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
         cfg = owners[0] if owners else env_cfg
         owner = cfg
         for i, part in enumerate(path[:-1]):
-            owner = getattr(owner, part, None)
-            if owner is None or isinstance(owner, (int, float, str, list, dict)):
-                raise ValueError(f"--set {text!r}: {'.'.join(path[:i + 1])} is not a config section of "
-                                 f"{type(cfg).__name__}")
+            parent, owner = owner, getattr(owner, part, None)
+            prefix = ".".join(path[:i + 1])
+            if owner is None and not hasattr(parent, part):
+                raise ValueError(f"--set {text!r}: {prefix} is not a config section of {type(cfg).__name__}")
+            if not _is_section(owner):
+                raise ValueError(f"--set {text!r}: {prefix} is a field ({type(owner).__name__}), not a config "
+                                 f"section; set it whole: --set {prefix}={owner!r}")
         if not hasattr(owner, path[-1]) or path[-1].startswith("_"):
             fields = sorted(n for n in dir(owner) if not n.startswith("_"))
             raise ValueError(f"--set {text!r}: {'.'.join(path[:-1])} has no field {path[-1]!r}; its fields: "
                              f"{', '.join(fields)}")
-        value = _override_value(value, getattr(owner, path[-1]), ".".join(path))
+        current, name = getattr(owner, path[-1]), ".".join(path)
+        typed = _override_value(value, current, name)
         if path[-1] == "hidden_dims":
-            _check_layer_widths(".".join(path), value)
-        setattr(owner, path[-1], value)
+            _check_layer_widths(name, typed)
+        setattr(owner, path[-1], _typed_entries(typed, current, name, value))
 
 
 def _check_layer_widths(name: str, dims) -> None:
