@@ -32,8 +32,9 @@ class ForcesConfig:
     foot_water_geom_names: list[str] | None  sphere or box geoms of the feet that feel water (buoyancy, drag);
                            None: the foot_geom_names
     sole_length, sole_width: float | None  a rectangular sole's size (m) along the foot body's x and y axes; None:
-                           the footprint of the first foot's geoms in its body's x-y plane (a lone sphere, capsule
-                           or cylinder: a disc of its radius; else the rectangle around the geoms)
+                           the footprint of the first foot's geoms in its body's x-y plane, each as it is turned in
+                           the body (a lone sphere, or a lone upright capsule or cylinder: a disc of its radius; else
+                           the rectangle around the geoms)
     contact_threshold: float  foot normal force (N) above which a foot counts as in contact
     liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
                           off: its slip and rut are forgotten (shorter dips are solver chatter, not lift-off)

@@ -38,6 +38,27 @@ from legged_gente.terrain.materials import MaterialMap
 
 
 _ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]
+# numeric settings and the bound each must meet: below it a substep divides by zero, gives NaN forces (a foot at rest
+# on soil with bulldozing_speed_reg 0) or forces that add energy (negative drag coefficients or density)
+_POSITIVE = ("water_density", "friction_reference", "soil_friction_cap", "sole_contact_max_depth",
+             "bulldozing_speed_reg", "sinkage_load_tau")
+_NON_NEGATIVE = ("drag_coefficient", "added_mass_coefficient", "plate_drag_coefficient", "sphere_drag_coefficient",
+                 "noise_std", "contact_threshold", "liftoff_time", "min_friction", "sinkage_rate", "max_rut_depth")
+
+
+def _check_values(cfg) -> None:
+    """One ValueError naming the first numeric setting out of its range and the default to use."""
+    for names, positive in ((_POSITIVE, True), (_NON_NEGATIVE, False)):
+        for name in names:
+            value = getattr(cfg, name)
+            try:
+                ok = float(value) > 0 if positive else float(value) >= 0  # False for NaN
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                where = " (in an env: set cfg.terrain.static_friction)" if name == "friction_reference" else ""
+                raise ValueError(f"forces.{name}={value!r} must be a number {'>' if positive else '>='} 0{where}; "
+                                 f"the default is {getattr(ForcesConfig, name)}.")
 
 
 def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
@@ -65,6 +86,27 @@ def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
             if inside:
                 out[k] = 0.0
     return out
+
+
+def _body_box(mjm, geoms) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners, in their body's frame, of the box around the geoms, each as it is turned in the body
+    (a capsule lying along x spans its length in x): exact for spheres, capsules, cylinders and boxes, the turned
+    bounding box (``geom_aabb``) of any other geom."""
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for g in geoms:
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, mjm.geom_quat[g])
+        rot = rot.reshape(3, 3)
+        r, h, axis = mjm.geom_size[g, 0], mjm.geom_size[g, 1], np.abs(rot[:, 2])
+        centre, half = mjm.geom_pos[g] + rot @ mjm.geom_aabb[g, :3], np.abs(rot) @ mjm.geom_aabb[g, 3:]
+        if mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE:
+            half = np.full(3, r)
+        elif mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE:
+            half = axis * h + r
+        elif mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+            half = axis * h + r * np.sqrt(np.maximum(1.0 - axis**2, 0.0))
+        lo, hi = np.minimum(lo, centre - half), np.maximum(hi, centre + half)
+    return lo, hi
 
 
 def _welded(mjm, body_a: int, body_b: int) -> bool:
@@ -139,6 +181,7 @@ class TerrainForces:
         if missing:
             raise ValueError(f"forces config lacks {missing}; subclass legged_gente.external_forces.field."
                              f"ForcesConfig to get the defaults.")
+        _check_values(cfg)
         heights = np.asarray(heights, np.float32)
         if heights.ndim != 2 or heights.shape != material.shape:
             raise ValueError(f"heights {heights.shape} and material map {material.shape} must be the same 2-D "
@@ -211,9 +254,7 @@ class TerrainForces:
         offsets = [mjm.geom_pos[g].mean(0) for g in groups] or np.zeros((1, 3))
         self.foot_offset = arr(np.asarray(offsets, np.float32), wp.vec3)
         # the sole's contact plane below that centre (body frame, foot level): where the soil forces act
-        box = int(mujoco.mjtGeom.mjGEOM_BOX)
-        drops = [offsets[f][2] - min(mjm.geom_pos[g, 2] - mjm.geom_size[g, 2 if mjm.geom_type[g] == box else 0]
-                                     for g in group) for f, group in enumerate(groups)] or [0.0]
+        drops = [offsets[f][2] - _body_box(mjm, group)[0][2] for f, group in enumerate(groups)] or [0.0]
         self.foot_drop = arr(np.asarray(drops, np.float32), float)
         geom_foot = np.full(mjm.ngeom, -1, np.int32)
         for f, g in enumerate(groups):
@@ -349,9 +390,10 @@ class TerrainForces:
 
     def _sole(self, mjm, groups):
         """Sole length (along the foot body's x axis), width (along its y axis) and whether it is a disc: from the
-        config (a rectangle), else the footprint of the first foot's geoms in its body's x-y plane: a lone sphere,
-        capsule or cylinder is a disc of its radius, anything else the rectangle around its geoms (a box: its x-y
-        extent)."""
+        config (a rectangle), else the footprint of the first foot's geoms in its body's x-y plane, each geom as it
+        is turned in the body: a lone sphere, or a lone capsule or cylinder standing upright, is a disc of its
+        radius, anything else the rectangle around its geoms (a capsule lying along x: its length by its
+        diameter)."""
         cfg = self.cfg
         if cfg.sole_length is not None and cfg.sole_width is not None:
             length, width, disc = float(cfg.sole_length), float(cfg.sole_width), False
@@ -359,11 +401,11 @@ class TerrainForces:
             length, width, disc = 1.0, 1.0, False  # no feet: never used
         else:
             g = groups[0]
-            box = mjm.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_BOX)
-            half = np.where(box[:, None], mjm.geom_size[g, :2], mjm.geom_size[g, :1])
-            lo, hi = (mjm.geom_pos[g, :2] - half).min(0), (mjm.geom_pos[g, :2] + half).max(0)
+            lo, hi = _body_box(mjm, g)
             length, width = float(hi[0] - lo[0]), float(hi[1] - lo[1])
-            disc = len(g) == 1 and not box[0]
+            round_types = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE),
+                           int(mujoco.mjtGeom.mjGEOM_CYLINDER))
+            disc = len(g) == 1 and int(mjm.geom_type[g[0]]) in round_types and math.isclose(length, width)
         if not (length > 0 and width > 0):
             raise ValueError(f"sole size must be > 0 m, got length={length}, width={width}; set "
                              f"forces.sole_length / sole_width.")

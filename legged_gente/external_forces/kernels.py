@@ -41,18 +41,6 @@ def cylinder_drag_fn(rho: float, cd: float, radius: float, length: float, speed:
 
 
 @wp.func
-def buoyancy_fn(rho: float, g: float, radius: float, length: float) -> float:
-    """Archimedes: rho g pi r^2 L."""
-    return rho * g * PI * radius * radius * length
-
-
-@wp.func
-def added_mass_fn(rho: float, cm: float, radius: float, length: float) -> float:
-    """Morison inertia term's added mass: cm rho pi r^2 L."""
-    return cm * rho * PI * radius * radius * length
-
-
-@wp.func
 def flow_force_fn(kind: int, t: float, amplitude: float, omega: float, phase: float) -> float:
     """GenTe flow term: still (0) -> 0, current (1) -> A, tide (2) -> A cos(omega t + phase)."""
     if kind == 1:

@@ -45,13 +45,14 @@ def buoyancy(rho, g, radius, submerged_length):
     return np.asarray(rho) * g * np.pi * np.asarray(radius) ** 2 * submerged_length
 
 
-def added_mass(rho, cm, radius, submerged_length):
-    """Added (hydrodynamic) mass of a cylinder accelerating across a fluid (kg): cm * rho * pi r^2 L.
+def added_mass(rho, ca, radius, submerged_length):
+    """Added (hydrodynamic) mass of a cylinder accelerating across a fluid (kg): ca * rho * pi r^2 L.
 
-    Morison equation inertia term; cm = 1 for a circular cylinder in potential flow (Hoerner; Newman,
-    *Marine Hydrodynamics*, 1977, sec. 4.13). The reaction force is -m_a * (relative acceleration).
+    ca the added-mass coefficient, 1 for a circular cylinder in potential flow (Newman, *Marine Hydrodynamics*,
+    1977, sec. 4.13); Morison's inertia coefficient of a fixed cylinder in accelerating flow is cm = 1 + ca. The
+    reaction force is -m_a * (relative acceleration across the axis).
     """
-    return np.asarray(cm) * rho * np.pi * np.asarray(radius) ** 2 * submerged_length
+    return np.asarray(ca) * rho * np.pi * np.asarray(radius) ** 2 * submerged_length
 
 
 def flow_force(kind, t, amplitude, omega=0.0, phase=0.0):

@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 from legged_gente.external_forces import models  # noqa: E402
 from legged_gente.external_forces import water_models as WM  # noqa: E402
 
-RHO, G, CD, CM = 1000.0, 9.81, 1.1, 1.0
+RHO, G, CD, CA = 1000.0, 9.81, 1.1, 1.0  # CA: the added-mass coefficient (Morison cm = 1 + CA)
 
 
 def gait_figure(path: Path):
@@ -48,7 +48,7 @@ def gait_figure(path: Path):
                 v = np.array([walk, 0.0, 0.0]) + np.cross(wv, arm)
                 acc = np.cross([0.0, a, 0.0], arm) + np.cross(wv, np.cross(wv, arm))
                 fd = WM.crossflow_drag(RHO, CD, r, vol, v - u, axis)
-                fi = WM.inertia_force(RHO, CM, vol, du, axis) - CM * RHO * vol * (acc - np.dot(acc, axis) * axis)
+                fi = WM.inertia_force(RHO, CA, vol, du, axis) - CA * RHO * vol * (acc - np.dot(acc, axis) * axis)
                 drag, inertia = drag + fd, inertia + fi
                 buoy = buoy + np.array([0.0, 0.0, RHO * G * vol])
                 paper = paper + WM.crossflow_drag(RHO, CD, r, vol, v - u, axis, paper_area=True)

@@ -40,7 +40,6 @@ GW = wp.constant(wp.vec3(5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0))
 NGAUSS = 3
 TINY = wp.constant(1.0e-6)
 GEOM_SPHERE = wp.constant(2)
-GEOM_BOX = wp.constant(6)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -372,26 +371,30 @@ def foot_water_kernel(
     cell = water_cell(water, c)
     z_w = water.surface[cell[0], cell[1]]
     t = time[w]
-    vrel = point_velocity(cvel, subtree_com, body_rootid, w, b, c) - water_flow(water, cell, t, xi[w])
+    u = water_flow(water, cell, t, xi[w])
     f = wp.vec3(0.0)
     p = c
+    v = wp.vec3(0.0)
     vol = float(0.0)
     frac = float(0.0)
+    # the drag takes the velocity v of the point p it acts at (the wetted part's middle): its power is never positive
     if geom_type[gid] == GEOM_SPHERE:
         r = size[0]
         vol = sphere_cap_volume_fn(r, z_w - (c[2] - r))
         frac = vol / (4.0 / 3.0 * PI * r * r * r)
         if frac > 0.0:
-            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, frac, vrel)
+            v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, frac, v - u)
             f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
     else:
         frac = box_submerged_fraction_fn(size, rot, c[2], z_w)
         if frac > 0.0:
             vol = 8.0 * size[0] * size[1] * size[2] * frac
             e_z = wp.abs(rot[2, 0]) * size[0] + wp.abs(rot[2, 1]) * size[1] + wp.abs(rot[2, 2]) * size[2]
-            f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), vrel)
-            f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
             p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # middle of the submerged height
+            v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+            f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), v - u)
+            f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
     scale = float(0.0)
     if frac > 0.0 and paper_added_mass == 0:
         scale = frac
@@ -400,7 +403,6 @@ def foot_water_kernel(
         com = subtree_com[w, body_rootid[b]]
         sacc = velocity_product_accel(cdof_dot, qvel, point_dofs, first_point + k, w)
         vb = cvel[w, b]
-        v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
         avp = point_vp_accel(sacc, wp.vec3(vb[0], vb[1], vb[2]), p - com, v)
         du = flow_accel(water, cell, t, xi[w])
         f = f + rho * vol * du + added * (du - avp)

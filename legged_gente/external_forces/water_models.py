@@ -21,10 +21,11 @@ The capsule's hemispherical caps carry buoyancy only: each gets half the submerg
 at the cylinder's end (exact for a horizontal capsule and for a cap wholly wet or dry; a tilted cap cut by the surface
 is off by at most rho g pi r^3 / 3, on a vertical capsule; the volume is continuous).
 Feet (``foot_*``): a sphere gets buoyancy from its exact spherical-cap volume and sphere drag; a box gets buoyancy
-from its submerged height fraction (exact for a level box) and flat-plate drag on each face pair. Both get an added
-mass tensor (``foot_added_mass``: a sphere's half its displaced mass, a box's faces as thin plates), scaled by the
-wet fraction, entering M implicitly as the legs' does, and the Froude-Krylov plus added-mass force of an
-accelerating flow.
+from its submerged height fraction (exact for a level box) and flat-plate drag on each face pair. Their forces act
+at the middle of the wetted part (a sphere's centre), and the drag takes that point's velocity, so its power is never
+positive however the foot spins. Both get an added mass tensor (``foot_added_mass``: a sphere's half its displaced
+mass, a box's faces as thin plates), scaled by the wet fraction, entering M implicitly as the legs' does, and the
+Froude-Krylov plus added-mass force of an accelerating flow.
 """
 
 from __future__ import annotations
