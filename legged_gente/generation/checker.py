@@ -90,7 +90,7 @@ def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[st
     problems: list[str] = []
 
     has_material = material.has_water().any() or material.has_soil().any() or (material.friction < GROUND_FRICTION).any()
-    if not spec.calls or (float(heights.max() - heights.min()) <= MIN_RELIEF and not has_material):
+    if float(heights.max() - heights.min()) <= MIN_RELIEF and not has_material:  # a heightmap's relief counts too
         problems.append("empty: the spec builds flat, plain ground (no relief, water, soil or low friction).")
 
     # Per cell, against the terrain's own worst-case bound on stacked heights (the one validation uses).

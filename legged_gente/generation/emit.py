@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import keyword
 import os
 import shutil
 import tempfile
@@ -24,6 +25,10 @@ import numpy as np
 
 from legged_gente.generation.spec import TerrainSpec
 
+MESH_FORMATS = ("obj", "glb", "ply", "stl")
+"""Mesh files ``emit(..., mesh=...)`` writes (the terrain library's ``Terrain.export_mesh``)."""
+HEIGHTMAP_NAME = "heightmap.npy"
+"""The emitted copy of a spec's heightmap, beside ``spec.json``."""
 DEFAULT_BASE = "legged_gente.envs.gente_biped.gente_biped_config:GenteBipedCfg.terrain"
 """``module:attribute.path`` of the terrain config class the emitted class subclasses."""
 
@@ -125,23 +130,35 @@ def emit(
     class_name: str | None = None,
     mesh: str | None = None,
 ) -> EmitResult:
-    """Write ``terrain_cfg.py``, ``spec.json``, ``preview.png`` (and ``terrain.<mesh>`` if ``mesh`` is a suffix).
+    """Write ``terrain_cfg.py``, ``spec.json``, ``preview.png`` (and ``terrain.<mesh>`` if ``mesh`` is one of
+    :data:`MESH_FORMATS`).
 
-    The files are made in a temporary folder inside ``out_dir`` and moved into place only once all of them are
-    made, so a failure (a spec that does not build, a full disk) leaves ``out_dir`` as it was.
+    The spec is validated first (a ValidationError names what would not load); a heightmap it names is copied
+    beside ``spec.json`` as ``heightmap.npy``, and the spec names that copy. The files are made in a temporary folder
+    inside ``out_dir`` and moved into place only once all of them are made, so a failure (a spec that does not
+    build, a full disk) leaves ``out_dir`` as it was.
     """
     base_module, base_attr, _ = resolve_base(base)
     class_name = class_name or class_name_for(spec.name)
-    if not class_name.isidentifier():
-        raise ValueError(f"class name {class_name!r} is not a Python identifier; pass a name like 'ForestTerrainCfg'.")
+    if not class_name.isidentifier() or keyword.iskeyword(class_name):
+        raise ValueError(f"class name {class_name!r} is not a name Python can give a class (an identifier, not a "
+                         f"keyword); pass a name like 'ForestTerrainCfg'.")
+    if mesh and mesh.lstrip(".").lower() not in MESH_FORMATS:
+        raise ValueError(f"mesh format {mesh!r} is none of {list(MESH_FORMATS)}; pass one of those.")
+    spec = spec.validated()  # spec.json must load: the emitted module and training read it
     out = Path(out_dir)
     created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    mesh_name = f"terrain.{mesh.lstrip('.')}" if mesh else None
+    mesh_name = f"terrain.{mesh.lstrip('.').lower()}" if mesh else None
+    map_name = HEIGHTMAP_NAME if spec.heightmap is not None else None
     stage = Path(tempfile.mkdtemp(prefix=".gente-emit-", dir=out))
     try:
+        if map_name:  # a copy beside spec.json, which names it: the folder stands alone, wherever it is moved
+            file = Path(spec.heightmap["file"])
+            shutil.copyfile(file if file.is_absolute() else (spec.base_dir or Path.cwd()) / file, stage / map_name)
+            spec = dataclasses.replace(spec, heightmap={**spec.heightmap, "file": map_name}, base_dir=stage)
         _write(spec, stage, base_module, base_attr, class_name, mesh_name)
-        for name in ("spec.json", "preview.png", mesh_name, "terrain_cfg.py"):  # the module, which names spec.json, last
+        for name in (map_name, "spec.json", "preview.png", mesh_name, "terrain_cfg.py"):  # the module last
             if name:
                 os.replace(stage / name, out / name)
     except BaseException:
@@ -157,7 +174,7 @@ def _write(
 ) -> None:
     """Write the files of :func:`emit` into ``folder``."""
     spec.save(folder / "spec.json")
-    source = spec.source.get("text") or (f"image sha256 {spec.source['image_sha256'][:12]}" if "image_sha256" in spec.source else "calls")
+    source = spec.source.get("text") or (f"image sha256 {str(spec.source['image_sha256'])[:12]}" if "image_sha256" in spec.source else "calls")
     provenance = {"backend": str(spec.backend), "model": None if spec.model is None else str(spec.model),
                   "source": str(source)[:200]}
     text = MODULE_TEMPLATE.format(

@@ -221,9 +221,7 @@ def _obstacles(args, sx, sy, issues):
               "max_size": _fit("discrete_obstacles", "max_size", hi, "max_size", issues),
               "density": _fit("discrete_obstacles", "density", float(args["num_rects"]) / (sx * sy), "num_rects/area", issues),
               "platform": _fit("discrete_obstacles", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
-    if params["min_size"] > params["max_size"]:
-        params["min_size"] = params["max_size"]
-    return [("discrete_obstacles", params)]
+    return [("discrete_obstacles", params)]  # lo <= hi, and _fit keeps the order
 
 
 def _waves(args, sx, sy, issues):
@@ -268,8 +266,7 @@ def _pillars(args, sx, sy, issues):
               "max_radius": _fit("pillars", "max_radius", size / 2.0, "max_pillar_size/2", issues),
               "min_radius": _fit("pillars", "min_radius", size / 4.0, "max_pillar_size/4", issues),
               "density": _fit("pillars", "density", float(args["num_pillars"]) / (sx * sy), "num_pillars/area", issues),
-              "platform": 1.5}
-    params["min_radius"] = min(params["min_radius"], params["max_radius"])
+              "platform": 1.5}  # min <= max: size/4 <= size/2 (a negative size meets both low bounds, 0.03 m)
     _ignored(args, ("pillar_gap", "step_height"), "our pillars are round, scattered without a minimum gap, with no ridges "
                                                   "between them", issues)
     return [("pillars", params)]

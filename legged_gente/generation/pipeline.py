@@ -49,7 +49,7 @@ def generate_spec(
         if image_bytes is not None:
             from legged_gente.generation.backends.image import plan_image
 
-            result = plan_image(image_bytes, size_x, size_y)
+            result = plan_image(image_bytes, size_x, size_y, resolution=resolution)
             if text:
                 result.warnings.append("the planner reads the image only; the text just names the terrain "
                                        "(use --backend openai to combine both).")

@@ -432,6 +432,11 @@ def validate_spec_dict(
             raise ValidationError([f"spec: {exc}."]) from None
     calls, messages = [], []
     for i, c in enumerate(data["calls"]):
+        layout = sorted(set(c["params"]) & set(LAYOUT_ARGS))
+        if layout:  # training passes params to the terrain as they are: layout there would not build
+            messages.append(f"spec: calls[{i}]: 'params' holds the layout argument(s) {layout}; put 'region' and "
+                            f"'mode' beside 'params', not in it.")
+            continue
         args = {**c["params"], "region": c["region"]}
         if "mode" in c:
             args["mode"] = c["mode"]

@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Mapping
 
 import numpy as np
-from PIL import Image
+from PIL import Image, ImageOps
 from scipy import ndimage
 
 from legged_gente.generation.backends import GenerationResult
@@ -117,11 +117,40 @@ def open_image(data: bytes, source: object = None) -> Image.Image:
                          f"file.") from None
 
 
+EXIF_ORIENTATION = 0x0112
+"""EXIF tag of how a stored picture must be turned to show it upright (1: as stored)."""
+
+
+def upright(img: Image.Image) -> Image.Image:
+    """``img`` turned as its EXIF orientation says (a camera held upright stores the picture turned): the picture a
+    viewer shows."""
+    return ImageOps.exif_transpose(img) if img.getexif().get(EXIF_ORIENTATION, 1) != 1 else img
+
+
 def _load(image: str | Path | bytes | Image.Image) -> Image.Image:
+    """The picture as 8-bit RGB, upright; transparent pixels (their colour means nothing) and integer or float
+    pixels beyond 8 bits (Pillow would clip them) are a one-line error. 16-bit pixels are scaled to 8 bits."""
     if isinstance(image, Image.Image):
-        return image.convert("RGB")
-    data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-    return open_image(data, image).convert("RGB")
+        img, name = image, "the image"
+    else:
+        data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
+        img, name = open_image(data, image), str(image) if isinstance(image, (str, Path)) else "the image"
+    img = upright(img)
+    if img.mode in ("RGBA", "LA", "PA", "RGBa", "La") or "transparency" in img.info:
+        clear = np.asarray(img.convert("RGBA"))[..., 3] < 255
+        if clear.any():
+            raise ValueError(f"{name} has transparent pixels ({100 * clear.mean():.0f} % of it), whose colour means "
+                             f"nothing; flatten it onto an opaque background (a sketch: paint every pixel a legend "
+                             f"colour) and pass it again.")
+    if img.mode.startswith("I;16"):  # 16-bit grey: 0..65535 onto 0..255
+        return Image.fromarray(np.round(np.asarray(img, np.float64) / 257.0).astype(np.uint8)).convert("RGB")
+    if img.mode in ("I", "F"):  # Pillow reads these as 0..255 and clips the rest
+        pixels = np.asarray(img)
+        lo, hi = float(pixels.min()), float(pixels.max())
+        if not (lo >= 0.0 and hi <= 255.0):
+            raise ValueError(f"{name} has {img.mode} pixels from {lo:g} to {hi:g}, beyond the 0..255 of a picture; "
+                             f"save it as an 8- or 16-bit PNG or as a JPEG and pass it again.")
+    return img.convert("RGB")
 
 
 def _hsv(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -634,8 +663,10 @@ def plan_image(
     size_x: float = 20.0,
     size_y: float = 20.0,
     registry: Mapping[str, AtomicTerrain] | None = None,
+    resolution: float | None = None,
 ) -> GenerationResult:
-    """Deterministic tool calls for a photo or a colour-coded sketch map (see the module docstring)."""
+    """Deterministic tool calls for a photo or a colour-coded sketch map (see the module docstring); with the tile's
+    ``resolution`` (m), a rectangle that holds no cell is skipped with a warning."""
     registry = ATOMIC_TERRAINS if registry is None else registry
     img = _load(image)
     warnings: list[str] = []
@@ -652,7 +683,7 @@ def plan_image(
         if registry[step.tool].kind == "geometric":
             args["mode"] = step.mode
         try:
-            calls.append(validate_call(step.tool, args, size_x, size_y, registry))
+            calls.append(validate_call(step.tool, args, size_x, size_y, registry, resolution))
         except ValidationError as exc:  # e.g. a block thinner than a cell: report, keep the rest
             warnings += [f"skipped: {m}" for m in exc.messages]
     return GenerationResult(calls, warnings, notes, model=None)

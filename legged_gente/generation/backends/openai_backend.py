@@ -19,9 +19,10 @@ Every request is bounded whatever the server does: ``timeout`` is the deadline o
 (connection, headers and body, not of each read: a server dripping one byte at a time cannot hold it
 longer), an answer is at most :data:`MAX_RESPONSE_BYTES`, and an answer that is not a chat completion (an
 HTML page, a proxy's error, truncated JSON) is a :class:`GenerationError` naming the server. The request
-runs in a worker thread so that the deadline holds even while the server drips its headers; the JSON is
-read into the ``openai`` package's ``ChatCompletion`` type, which checks its structure. A redirect (3xx) is not
-followed: it would carry the API key and the prompt to the address the server names; it is a
+runs in a worker thread so that the deadline holds even while the server drips its headers; the message of
+the first choice, the one part read, is read into the ``openai`` package's ``ChatCompletionMessage`` type,
+which checks its structure (the rest differs between servers: finish reasons, missing fields). A redirect
+(3xx) is not followed: it would carry the API key and the prompt to the address the server names; it is a
 :class:`GenerationError` naming that address.
 """
 
@@ -30,6 +31,7 @@ from __future__ import annotations
 import base64
 import dataclasses
 import http.client
+import io
 import json
 import os
 import re
@@ -41,10 +43,10 @@ import urllib.request
 from pathlib import Path
 from typing import Any, Mapping
 
-from openai.types.chat import ChatCompletion
+from openai.types.chat import ChatCompletionMessage
 
 from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, GenerationError, GenerationResult
-from legged_gente.generation.backends.image import open_image
+from legged_gente.generation.backends.image import EXIF_ORIENTATION, open_image, upright
 from legged_gente.generation.tools import named_regions, tool_schemas
 from legged_gente.generation.validation import (
     MAX_CALLS,
@@ -74,11 +76,32 @@ DESCRIBE_PROMPT = (
 )
 
 
+WEB_FORMATS = {"PNG": "png", "JPEG": "jpeg", "MPO": "jpeg", "WEBP": "webp", "GIF": "gif"}
+"""Pillow's format -> the image type servers read (a phone's MPO is a JPEG with a second picture appended)."""
+PNG_MODES = ("1", "L", "LA", "I", "I;16", "P", "RGB", "RGBA")
+"""Pixel modes a PNG holds as they are."""
+
+
 def image_data_url(image: str | Path | bytes) -> str:
-    """A ``data:image/...;base64,`` URL of an image file or its bytes (the format is read from the data)."""
+    """A ``data:image/...;base64,`` URL of an image file or its bytes (the format is read from the data).
+
+    PNG, JPEG, WEBP and GIF go as they are; other formats (BMP, TIFF, ...) are re-encoded as PNG, and a picture
+    stored turned (EXIF orientation) is sent upright, as servers decode the pixels without turning them.
+    """
     data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
-    fmt = open_image(data, image).format or "PNG"
-    return f"data:image/{fmt.lower()};base64,{base64.b64encode(data).decode('ascii')}"
+    img = open_image(data, image)
+    subtype = WEB_FORMATS.get(img.format or "")
+    if subtype is None or img.getexif().get(EXIF_ORIENTATION, 1) != 1:
+        img = upright(img)
+        buf = io.BytesIO()
+        if subtype == "jpeg":
+            img.convert("RGB").save(buf, format="JPEG", quality=95)
+        else:
+            subtype = "png"
+            img = img if img.mode in PNG_MODES else img.convert("RGBA" if "A" in img.getbands() else "RGB")
+            img.save(buf, format="PNG")
+        data = buf.getvalue()
+    return f"data:image/{subtype};base64,{base64.b64encode(data).decode('ascii')}"
 
 
 def system_prompt(size_x: float, size_y: float) -> str:
@@ -179,8 +202,9 @@ class OpenAIBackend:
                 body += chunk
             return response.status, response.headers, bytes(body)
 
-    def _create(self, **payload: Any) -> ChatCompletion:
-        """One chat-completions request within the deadline; every failure is a GenerationError naming the server."""
+    def _create(self, **payload: Any) -> ChatCompletionMessage:
+        """One chat-completions request within the deadline: the message of its first choice. Every failure is a
+        GenerationError naming the server."""
         deadline = time.monotonic() + self.timeout
         box: dict[str, Any] = {}
 
@@ -238,8 +262,15 @@ class OpenAIBackend:
                 f"{content_type[:60]!r}, starting {text[:80]!r}); point --base-url at its OpenAI-compatible API, "
                 f"e.g. http://localhost:8000/v1."
             )
+        # Only the first choice's message is read, so only it is checked: servers differ from OpenAI in the rest
+        # (finish_reason "eos_token" or "eos", no "object" or "created"), which ChatCompletion would refuse.
+        choices = data.get("choices") if isinstance(data, dict) else None
+        if choices == []:
+            raise GenerationError(f"the server at {self.base_url} returned no choices.")
         try:
-            return ChatCompletion.model_validate(data)
+            if not isinstance(choices, list) or not isinstance(choices[0], dict):
+                raise ValueError("'choices' is not a list of objects")
+            return ChatCompletionMessage.model_validate(choices[0].get("message"))
         except ValueError as exc:  # pydantic's ValidationError is a ValueError
             raise GenerationError(
                 f"the server at {self.base_url} answered JSON that is not a chat completion ({str(exc).splitlines()[0][:120]}; "
@@ -326,8 +357,8 @@ class OpenAIBackend:
         """Phase one of two: the vision model's description of the image as terrain."""
         content: list[dict[str, Any]] = [{"type": "text", "text": DESCRIBE_PROMPT + (f" Context: {text}" if text else "")}]
         content.append({"type": "image_url", "image_url": {"url": image_data_url(image)}})
-        resp = self._create(model=self.vision_model, messages=[{"role": "user", "content": content}])
-        description = (resp.choices[0].message.content or "").strip() if resp.choices else ""
+        message = self._create(model=self.vision_model, messages=[{"role": "user", "content": content}])
+        description = (message.content or "").strip()
         if not description:
             raise GenerationError(f"the vision model {self.vision_model!r} returned no description of the image.")
         return description
@@ -365,10 +396,7 @@ class OpenAIBackend:
         warnings: list[str] = early_warnings
         rejected: list[str] = []
         for round_ in range(1, self.max_retries + 2):
-            resp = self._create(model=self.model, messages=messages, tools=tools, tool_choice=self.tool_choice)
-            if not resp.choices:
-                raise GenerationError(f"the server at {self.base_url} returned no choices.")
-            msg = resp.choices[0].message
+            msg = self._create(model=self.model, messages=messages, tools=tools, tool_choice=self.tool_choice)
             tool_calls = msg.tool_calls or []
             if len(tool_calls) > MAX_TOOL_CALLS_PER_ANSWER:
                 rejected = [f"round {round_}: the model sent {len(tool_calls)} tool calls in one answer; at most "
