@@ -118,3 +118,14 @@ def test_a_sketch_block_thinner_than_a_cell_is_skipped_with_a_warning():
     assert any(w.startswith("skipped: flat: region") and "holds no cell at resolution 1.0 m" in w for w in result.warnings)
     spec, result = generate_spec(image=_encode(Image.fromarray(sketch)), resolution=0.1)
     assert [c.tool for c in spec.calls] == ["natural_ground", "flat"] and not result.warnings
+
+
+def test_running_out_of_memory_while_decoding_is_not_called_an_unreadable_file(monkeypatch):
+    from legged_gente.generation.backends import image as image_module
+
+    def out_of_memory(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(image_module.Image, "open", out_of_memory)
+    with pytest.raises(MemoryError):
+        image_module.open_image(b"\x89PNG\r\n\x1a\n", "big.png")

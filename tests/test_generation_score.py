@@ -60,3 +60,9 @@ def test_the_evaluation_set():
         assert {f for i in items for f in i["labels"]} == set(FEATURES)  # every feature is exercised
     for item in photos:
         assert item["path"].stat().st_size < 60_000, item["file"]
+
+
+def test_an_item_file_without_an_items_list_is_a_one_line_error(tmp_path):
+    (tmp_path / "texts.json").write_text(json.dumps([{"text": "a beach", "labels": ["sand"]}]))
+    with pytest.raises(ValueError, match=r"texts.json holds no 'items' list; write \{\"items\""):
+        load_items(tmp_path, "text")

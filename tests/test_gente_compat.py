@@ -310,3 +310,10 @@ def test_a_live_model_corrects_values_outside_our_range_that_an_import_clamps():
     assert imported.spec.calls[0].params["step_height"] == 0.3
     assert [(i.kind, i.message) for i in imported.issues] == [
         ("clamped", "step_height=30 gives stairs.step_height=30 m, outside our range [0.0, 0.3]; imported as 0.3.")]
+
+
+def test_a_transcript_of_too_many_calls_is_refused_whole_not_cut():
+    call = _gcall("flat_ground_terrain", {"terrain": "init_terrain", "height": 0.2, "part": 1})
+    result = import_transcript({"tool_calls": [call] * 257}, "long", "multi")
+    assert result.spec is None and result.error == "the transcript has 257 tool calls; at most 256 are read"
+    assert "at most 256" not in (import_transcript({"tool_calls": [call] * 256}, "long", "multi").error or "")

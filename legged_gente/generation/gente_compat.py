@@ -557,6 +557,10 @@ class TranscriptImport:
         return [i for t in self.translations for i in t.issues]
 
 
+MAX_TRANSCRIPT_CALLS = 256
+"""Tool calls a transcript may hold (a bound on the work a file can ask for)."""
+
+
 def import_transcript(
     data: Any, name: str, schema: str, seed: int = 0, resolution: float = GENTE_CELL,
 ) -> TranscriptImport:
@@ -567,8 +571,11 @@ def import_transcript(
     tool_calls = data.get("tool_calls") if isinstance(data, dict) else None
     if not isinstance(tool_calls, list) or not tool_calls:
         return TranscriptImport(None, [], "the transcript has no tool_calls list")
+    if len(tool_calls) > MAX_TRANSCRIPT_CALLS:
+        return TranscriptImport(None, [], f"the transcript has {len(tool_calls)} tool calls; at most "
+                                          f"{MAX_TRANSCRIPT_CALLS} are read")
     translations = []
-    for tc in tool_calls[:256]:
+    for tc in tool_calls:
         fn = tc.get("function") if isinstance(tc, dict) else None
         if not isinstance(fn, dict):
             translations.append(Translation("?", [], [Issue("unreadable_arguments", "a tool call without a function object.")]))

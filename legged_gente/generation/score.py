@@ -75,7 +75,10 @@ def load_items(root: Path, kind: str) -> list[dict]:
     path = root / ("texts.json" if kind == "text" else "photos/manifest.json")
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found; pass --set with a folder holding texts.json and photos/manifest.json.")
-    items = json.loads(path.read_text(encoding="utf-8"))["items"]
+    items = json.loads(path.read_text(encoding="utf-8"))
+    if not isinstance(items, dict) or not isinstance(items.get("items"), list):
+        raise ValueError(f"{path} holds no 'items' list; write {{\"items\": [{{\"labels\": [...], ...}}, ...]}}.")
+    items = items["items"]
     for i, item in enumerate(items):
         bad = sorted(set(item["labels"]) - set(FEATURES))
         if bad:

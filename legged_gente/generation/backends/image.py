@@ -112,6 +112,8 @@ def open_image(data: bytes, source: object = None) -> Image.Image:
     except Image.DecompressionBombError as exc:  # Pillow's first clause gives the image's pixels and its limit
         raise ValueError(f"{name} is too large to decode: {str(exc).split(',')[0]}; downscale it (a few megapixels "
                          f"are plenty) and pass it again.") from None
+    except MemoryError:
+        raise  # the machine is out of memory, not the file unreadable
     except Exception as exc:  # Pillow raises several types for unreadable data; its text names only a buffer
         raise ValueError(f"{name} could not be read as an image ({type(exc).__name__}); pass a PNG or JPEG "
                          f"file.") from None
