@@ -60,6 +60,9 @@ def test_unit_conversions_by_hand():
                                                          "downsampled_scale": 5, "part": 1}).calls
     assert off.params["height"] == pytest.approx(0.1) and uni.params["amplitude"] == pytest.approx(0.1)
     assert uni.params["step"] == pytest.approx(0.05) and uni.params["spacing"] == pytest.approx(0.5)
+    # no step given: GenTe's function runs with its default step=1, so 0.05 m again
+    _, uni = translate_call("random_uniform_terrain", {"min_height": 0.0, "max_height": 0.2, "part": 1}).calls
+    assert uni.params["step"] == pytest.approx(0.05)
     # gap depth in 0.005 m units: 200 -> 1.0 m
     assert translate_call("gap_terrain", {"gap_size": 0.5, "depth": 200, "part": 1}).calls[0].params["depth"] == pytest.approx(1.0)
 

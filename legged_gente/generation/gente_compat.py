@@ -199,7 +199,7 @@ def _uniform(args, sx, sy, issues):
     if lo > hi:
         issues.append(Issue("clamped", f"min_height={lo:g} > max_height={hi:g}; imported swapped."))
         lo, hi = hi, lo
-    step = float(args.get("step", 0.1))
+    step = float(args.get("step", 1.0))  # GenTe's function default (its schema says 0.1, but the code's 1 is what ran)
     # GenTe converts step with the horizontal scale: int(step / 0.1) height units of 0.005 m.
     step_m = int(step / GENTE_CELL) * GENTE_VERTICAL
     spacing = float(args["downsampled_scale"]) * GENTE_CELL if args.get("downsampled_scale") else GENTE_CELL
