@@ -310,3 +310,23 @@ def test_benchmark_grid_small():
     result = benchmark_grid(num_rows=2, num_cols=len(BENCHMARK_TYPES), tile_size=2.0, repeats=1)
     assert result["types"] == BENCHMARK_TYPES and result["best_s"] > 0
     assert result["cells"] == (2 * 20 + 100) * (len(BENCHMARK_TYPES) * 20 + 100)
+
+
+def test_a_generated_spec_at_another_resolution_is_refused(tmp_path):
+    """A 4 m spec at 0.05 m cells has 80 x 80 cells, as many as an 8 m tile at 0.1 m: laid there, its 0.3 m treads
+    would become 0.6 m. The grid refuses it, naming both cell sizes."""
+    import json
+
+    spec = {"version": 1, "size_x": 4.0, "size_y": 4.0, "resolution": 0.05, "seed": 0,
+            "calls": [{"tool": "stairs", "region": "full", "params": {"step_width": 0.3}, "mode": "set"}]}
+    path = tmp_path / "fine.json"
+    path.write_text(json.dumps(spec))
+    with pytest.raises(ValueError, match=r"fine.json: its cells are 0.05 m, the grid's resolution is 0.1 m; set "
+                                         r"terrain.resolution"):
+        Terrain(cfg(mode="generated", num_rows=1, num_cols=1, terrain_length=8.0, terrain_width=8.0,
+                    generated_specs=[str(path)]), 1)
+
+
+def test_a_negative_seed_is_refused_naming_the_field():
+    with pytest.raises(ValueError, match=r"^terrain seed=-1 must be a whole number >= 0"):
+        Terrain(cfg(seed=-1), 1)

@@ -14,6 +14,10 @@ from .registry import Param, atomic_terrain, min_le_max
 
 F32 = np.float32
 
+EDGE = 1e-9
+"""Metres by which a cell point on an edge may miss it through float rounding ((i - c) * resolution, a sum of
+two parameters): within it the point counts as on the edge, so an odd-sized region keeps its edge cells."""
+
 
 def _axes(shape: tuple[int, int], resolution: float) -> tuple[np.ndarray, np.ndarray]:
     """Cell coordinates relative to the region centre: x of shape (nx, 1), y of shape (1, ny), in metres."""
@@ -43,7 +47,7 @@ def _flatten_centre(h: np.ndarray, resolution: float, platform: float, ramp: flo
     if platform <= 0.0:
         return h
     d = _chebyshev(h.shape, resolution)
-    inside = d <= platform / 2.0
+    inside = d <= platform / 2.0 + EDGE
     level = h[inside].mean() if inside.any() else 0.0
     w = _smoothstep((d - platform / 2.0) / ramp)
     return w * h + (1.0 - w) * level
@@ -51,7 +55,7 @@ def _flatten_centre(h: np.ndarray, resolution: float, platform: float, ramp: flo
 
 def _clear_centre(h: np.ndarray, resolution: float, platform: float) -> np.ndarray:
     """Set the central square of side ``platform`` to 0 (obstacles that would overlap it are cut)."""
-    h[_chebyshev(h.shape, resolution) <= platform / 2.0] = 0.0
+    h[_chebyshev(h.shape, resolution) <= platform / 2.0 + EDGE] = 0.0
     return h
 
 
@@ -364,7 +368,7 @@ def stepping_stones(shape, resolution, rng, stone_size, stone_distance, depth, h
 )
 def gap(shape, resolution, rng, gap_width, depth, platform):
     d = _chebyshev(shape, resolution)
-    trench = (d > platform / 2.0) & (d <= platform / 2.0 + gap_width)
+    trench = (d > platform / 2.0 + EDGE) & (d <= platform / 2.0 + gap_width + EDGE)
     return np.where(trench, -depth, 0.0).astype(F32)
 
 
@@ -381,7 +385,7 @@ def gap(shape, resolution, rng, gap_width, depth, platform):
 )
 def pit(shape, resolution, rng, depth, width):
     d = _chebyshev(shape, resolution)
-    return np.where(d < width / 2.0, -depth, 0.0).astype(F32)
+    return np.where(d < width / 2.0 - EDGE, -depth, 0.0).astype(F32)
 
 
 PILLAR_PARAMS = {
@@ -403,7 +407,8 @@ def _scatter(rng, max_density: float, shape, resolution: float, min_radius: floa
 
 
 def _discs(shape, resolution, centres, radii, heights) -> np.ndarray:
-    """Heights of vertical cylinders (the max where they overlap), each written in its own window."""
+    """Heights of vertical cylinders (the max where they overlap), each written in its own window. A cylinder
+    thinner than a cell still fills the cell nearest its axis: none vanishes between the cell points."""
     h = np.zeros(shape, F32)
     x = np.arange(shape[0]) * resolution
     y = np.arange(shape[1]) * resolution
@@ -413,6 +418,9 @@ def _discs(shape, resolution, centres, radii, heights) -> np.ndarray:
         inside = (x[i0:i1, None] - cx) ** 2 + (y[None, j0:j1] - cy) ** 2 <= r * r
         win = h[i0:i1, j0:j1]
         win[inside] = np.maximum(win[inside], z)
+        i, j = int(round(cx / resolution)), int(round(cy / resolution))
+        if i < shape[0] and j < shape[1]:
+            h[i, j] = max(h[i, j], z)
     return h
 
 

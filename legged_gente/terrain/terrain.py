@@ -108,6 +108,8 @@ class Terrain:
             raise ValueError(f"num_rows={cfg.num_rows} and num_cols={cfg.num_cols} must both be >= 1.")
         if cfg.border_size < 0:
             raise ValueError(f"border_size must be >= 0 m, got {cfg.border_size}.")
+        if self.mode != "plane" and not (float(cfg.seed) == int(cfg.seed) >= 0):
+            raise ValueError(f"terrain seed={cfg.seed} must be a whole number >= 0 (it seeds every tile); set terrain.seed.")
         self.resolution = float(cfg.resolution)
         if not self.resolution > 0:
             raise ValueError(f"resolution must be > 0 m, got {cfg.resolution}.")
@@ -239,6 +241,10 @@ class Terrain:
         def build():
             try:
                 tile = tile_spec_from_document(json.loads(path.read_text()), path.parent)
+                if not math.isclose(tile.resolution, self.resolution, rel_tol=1e-9):  # same cells, other metres
+                    raise ValueError(f"its cells are {tile.resolution:g} m, the grid's resolution is {self.resolution:g} "
+                                     f"m; set terrain.resolution={tile.resolution:g} and the tile size to the spec's "
+                                     f"{tile.size_x:g} x {tile.size_y:g} m")
                 return tile.build(ground_friction=float(self.cfg.static_friction))
             except FileNotFoundError:
                 raise FileNotFoundError(f"terrain spec {path} does not exist; list the spec.json files that "
