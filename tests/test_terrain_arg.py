@@ -1,5 +1,7 @@
 """--terrain: plane, a generated spec JSON (any tile size), an emitted terrain_cfg.py, and bad input."""
 
+import json
+
 import pytest
 
 from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
@@ -63,3 +65,36 @@ def test_a_terrain_module_error_is_one_line_in_the_commands(tmp_path, capsys):
         train_script.main(["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "1", "--terrain", str(path)])
     err = capsys.readouterr().err
     assert exit_info.value.code == 2 and "Traceback" not in err and f"--terrain {path}:1: SyntaxError" in err, err
+
+
+def test_a_folder_names_the_files_to_pass(emitted):
+    """gente-generate writes a folder: passing it says so and names the files in it, not 'no such file'."""
+    with pytest.raises(ValueError) as error:
+        apply_terrain_arg(str(emitted), GenteBipedCfg())
+    message = str(error.value)
+    assert "is a folder" in message and str(emitted / "spec.json") in message and "no such file" not in message
+
+
+def test_a_module_with_several_terrain_classes_is_ambiguous(tmp_path):
+    """Which of two terrain configs a module means cannot be guessed (inspect lists them by name, so the first
+    in the alphabet would silently win)."""
+    path = tmp_path / "terrain_cfg.py"
+    path.write_text("from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg\n\n"
+                    "class Rough(LeggedRobotCfg.terrain):\n    mesh_type = 'heightfield'\n\n"
+                    "class Rougher(Rough):\n    max_difficulty = 2.0\n")
+    with pytest.raises(ValueError, match=r"defines 2 subclasses of LeggedRobotCfg.terrain \(Rough, Rougher\)"):
+        apply_terrain_arg(str(path), GenteBipedCfg())
+
+
+def test_a_spec_at_a_resolution_that_does_not_divide_the_border_builds(tmp_path):
+    """gente-generate --resolution 0.15: the task's 5 m border is 33.3 cells of it; the border grows to whole cells
+    (34 x 0.15 m = 5.1 m) instead of the terrain refusing a border size the user never set."""
+    spec = {"size_x": 3.0, "size_y": 3.0, "resolution": 0.15, "seed": 0,
+            "calls": [{"tool": "flat", "region": {"x0": 0.0, "y0": 0.0, "x1": 3.0, "y1": 3.0}, "params": {}}]}
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps(spec))
+    cfg = GenteBipedCfg()
+    assert cfg.terrain.border_size == 5.0
+    apply_terrain_arg(str(path), cfg)
+    assert cfg.terrain.border_size == pytest.approx(34 * 0.15)
+    assert Terrain(cfg.terrain, 2).height_field.shape == (2 * 34 + 20,) * 2  # border, tile, border cells

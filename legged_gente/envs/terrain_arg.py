@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import inspect
 import json
+import math
 import traceback
 from pathlib import Path
 
@@ -17,6 +18,10 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         env_cfg.terrain.mesh_type = "plane"
         return
     path = Path(value)
+    if path.is_dir():  # gente-generate's output folder: name the files in it that --terrain takes
+        inside = [str(path / name) for name in ("spec.json", "terrain_cfg.py") if (path / name).is_file()]
+        raise ValueError(f"--terrain {value} is a folder; pass a file: "
+                         + (" or ".join(inside) if inside else "a spec .json or a terrain_cfg.py"))
     if not path.is_file():
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
     if path.suffix == ".json":
@@ -34,6 +39,8 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         terrain.generated_specs = [str(path.resolve())]
         terrain.terrain_length, terrain.terrain_width = float(spec.size_x), float(spec.size_y)
         terrain.resolution = float(spec.resolution)
+        # the flat border around the tile is laid in the spec's cells: widened (by less than a cell) to whole ones
+        terrain.border_size = math.ceil(terrain.border_size / terrain.resolution - 1e-6) * terrain.resolution
         terrain.num_rows = terrain.num_cols = 1
         return
     if path.suffix == ".py":
@@ -48,6 +55,10 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
                    if c.__module__ == module.__name__ and issubclass(c, LeggedRobotCfg.terrain)]
         if not classes:
             raise ValueError(f"--terrain {value}: the module defines no subclass of LeggedRobotCfg.terrain")
+        if len(classes) > 1:  # which one is meant cannot be guessed
+            names = ", ".join(c.__name__ for c in classes)
+            raise ValueError(f"--terrain {value}: the module defines {len(classes)} subclasses of "
+                             f"LeggedRobotCfg.terrain ({names}); keep only the one to train on")
         env_cfg.terrain = classes[0]()
         return
     if path.suffix == ".npy":

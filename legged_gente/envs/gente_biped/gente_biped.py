@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import mujoco
+import numpy as np
 import torch
 
 from legged_gente.envs.base.legged_robot import LeggedRobot
@@ -13,18 +15,36 @@ from legged_gente.sim.assembly import match_names
 class GenteBiped(LeggedRobot):
     def _init_buffers(self) -> None:
         super()._init_buffers()
-        # the sole geoms of each foot (cfg.asset.sole_geoms), (num_feet, soles per foot), and their radii
+        # the sole geoms of each foot (cfg.asset.sole_geoms), (num_feet, soles per foot), and their depths
         geoms = [self.mjm.geom(i).name for i in range(self.mjm.ngeom)]
         soles = [self.mjm.geom(name).id for name in match_names(self.cfg.asset.sole_geoms, geoms, "geom")]
+        off_feet = [geoms[g] for g in soles if self.mjm.geom_bodyid[g] not in self.layout.foot_bodies]
+        if off_feet:
+            raise ValueError(f"cfg.asset.sole_geoms={self.cfg.asset.sole_geoms} matches {off_feet}, not on a foot "
+                             f"({self.cfg.asset.foot_bodies}); name only geoms of the feet.")
         per_foot = [[g for g in soles if self.mjm.geom_bodyid[g] == foot] for foot in self.layout.foot_bodies]
         if any(len(f) != len(per_foot[0]) or not f for f in per_foot):
             raise ValueError(f"cfg.asset.sole_geoms={self.cfg.asset.sole_geoms} gives {[len(f) for f in per_foot]} "
                              f"geoms on the feet {self.cfg.asset.foot_bodies}; name the same number (>= 1) on each.")
         self.sole_geoms = torch.tensor(per_foot, dtype=torch.long, device=self.device)
-        # a sphere's (or the lowest point of a box's) distance below its centre
-        low = [self.mjm.geom_size[g, 0] if self.mjm.geom_type[g] == 2 else self.mjm.geom_size[g, 2]
-               for g in soles]
-        self.sole_depth = torch.tensor(low, dtype=torch.float32, device=self.device).view_as(self.sole_geoms)
+        depth = [[self._sole_depth(g) for g in foot] for foot in per_foot]
+        self.sole_depth = torch.tensor(depth, dtype=torch.float32, device=self.device)
+
+    def _sole_depth(self, geom: int) -> float:
+        """How far a sole geom reaches below its centre while its foot is level (exact for a sphere at any tilt)."""
+        size, kind = self.mjm.geom_size[geom], self.mjm.geom_type[geom]
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, self.mjm.geom_quat[geom])
+        vertical = np.abs(rot[6:9])  # |cos| of the angle between each geom axis and the foot body's z
+        if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+            return float(size[0])
+        if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:  # radius + half length along its (z) axis
+            return float(size[0] + size[1] * vertical[2])
+        if kind == mujoco.mjtGeom.mjGEOM_BOX:
+            return float(vertical @ size)
+        shape = mujoco.mjtGeom(kind).name[len("mjGEOM_"):].lower()
+        raise ValueError(f"cfg.asset.sole_geoms: {self.mjm.geom(geom).name} is of type {shape}; soles must be sphere, "
+                         f"capsule or box geoms")
 
     def _gait_phase(self) -> torch.Tensor:
         """Per-foot phase in [0, 1): the feet evenly spaced over the period."""

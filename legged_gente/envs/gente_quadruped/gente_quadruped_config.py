@@ -17,7 +17,7 @@ class GenteQuadrupedCfg(LeggedRobotCfg):
 
     class terrain(LeggedRobotCfg.terrain):
         """The biped's curriculum (rows: difficulty, columns: type). The geometric terrains keep their
-        difficulty ramps (steps and obstacles up to 0.2 m, like legged_gym's small-quadruped curriculum);
+        difficulty ramps (steps, blocks and waves up to 0.2 m, rocks 0.25 m, like legged_gym's curriculum);
         the water is fixed shallow enough to wade: 0.15 m, half the trunk height, where the biped gets up
         to 0.5 m. The per-type params after ':' replace the curriculum's value on every level."""
 
