@@ -2,6 +2,7 @@
 pose inside the joint limits, the spawn above the ground, the base height target at the default pose's height."""
 
 import mujoco
+import numpy as np
 import pytest
 
 from legged_gente.envs.task_registry import task_registry
@@ -46,3 +47,20 @@ def test_spawn_is_above_the_ground_and_the_height_target_near_the_stand(task):
     standing = cfg.init_state.pos[2] - clearance  # the base's height with the feet on flat ground
     assert abs(cfg.rewards.base_height_target - standing) <= 0.03 * standing
 
+
+
+@pytest.mark.parametrize("task", BUILTIN)
+def test_a_reset_s_joint_noise_never_starts_a_collider_inside_the_ground(task):
+    """Resets add uniform noise of +-init_state.joint_pos_noise to every default angle (before any joint limit):
+    at the worst of 2000 draws the robot still starts above flat ground, so no reset launches it out of it."""
+    cfg, model, data = default_pose(task)
+    noise = cfg.init_state.joint_pos_noise
+    rng = np.random.default_rng(0)
+    default = data.qpos.copy()
+    worst = np.inf
+    for _ in range(2000):
+        data.qpos[:] = default
+        data.qpos[7:] += rng.uniform(-noise, noise, model.nq - 7)
+        mujoco.mj_kinematics(model, data)
+        worst = min(worst, lowest_collider_z(model, data))
+    assert worst >= 0.0, f"{task}: a collider starts {-worst * 100:.1f} cm inside the ground"

@@ -39,7 +39,7 @@ def match_names(patterns: list[str], names: list[str], what: str) -> list[str]:
     for pattern in patterns:
         hits = [n for n in names if fnmatch.fnmatchcase(n, pattern)]
         if not hits:
-            raise ValueError(f"{what} {pattern!r} matches nothing in the robot; its {what}s are: {names}")
+            raise ValueError(f"{what} {pattern!r} matches nothing in the robot; its {'bodies' if what == 'body' else what + 's'} are: {names}")
         matched += [h for h in hits if h not in matched]
     return [n for n in names if n in matched]
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import inspect
 
@@ -28,6 +29,8 @@ def _instantiate_nested(obj: object) -> None:
             _instantiate_nested(instance)
         elif dataclasses.is_dataclass(value):  # a term record (ObsTerm): each config instance gets its own copy
             setattr(obj, name, dataclasses.replace(value))
+        elif isinstance(value, (list, dict, set)):  # an edit in place (cfg.control.stiffness["knee"] = 1) stays in
+            setattr(obj, name, copy.deepcopy(value))  # this instance, not in the class and every later config
 
 
 def class_to_dict(obj: object) -> dict | object:

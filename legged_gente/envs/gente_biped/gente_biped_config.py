@@ -28,7 +28,7 @@ class GenteBipedCfg(LeggedRobotCfg):
                                0.075, 0.05, 0.075, 0.05, 0.05]
 
     class init_state(LeggedRobotCfg.init_state):
-        pos = [0.0, 0.0, 1.0]
+        pos = [0.0, 0.0, 1.03]  # m; the default pose stands at 1.0 m: dropped from 3 cm, above the ground at any reset noise
         default_joint_angles = {
             "*_hip_yaw": 0.0,
             "*_hip_roll": 0.0,
