@@ -199,3 +199,15 @@ def test_bad_input_is_refused_before_any_request(tmp_path, capsys):
                                         "--out", str(tmp_path / "o"), *flags])
         assert line == message and srv.requests == []
     assert not (tmp_path / "o").exists()
+
+
+def test_an_emitted_config_at_a_resolution_that_does_not_divide_the_border_builds(tmp_path):
+    """The base's 5 m border is 33.3 cells of 0.15 m: the emitted class lays it in whole cells, 34 x 0.15 = 5.1 m."""
+    from legged_gente.terrain.terrain import Terrain
+
+    spec, _ = generate_spec("stairs", size_x=6.0, size_y=6.0, resolution=0.15)
+    out = emit(spec, tmp_path / "stairs")
+    cfg = getattr(load_module(out.module), out.class_name)
+    assert cfg.border_size == pytest.approx(34 * 0.15)
+    terrain = Terrain(cfg, num_robots=1)
+    assert terrain.height_field.shape == (40 + 2 * 34, 40 + 2 * 34)  # 6 m = 40 cells, and the border on each side

@@ -16,6 +16,7 @@ import dataclasses
 import importlib
 import importlib.util
 import keyword
+import math
 import os
 import shutil
 import tempfile
@@ -86,7 +87,7 @@ class {class_name}({base_attr}):
     generated_specs = [str(SPEC_PATH)]
     terrain_length = {size_x!r}  # m, the spec's tile size
     terrain_width = {size_y!r}
-    resolution = {resolution!r}  # m
+    resolution = {resolution!r}  # m{border_line}
     num_rows = 1
     num_cols = 1
     curriculum = False
@@ -138,7 +139,7 @@ def emit(
     inside ``out_dir`` and moved into place only once all of them are made, so a failure (a spec that does not
     build, a full disk) leaves ``out_dir`` as it was.
     """
-    base_module, base_attr, _ = resolve_base(base)
+    base_module, base_attr, base_class = resolve_base(base)
     class_name = class_name or class_name_for(spec.name)
     if not class_name.isidentifier() or keyword.iskeyword(class_name):
         raise ValueError(f"class name {class_name!r} is not a name Python can give a class (an identifier, not a "
@@ -157,7 +158,9 @@ def emit(
             file = Path(spec.heightmap["file"])
             shutil.copyfile(file if file.is_absolute() else (spec.base_dir or Path.cwd()) / file, stage / map_name)
             spec = dataclasses.replace(spec, heightmap={**spec.heightmap, "file": map_name}, base_dir=stage)
-        _write(spec, stage, base_module, base_attr, class_name, mesh_name)
+        border = getattr(base_class, "border_size", None)  # the grid lays it in whole cells: rounded up to them
+        border = None if border is None else math.ceil(float(border) / spec.resolution - 1e-6) * spec.resolution
+        _write(spec, stage, base_module, base_attr, class_name, mesh_name, border)
         for name in (map_name, "spec.json", "preview.png", mesh_name, "terrain_cfg.py"):  # the module last
             if name:
                 os.replace(stage / name, out / name)
@@ -171,6 +174,7 @@ def emit(
 
 def _write(
     spec: TerrainSpec, folder: Path, base_module: str, base_attr: str, class_name: str, mesh_name: str | None,
+    border_size: float | None,
 ) -> None:
     """Write the files of :func:`emit` into ``folder``."""
     spec.save(folder / "spec.json")
@@ -186,6 +190,8 @@ def _write(
         size_x=float(spec.size_x),
         size_y=float(spec.size_y),
         resolution=float(spec.resolution),
+        border_line="" if border_size is None else
+        f"\n    border_size = {float(border_size)!r}  # m, the base's border in whole cells of this resolution",
     )
     (folder / "terrain_cfg.py").write_text(text, encoding="utf-8")  # Python reads source as UTF-8, whatever the locale
     heights, material = spec.build()
