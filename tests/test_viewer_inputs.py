@@ -75,6 +75,20 @@ def test_a_rollout_given_as_traces_says_how_to_open_it(capsys, monkeypatch, tmp_
            f"gente-view {rollout}" in line
 
 
+def test_a_rollout_of_another_robot_is_one_line(capsys, monkeypatch, tmp_path):
+    """A rollout whose qpos does not fit its task's robot (recorded before the MJCF changed, or written by hand):
+    a traceback with --step, and without it a player thread that died and left the robots unmoved."""
+    steps = 3
+    rollout = Rollout("gente_biped_flat", 0.02, np.zeros((steps, 1, QUADRUPED_NQ), np.float32), np.zeros((steps, 1, 3)),
+                      np.zeros((steps, 1, 3)), np.zeros((steps, 1), bool), np.zeros((steps, 1), bool), [],
+                      np.zeros((steps, 1, 0, 3), np.float32), np.zeros((steps, 1, 0, 3), np.float32),
+                      np.zeros((2, 2), np.float32), (0.0, 0.0), 1.0, MaterialMap.rigid((2, 2))).save(tmp_path / "r.npz")
+    for extra in ([], ["--step", "0"]):
+        line = one_line_error(capsys, monkeypatch, [str(rollout), *extra])
+        assert line == (f"gente-view: error: {rollout} holds robots of {QUADRUPED_NQ} qpos values, the robot of its "
+                        f"task gente_biped_flat {BIPED_NQ}: it was recorded with another robot model; record it again.")
+
+
 def test_traces_without_their_keys_are_named(capsys, monkeypatch, tmp_path):
     np.savez(tmp_path / "other.npz", qpos=np.zeros((1, 2, BIPED_NQ)), ids=np.array(["flat"]))
     line = one_line_error(capsys, monkeypatch, [str(FLAT_BENCHMARK), "--traces", str(tmp_path / "other.npz")])
@@ -103,6 +117,16 @@ def test_play_opened_at_a_step_starts(capsys):
     view_script.main(["--task", "gente_biped_flat", "--play", "--policy", "zero", "--robots", "1", "--num_envs", "1",
                       "--steps", "3", "--step", "2", "--seconds", "0", "--headless", "--port", str(free_port())])
     assert "serving" in capsys.readouterr().out
+
+
+def test_play_stops_rolling_out_when_the_viewer_stops():
+    """Without --record the rollout is only watched: when serving ends (--seconds, Ctrl-C) the policy stops too;
+    its thread went on stepping the env after main() returned."""
+    import threading
+
+    view_script.main(["--task", "gente_biped_flat", "--play", "--policy", "zero", "--robots", "1", "--num_envs", "1",
+                      "--steps", "100000", "--seconds", "0", "--headless", "--port", str(free_port())])
+    assert not [t for t in threading.enumerate() if "_run_play" in t.name]
 
 
 class LiveRecording:
@@ -171,6 +195,28 @@ def test_a_step_being_recorded_is_not_read_halfway():
         player.draw(1)  # the newest complete step, 0
         player._plot()
         assert [len(series) for series in player.plot_gui.data] == [1] * 7
+    finally:
+        viewer.stop()
+
+
+def test_force_arrows_hide_when_unticked_while_paused():
+    """Unticking "force arrows" on a paused rollout left the arrows drawn until the slider was moved."""
+    mjm = robot_model("gente_biped_flat")
+    forces = np.zeros((2, 1, 1, 3), np.float32)
+    forces[..., 2] = 200.0  # N: a 2 m arrow
+    rollout = Rollout("gente_biped_flat", 0.02, np.tile(mjm.qpos0, (2, 1, 1)), np.zeros((2, 1, 3)), np.zeros((2, 1, 3)),
+                      np.zeros((2, 1), bool), np.zeros((2, 1), bool), ["buoyancy:shin"], forces,
+                      np.zeros((2, 1, 1, 3), np.float32), np.zeros((2, 2), np.float32), (0.0, 0.0), 1.0,
+                      MaterialMap.rigid((2, 2)))
+    viewer = bare_viewer()
+    try:
+        player = viewer.attach_rollout(rollout, mjm, play=False)
+        player.draw(1)
+        assert player.force_handles["buoyancy"].visible and len(player.force_handles["buoyancy"].points) == 1
+        player.forces_gui.value = False
+        assert not player.force_handles["buoyancy"].visible
+        player.forces_gui.value = True
+        assert player.force_handles["buoyancy"].visible
     finally:
         viewer.stop()
 

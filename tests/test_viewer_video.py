@@ -38,16 +38,23 @@ def robot_file():
 
 
 def test_ground_texture_layout_and_checker():
-    # 3 x 2 cells of 0.5 m from the origin (0, 0): x in [0, 1.5), y in [0, 1); cell (2, 0) red, the rest white
+    """MuJoCo stretches the texture over the heightfield, from its first sample to its last (render_gl3.c,
+    settexture: s = x / (2 half_x) + 1/2 over the geom), and the force kernels read the nearest sample's material:
+    each texel shows the sample nearest to it, and the checker is at its place in the world."""
+    # 3 x 2 samples 0.5 m apart from (0.5, 0) m: the heightfield spans x in [0.5, 1.5], y in [0, 0.5] m
     colours = np.ones((3, 2, 3))
-    colours[2, 0] = (1.0, 0.0, 0.0)
-    image = ground_texture(colours, 0.5, (0.0, 0.0))
+    colours[2, 0] = (1.0, 0.0, 0.0)  # sample (2, 0) at (1.5, 0) m: nearest for x in [1.25, 1.5], y in [0, 0.25]
     k = TEXELS_PER_CELL
-    assert image.shape == (2 * k, 3 * k, 3)  # rows along y, columns along x
-    # MuJoCo puts texture row 0 at the largest y: cell (i=2, j=0) is in the last rows, last columns
-    assert tuple(image[-1, -1]) == (round(255 * CHECKER_DARK), 0, 0)  # x in [1, 2) m: a dark checker square
-    assert tuple(image[0, 0]) == (255, 255, 255)  # cell (0, 1): x, y in [0, 1) m, a light square
-    assert tuple(image[0, -1]) == (round(255 * CHECKER_DARK),) * 3  # cell (2, 1): x in [1, 2), y in [0, 1)
+    assert k == 4  # the texel positions below: 1 m / 8 texels = 0.125 m per texel
+    image = ground_texture(colours, 0.5, (0.5, 0.0)).astype(int)
+    assert image.shape == (1 * k, 2 * k, 3)  # (ny - 1) x (nx - 1) cells; rows along y, columns along x
+    # texel column c is centred at x = 0.5 + (c + 0.5) * 0.125 m; row r at y = 0.5 - (r + 0.5) * 0.125 m (row 0 at
+    # the largest y): the red sample is in columns 6, 7 (x = 1.3125, 1.4375 m) and rows 2, 3 (y = 0.1875, 0.0625 m)
+    dark, light = round(255 * CHECKER_DARK), 255
+    red = (image[..., 0] > 0) & (image[..., 1] == 0)
+    assert red[2:, 6:].all() and red.sum() == 4
+    # the 1 m checker line x = 1 m lies between column 3 (x = 0.9375 m, light) and column 4 (x = 1.0625 m, dark)
+    assert (image[:, :4] == light).all() and (image[:, 4:, 0] == dark).all()
 
 
 def test_render_model_has_the_terrain_the_water_and_the_flow(terrain):
@@ -58,7 +65,7 @@ def test_render_model_has_the_terrain_the_water_and_the_flow(terrain):
     model, arrows = render_model(robot_file(), terrain)
     assert model.nq == robot_model("gente_biped").nq  # the task's qpos layout
     assert model.nhfield == 1 and tuple(model.hfield_nrow) == (terrain.height_field.shape[1],)
-    assert model.ntex >= 2 and model.tex_width[1] == terrain.height_field.shape[0] * TEXELS_PER_CELL
+    assert model.ntex >= 2 and model.tex_width[1] == (terrain.height_field.shape[0] - 1) * TEXELS_PER_CELL
     water = [g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH
              and model.geom_bodyid[g] == 0]
     assert len(water) == 1 and model.geom_rgba[water[0], 3] == pytest.approx(0.5)

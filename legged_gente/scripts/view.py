@@ -157,12 +157,15 @@ def _make_play(args):
     return env, policy, Recorder(env, args.task, robots)
 
 
-def _run_play(env, policy, recorder, steps: int, record: str | None) -> None:
+def _run_play(env, policy, recorder, steps: int, record: str | None, stop: threading.Event | None = None) -> None:
+    """``steps`` policy steps recorded by ``recorder`` (fewer once ``stop`` is set), then the file if ``record``."""
     import torch
 
     obs = env.get_observations()
     with torch.inference_mode():
         for _ in range(steps):
+            if stop is not None and stop.is_set():
+                break
             obs, _, _, _ = env.step(policy(obs))
             recorder.add()
     if record:
@@ -176,7 +179,7 @@ def main(argv=None) -> None:
         argv += ["--device", "cpu"]  # the viewer runs on the CPU unless told otherwise
     args = parse_args(parser, argv)
     from legged_gente.viewer.rollout import Rollout, robot_model
-    from legged_gente.viewer.scene import BareTerrain
+    from legged_gente.viewer.scene import BareTerrain, plane_terrain
     from legged_gente.viewer.server import TerrainItem, Viewer
 
     from legged_gente.evaluation.benchmark import benchmark_root
@@ -190,7 +193,7 @@ def main(argv=None) -> None:
         parser.error("--pretrained plays the shipped policy; leave out --policy zero, --load_run and --checkpoint")
     check_flags(parser, args, source)
     play_steps = args.steps or DEFAULT_STEPS
-    rollout, mjm, play = None, None, None
+    rollout, mjm, play, stop_play = None, None, None, threading.Event()
     try:
         if args.pretrained:
             from legged_gente.utils.checkpoints import pretrained_policy
@@ -200,9 +203,9 @@ def main(argv=None) -> None:
             if args.record:
                 check_output(args.record, "--record", folder=False)
             env, policy, recorder = _make_play(args)
-            items = [TerrainItem(f"{args.task} (play)", lambda: env.terrain or BareTerrain(*_plane()))]
+            items = [TerrainItem(f"{args.task} (play)", lambda: env.terrain or plane_terrain())]
             rollout, mjm = recorder, env.mjm
-            play = threading.Thread(target=_run_play, args=(env, policy, recorder, play_steps, args.record),
+            play = threading.Thread(target=_run_play, args=(env, policy, recorder, play_steps, args.record, stop_play),
                                     daemon=True)
         elif source is None:
             items = [TerrainItem(args.task, _task_terrain(args))]
@@ -220,6 +223,10 @@ def main(argv=None) -> None:
             items = [TerrainItem(source.stem, lambda: BareTerrain(rollout.heights, rollout.material,
                                                                   rollout.resolution, rollout.origin))]
             mjm = robot_model(rollout.task)
+            if rollout.qpos.shape[-1] != mjm.nq:
+                raise ValueError(f"{source} holds robots of {rollout.qpos.shape[-1]} qpos values, the robot of its "
+                                 f"task {rollout.task} {mjm.nq}: it was recorded with another robot model; record it "
+                                 f"again.")
         elif source.suffix in (".json", ".py"):
             items = [TerrainItem(source.parent.name or source.stem,
                                  _task_terrain(args, source))]
@@ -253,8 +260,11 @@ def main(argv=None) -> None:
             time.sleep(0.2)
     except KeyboardInterrupt:
         pass
-    if play is not None and args.record:
-        print("gente-view: finishing the rollout to record it", flush=True)
+    if play is not None:
+        if args.record:
+            print("gente-view: finishing the rollout to record it", flush=True)
+        else:
+            stop_play.set()  # only watched: the policy stops with the viewer
         play.join()
     viewer.stop()
 
@@ -286,12 +296,6 @@ def check_flags(parser, args, source: Path | None) -> None:
     if args.robots is not None and args.num_envs is not None and args.robots > args.num_envs:
         parser.error(f"--robots {args.robots} exceeds --num_envs {args.num_envs}: only simulated worlds can be "
                      f"drawn; raise --num_envs or lower --robots")
-
-
-def _plane():
-    from legged_gente.terrain.materials import MaterialMap
-
-    return np.zeros((2, 2), np.float32), MaterialMap.rigid((2, 2)), 100.0, (-50.0, -50.0)
 
 
 if __name__ == "__main__":

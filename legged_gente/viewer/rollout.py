@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 
 from legged_gente.terrain.materials import MaterialMap
+from legged_gente.viewer.scene import plane_terrain
 
 
 def open_npz(path: str | Path):
@@ -152,10 +153,11 @@ def robot_geoms(mjm: mujoco.MjModel) -> list[GeomShape]:
             mesh = trimesh.Trimesh(mjm.mesh_vert[v0:v0 + nv], mjm.mesh_face[f0:f0 + nf], process=False)
         else:
             continue  # planes, heightfields: not part of a robot
-        rot = np.eye(4)
-        mujoco.mju_quat2Mat(rot[:3, :3].reshape(-1), mjm.geom_quat[g])
-        rot[:3, 3] = mjm.geom_pos[g]
-        mesh.apply_transform(rot)
+        mat = np.zeros(9)  # mju_quat2Mat writes in place: a reshaped slice of a 4 x 4 would be a copy
+        mujoco.mju_quat2Mat(mat, mjm.geom_quat[g])
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = mat.reshape(3, 3), mjm.geom_pos[g]
+        mesh.apply_transform(pose)
         color = tuple(int(round(255 * c)) for c in mjm.geom_rgba[g, :3])
         shapes.append(GeomShape(body, np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32), color))
     return shapes
@@ -280,13 +282,8 @@ class Recorder:
     def rollout(self) -> Rollout:
         if not self.frames["qpos"]:
             raise ValueError("no steps recorded yet; call add() after env.step().")
-        t = self.env.terrain
-        if t is not None:
-            heights, origin, res, material = t.height_field, t.origin_xy, t.resolution, t.material
-        else:  # a plane: a flat patch around the robots
-            heights, origin, res = np.zeros((2, 2), np.float32), (-50.0, -50.0), 100.0
-            material = MaterialMap.rigid((2, 2))
+        t = self.env.terrain if self.env.terrain is not None else plane_terrain()
         arrays = {k: np.stack(v) for k, v in self.frames.items()}
         return Rollout(self.task, float(self.env.dt), arrays["qpos"], arrays["cmd"], arrays["vel"],
                        arrays["done"].astype(bool), arrays["fell"].astype(bool), list(self.labels), arrays["forces"],
-                       arrays["force_points"], heights, tuple(origin), float(res), material)
+                       arrays["force_points"], t.height_field, tuple(t.origin_xy), float(t.resolution), t.material)

@@ -219,6 +219,12 @@ class BareTerrain:
     mode: str = "bare"
 
 
+def plane_terrain() -> BareTerrain:
+    """The ground drawn for a task without a heightfield (``mesh_type = "plane"``): 100 m x 100 m of rigid ground
+    around the origin."""
+    return BareTerrain(np.zeros((2, 2), np.float32), MaterialMap.rigid((2, 2)), 100.0, (-50.0, -50.0))
+
+
 def _flow_arrows(material: MaterialMap, x0: float, y0: float, res: float) -> np.ndarray:
     """(N, 2, 3) arrows on the moving water, one every FLOW_ARROW_SPACING m."""
     step = max(1, int(round(FLOW_ARROW_SPACING / res)))

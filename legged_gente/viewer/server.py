@@ -92,6 +92,17 @@ def check_address(host: str, port: int) -> None:
                          f"or 0.0.0.0 (every interface).") from None
 
 
+def point_cameras(server, look_at, position) -> None:
+    """Put the initial camera and every connected browser's at ``position`` (m), looking at ``look_at``. A browser
+    camera's position setter carries its look-at point along (viser keeps the view direction), so the position
+    is set first and the look-at point after it."""
+    look_at, position = tuple(float(v) for v in look_at), tuple(float(v) for v in position)
+    server.initial_camera.look_at, server.initial_camera.position = look_at, position
+    for client in server.get_clients().values():
+        client.camera.position = position
+        client.camera.look_at = look_at
+
+
 class Viewer:
     """A viser server showing ``items`` (terrains) and, after :meth:`attach_rollout`, a rollout."""
 
@@ -127,7 +138,7 @@ class Viewer:
         self._selecting = False
         self.item_gui.on_update(lambda _: self._select_item())
         self.tile_gui.on_update(lambda _: None if self._selecting else self.show())
-        self.colour_gui.on_update(lambda _: self.show())
+        self.colour_gui.on_update(lambda _: self.show(move_camera=False))
         for box in (self.water_gui, self.flow_gui, self.tiles_gui):
             box.on_update(lambda _: self._apply_visibility())
         self.player: RolloutPlayer | None = None
@@ -166,7 +177,9 @@ class Viewer:
         item = self.items[self.item_gui.value]
         return terrain_scene(self.terrain(), self.colour_gui.value, tile, item.offset)
 
-    def show(self) -> None:
+    def show(self, move_camera: bool = True) -> None:
+        """Draw the chosen terrain; ``move_camera``: also point the cameras at its overview (a new terrain or
+        tile; new colours of the same ground keep the view)."""
         with self.lock:
             scene = self.build_scene()
             for handle in self.handles.values():
@@ -177,13 +190,10 @@ class Viewer:
             self.info_gui.content = (f"**{self.item_gui.value}**: {hi[0] - lo[0]:.1f} m x {hi[1] - lo[1]:.1f} m, "
                                      f"cells of {t.resolution:g} m, heights {lo[2]:+.2f} to {hi[2]:+.2f} m")
             self.legend_gui.content = legend_html(scene.legend)
-            centre, extent = (lo + hi) / 2, float(max(hi[0] - lo[0], hi[1] - lo[1]))
-            self.server.initial_camera.look_at = tuple(centre)
-            self.server.initial_camera.position = (float(centre[0] - 0.15 * extent), float(centre[1] - 0.75 * extent),
-                                                   float(hi[2] + 0.45 * extent))
-            for client in self.server.get_clients().values():
-                client.camera.look_at = self.server.initial_camera.look_at
-                client.camera.position = self.server.initial_camera.position
+            if move_camera:
+                centre, extent = (lo + hi) / 2, float(max(hi[0] - lo[0], hi[1] - lo[1]))
+                point_cameras(self.server, centre, (centre[0] - 0.15 * extent, centre[1] - 0.75 * extent,
+                                                    hi[2] + 0.45 * extent))
         self._apply_visibility()
 
     def _apply_visibility(self) -> None:
@@ -225,6 +235,7 @@ class RolloutPlayer:
         self.server, self.source = server, source
         self.dt = float(getattr(source, "dt", None) or source.env.dt)
         self.kin = Kinematics(mjm)
+        self.base = int(mjm.jnt_bodyid[0])  # the floating base: the body the camera follows
         self.shapes = robot_geoms(mjm)
         frames = _frames(source)
         self.num_robots = frames["qpos"][0].shape[0] if len(frames["qpos"]) else len(source.robots)
@@ -246,7 +257,8 @@ class RolloutPlayer:
             gui.add_html(legend_html([(f"{k} force (1 m = {1 / FORCE_SCALE:g} N)", FORCE_COLOURS[k])
                                       for k in FORCE_KINDS]))
             self.plot_gui = None
-        self.step_gui.on_update(lambda _: self.draw(int(self.step_gui.value)))
+        for control in (self.step_gui, self.follow_gui, self.forces_gui):  # also while paused
+            control.on_update(lambda _: self.draw(int(self.step_gui.value)))
         self._draw_lock = threading.Lock()  # the GUI's callbacks and the play loop both draw
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._loop, daemon=True)
@@ -275,11 +287,7 @@ class RolloutPlayer:
         if not len(f["qpos"]):
             return  # a live recording without steps yet: the play loop focuses once the step is recorded
         base = np.asarray(f["qpos"][min(t, len(f["qpos"]) - 1)][0][:3], np.float64)
-        position = base + distance * np.array([-0.6, -0.75, 0.45])
-        self.server.initial_camera.look_at = tuple(base)
-        self.server.initial_camera.position = tuple(position)
-        for client in self.server.get_clients().values():
-            client.camera.look_at, client.camera.position = base, position
+        point_cameras(self.server, base, base + distance * np.array([-0.6, -0.75, 0.45]))
 
     def stop(self) -> None:
         self._stop.set()
@@ -301,11 +309,11 @@ class RolloutPlayer:
                     if rr == r:
                         handle.position = d.xpos[body]
                         handle.wxyz = d.xquat[body]
-                if r == 0 and self.follow_gui.value:
+                if r == 0 and self.follow_gui.value:  # keep each browser's view, moved along with the base
+                    base = d.xpos[self.base]
                     for client in self.server.get_clients().values():
-                        shift = d.xpos[1] - client.camera.look_at
-                        client.camera.look_at = d.xpos[1]
-                        client.camera.position = client.camera.position + shift
+                        client.camera.position = client.camera.position + (base - client.camera.look_at)
+                        client.camera.look_at = base  # (the position setter carried it there already)
             labels = f["labels"]
             for kind in FORCE_KINDS:
                 cols = [k for k, label in enumerate(labels) if label.split(":")[0] == kind]

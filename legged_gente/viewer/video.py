@@ -32,13 +32,16 @@ TEXELS_PER_CELL = 4
 
 def ground_texture(colours: np.ndarray, resolution: float, origin: tuple[float, float]) -> np.ndarray:
     """(H, W, 3) uint8 texture of the heightfield: ``colours`` (nx, ny, 3) in [0, 1] per cell, darkened on every
-    other ``CHECKER`` square. MuJoCo stretches a heightfield's 2-D texture over it with texture column = x and
-    texture row 0 at the largest y, so the image is the (x, y) grid transposed and flipped."""
+    other ``CHECKER`` square. MuJoCo stretches a heightfield's 2-D texture over the heightfield, from its first
+    sample to its last ((nx - 1) x (ny - 1) cells; render_gl3.c, settexture), with texture column = x and texture
+    row 0 at the largest y, so the image is the (x, y) grid transposed and flipped. Each texel takes the colour of
+    its nearest sample, the cell whose material the force kernels read there."""
     k = TEXELS_PER_CELL
-    rgb = np.repeat(np.repeat(colours, k, 0), k, 1)
-    nx, ny = rgb.shape[:2]
-    x = origin[0] + (np.arange(nx) + 0.5) * resolution / k
-    y = origin[1] + (np.arange(ny) + 0.5) * resolution / k
+    nx, ny = colours.shape[:2]
+    u = (np.arange((nx - 1) * k) + 0.5) / k  # texel centres, in cells from the first sample
+    v = (np.arange((ny - 1) * k) + 0.5) / k
+    rgb = colours[np.ix_(np.round(u).astype(int), np.round(v).astype(int))]
+    x, y = origin[0] + u * resolution, origin[1] + v * resolution
     dark = (np.floor(x / CHECKER)[:, None] + np.floor(y / CHECKER)[None, :]) % 2 == 1
     rgb = rgb * np.where(dark, CHECKER_DARK, 1.0)[..., None]
     return np.ascontiguousarray(np.round(255 * np.clip(rgb, 0, 1)).astype(np.uint8).transpose(1, 0, 2)[::-1])
