@@ -198,7 +198,8 @@ def test_forces_act_in_water_and_soil_only(env):
 def test_low_friction_tiles_lower_contact_friction(env):
     """The solver sees the cell's friction in the contacts of the robot on the low-friction tile."""
     env.reset()
-    env.step(torch.zeros(env.num_envs, env.num_actions))
+    for _ in range(10):  # 0.2 s: the robots, spawned 3 cm above their stand, have landed
+        env.step(torch.zeros(env.num_envs, env.num_actions))
     env.sim.step(1)  # a substep's contacts
     d = env.sim.d
     n = int(d.nacon.numpy()[0])
