@@ -422,3 +422,33 @@ def test_rft_spinning_sole_gets_the_moment_of_its_elements():
     assert f.foot_support.numpy()[0, 0] == pytest.approx(0.375, abs=1e-5)
     assert torque[2] == pytest.approx(couple, rel=0.1), (torque, couple)
     assert np.linalg.norm(force[:2]) < 1e-3 * abs(couple) / 0.05
+
+
+def body_world(mass):
+    """A 'knee': a body that is no foot, touching the ground through two colliding spheres, sliding along x."""
+    xml = f"""<mujoco><option timestep="0.005"/>
+      <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+        <body name="knee" pos="0 0 0.03"><joint type="slide" axis="1 0 0"/><joint type="slide" axis="0 0 1"/>
+          <geom type="sphere" size="0.03" pos="0.05 0 0" mass="{mass / 2}"/>
+          <geom type="sphere" size="0.03" pos="-0.05 0 0" mass="{mass / 2}"/>
+        </body></worldbody></mujoco>"""
+    return mujoco.MjModel.from_xml_string(xml)
+
+
+def test_a_body_other_than_a_foot_gets_at_most_tan_phi_on_soil():
+    """Mohr-Coulomb without the cohesion share (the contact area of a knee or a trunk is unknown): a 20 kg body on
+    dry sand (phi = 28 deg) holds a push below W tan(phi) = 104.3 N and slides under one above it; on rigid ground
+    (mu = 1) it holds both."""
+    wp.set_device(DEV)
+    mass = 20.0
+    limit = mass * G * math.tan(math.radians(28.0))  # 104.3 N
+    for soil, slides in (("t_sand", True), (None, False)):
+        m, d, f = make(body_world(mass), soil_map(soil), nworld=2, foot_geom_names=[])
+        run(m, d, f, 60)
+        x0 = d.qpos.numpy()[:, 0].copy()
+        ramp_and_hold(m, d, f, [0.8 * limit, 1.2 * limit])
+        travel, v = d.qpos.numpy()[:, 0] - x0, d.qvel.numpy()[:, 0]
+        assert abs(travel[0]) < 0.01 and abs(v[0]) < 0.01, (soil, travel, v)
+        assert (v[1] > 0.3 and travel[1] > 0.3) if slides else (abs(travel[1]) < 0.01 and abs(v[1]) < 0.01), \
+            (soil, travel, v)

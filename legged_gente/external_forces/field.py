@@ -446,7 +446,7 @@ class TerrainForces:
         nf = max(self.nfoot, 1)
         feet = K.FootSoil()
         feet.friction_reference, feet.use_friction = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
-        feet.use_soil = int(bool(cfg.soil) and self.nfoot > 0)
+        feet.use_soil = int(bool(cfg.soil))  # feet: their traction; other bodies: tan(phi) (ground_friction)
         feet.sole_area, feet.bekker_width = self.sole_area, self.bekker_width
         feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
         feet.sink_step = float(cfg.sinkage_rate) * self.dt
@@ -454,7 +454,8 @@ class TerrainForces:
         feet.slip, feet.sinkage, feet.soil = self.foot_slip, self.foot_sinkage, self.foot_soil
         launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
-                          feet.use_soil, self.foot_soil, self.foot_touch, self.foot_cand, self.foot_inrut],
+                          int(feet.use_soil and self.nfoot > 0), self.foot_soil, self.foot_touch, self.foot_cand,
+                          self.foot_inrut],
                   record_cmd=True))
         c = d.contact
         launches.append(wp.launch(

@@ -330,15 +330,20 @@ class FootSoil:
 @wp.func
 def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, feet: FootSoil) -> vec5:
     """Tangential friction of a ground contact in ``cell``: the rigid friction scaled by the cell's map friction;
-    on soil under a foot ``f`` (>= 0), at most the soil's mobilised traction / F_N (Mohr-Coulomb, Janosi-Hanamoto)."""
+    on soil, at most what the soil's shear strength gives (Mohr-Coulomb): under a foot ``f`` (>= 0) its mobilised
+    traction / F_N (Janosi-Hanamoto); under any other body (a knee, a shank, a fallen trunk), whose contact area is
+    unknown, tan(phi), the strength without its cohesion share (exact on a cohesionless sand, low on a mud)."""
     mu = fr[0]
     if feet.use_friction != 0:
         mu = mu * soilmap.friction[cell[0], cell[1]] / feet.friction_reference
     s = soilmap.soil[cell[0], cell[1]]
-    if feet.use_soil != 0 and f >= 0 and s >= 0:
+    if feet.use_soil != 0 and s >= 0:
         p = feet.soil_params
-        mu = wp.min(mu, soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f], feet.slip[w, f],
-                                         p[w, s, K], feet.friction_cap))
+        if f >= 0:
+            mu = wp.min(mu, soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f],
+                                             feet.slip[w, f], p[w, s, K], feet.friction_cap))
+        else:
+            mu = wp.min(mu, p[w, s, MU])
     fr[0] = mu
     fr[1] = mu
     return fr
