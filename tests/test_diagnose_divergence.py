@@ -21,6 +21,7 @@ def test_a_world_given_a_runaway_joint_is_reported_with_its_reason_and_step(load
 
     rows, summary = tool.diagnose(evaluation, policy)
     assert [(r["world"], r["step"], r["reason"], r["flagged_by_env"]) for r in rows] == [(1, 3, "qvel>max_qvel", True)]
+    assert tuple(rows[0]) == tool.COLUMNS  # the CSV's header names every value of a row, in order
     assert summary["worlds"] == 2 and summary["steps"] == evaluation.num_steps
     assert 0 < summary["max_nacon"] <= summary["naconmax"]
     assert "diverged robots: 1" in tool.report(rows, summary)

@@ -77,6 +77,7 @@ def test_metadata_a_deployment_needs(exported):
     assert all(n.startswith("gait_clock") for n in names[first + 10:])  # the biped's clock; no height scan on a plane
     assert meta["observation_clips"] == [None] * len(names)  # no term of the flat biped is clamped
     assert meta["clip_actions"] == 100.0 and meta["clip_observations"] == 100.0
+    assert "observation_groups" not in meta  # the actor takes the policy group alone (runner.obs_groups' default)
 
 
 def test_the_observation_layout_names_each_terms_clip():
@@ -84,15 +85,15 @@ def test_the_observation_layout_names_each_terms_clip():
     carries its term's clip."""
     from types import SimpleNamespace
 
-    from legged_gente.utils.export import policy_observation_layout
+    from legged_gente.utils.export import observation_layout
 
     env = SimpleNamespace(
         observation_names={"policy": ["dof_vel[0]", "dof_vel[1]", "height_scan[0]", "height_scan[1]"]},
         _obs_groups={"policy": [("dof_vel", None, torch.full((2,), 0.05), None, None),
                                 ("height_scan", None, torch.full((2,), 5.0), (-1.0, 1.0), None)]})
-    assert policy_observation_layout(env) == [("dof_vel[0]", pytest.approx(0.05), None),
-                                              ("dof_vel[1]", pytest.approx(0.05), None),
-                                              ("height_scan[0]", 5.0, [-1.0, 1.0]), ("height_scan[1]", 5.0, [-1.0, 1.0])]
+    assert observation_layout(env) == [("dof_vel[0]", pytest.approx(0.05), None),
+                                       ("dof_vel[1]", pytest.approx(0.05), None),
+                                       ("height_scan[0]", 5.0, [-1.0, 1.0]), ("height_scan[1]", 5.0, [-1.0, 1.0])]
 
 
 def test_evaluate_exported_runs_the_onnx_file_and_checks_its_size(exported, tmp_path):
@@ -107,7 +108,7 @@ def test_evaluate_exported_runs_the_onnx_file_and_checks_its_size(exported, tmp_
     assert source == path.resolve()
     assert policy(env.get_observations()).shape == (env.num_envs, env.num_actions)
     with pytest.raises(ValueError, match="takes 44 observations; this task's policy observation has 50"):
-        OnnxPolicy(path, num_obs=50)
+        OnnxPolicy(path, {"policy": torch.zeros(1, 50)})
     with pytest.raises(FileNotFoundError, match="no such file"):
         OnnxPolicy(tmp_path / "policy.onnx")
 

@@ -5,6 +5,7 @@ import json
 
 import onnx
 import pytest
+import torch
 from onnx import TensorProto, helper
 
 from legged_gente.envs.task_registry import task_registry
@@ -41,6 +42,6 @@ def test_an_onnx_file_with_another_input_layout_is_a_one_line_error(tmp_path, in
     """A recurrent policy (obs and a hidden state in) or a model without a batch axis: not what OnnxPolicy runs."""
     path = onnx_file(tmp_path / "policy.onnx", inputs)
     with pytest.raises(ValueError) as error:
-        OnnxPolicy(path, num_obs=44, num_actions=44)
+        OnnxPolicy(path, {"policy": torch.zeros(1, 44)}, num_actions=44)
     message = str(error.value)
     assert "\n" not in message and "gente-play" in message and "obs" in message, message

@@ -18,7 +18,9 @@ and compiled torch logic, to tell a graph or compiler effect from the physics.
 from __future__ import annotations
 
 import argparse
+import csv
 from collections import Counter
+from pathlib import Path
 
 import mujoco_warp as mjw
 import torch
@@ -26,6 +28,9 @@ import warp as wp
 
 REASONS = {1: "non-finite", 2: "qvel>max_qvel", 4: "nefc>njmax"}
 OVERFLOWS = {int(b): b.name for b in mjw.OverflowType if b.name not in ("NONE", "ALL")}
+COLUMNS = ("world", "tile", "item", "step", "flagged_by_env", "launched", "reason", "fastest_dof", "base_speed",
+           "overflow_bits")
+"""The keys of a row of ``diagnose`` (one per diverged robot): the CSV's header."""
 
 
 def _names(bits: int, table: dict[int, str]) -> str:
@@ -114,11 +119,20 @@ def report(rows: list[dict], summary: dict) -> str:
     return "\n".join(lines)
 
 
+def write_csv(path: str, rows: list[dict]) -> str:
+    """The rows under ``COLUMNS``' header (the header alone when no robot diverged); what was written, in words."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    return f"{path}: {len(rows)} diverged robots" if rows else f"{path}: header only, no robot diverged"
+
+
 def main(argv=None) -> None:
     from legged_gente.envs.base.step_runner import StepRunner
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
-    from legged_gente.utils.tables import write_rows
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--task", default="gente_quadruped")
@@ -134,7 +148,7 @@ def main(argv=None) -> None:
     p.add_argument("--device", default="cpu")
     p.add_argument("--plain_launches", action="store_true", help="no CUDA graph, no torch.compile in the env step")
     p.add_argument("--no_progress", action="store_true", help="no progress bar")
-    p.add_argument("--csv", help="one row per diverged robot")
+    p.add_argument("--csv", help="one row per diverged robot (the header alone when none diverged)")
     args = p.parse_args(argv)
 
     items = load_benchmark(args.benchmark, args.items)[: args.limit]
@@ -145,8 +159,8 @@ def main(argv=None) -> None:
                          baseline=None if (args.checkpoint or args.pretrained) else "zero")
     rows, summary = diagnose(evaluation, policy, progress=not args.no_progress)
     print(report(rows, summary))
-    if args.csv and rows:
-        write_rows(args.csv, rows)
+    if args.csv:
+        print(write_csv(args.csv, rows))
 
 
 if __name__ == "__main__":

@@ -1,4 +1,6 @@
-"""Throughput versus num_envs from gente-benchmark CSVs (one line style per file)."""
+"""Throughput versus num_envs from gente-benchmark CSVs (one line style per file). The raw line is the raw ceiling
+in env steps/s: raw substeps/s over the CSV's decimation column (a CSV without it, written before gente-benchmark
+recorded it, is read as decimation 4: every task's then)."""
 
 import argparse
 import csv
@@ -8,6 +10,14 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+OLD_CSV_DECIMATION = 4
+
+
+def raw_ceiling(row: dict) -> float:
+    """Env steps/s the raw physics would allow: raw substeps/s / the row's decimation (OLD_CSV_DECIMATION where the
+    CSV has no such column)."""
+    return float(row["raw_substeps_per_s"]) / int(row.get("decimation", OLD_CSV_DECIMATION))
 
 
 def main(argv=None) -> None:
@@ -33,8 +43,8 @@ def main(argv=None) -> None:
                                   ("ppo_steps_per_s", "tab:orange", "PPO")):
             if key == "raw_substeps_per_s" and label in args.skip_raw:
                 continue
-            scale = 0.25 if key == "raw_substeps_per_s" else 1.0  # decimation 4: the raw ceiling in env steps
-            ax.plot(n, [float(r[key]) * scale for r in rows], style, color=colour, marker="o", label=f"{label}: {name}")
+            values = [raw_ceiling(r) if key == "raw_substeps_per_s" else float(r[key]) for r in rows]
+            ax.plot(n, values, style, color=colour, marker="o", label=f"{label}: {name}")
     ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     ax.set_xlabel("num_envs")

@@ -354,8 +354,7 @@ def load_policy_and_file(evaluation, checkpoint: str | None = None, exported: st
     if exported:
         from legged_gente.utils.export import OnnxPolicy
 
-        num_obs = int(env.get_observations()["policy"].shape[1])
-        return OnnxPolicy(exported, num_obs, env.num_actions), Path(exported).resolve()
+        return OnnxPolicy(exported, env.get_observations(), env.num_actions), Path(exported).resolve()
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.utils.checkpoints import find_checkpoint
 

@@ -5,7 +5,8 @@
 Raw physics is ``mjw.step`` of the very model the env compiles (captured in a CUDA graph on GPU), from the
 robots standing after landing (restored every RESTORE_EVERY substeps, so they never lie fallen), reported as
 substeps/s summed over worlds; env steps/s is policy steps/s summed over worlds; PPO is rsl-rl's
-collection + learning. ``env/raw`` compares env steps against the raw ceiling (raw substeps / decimation).
+collection + learning. ``env/raw`` compares env steps against the raw ceiling (raw substeps / decimation); the
+CSV's last column is the task's decimation.
 """
 
 from __future__ import annotations
@@ -332,7 +333,7 @@ def run(task: str, sizes: list[int], device: str, steps: int, iterations: int, c
                      "ppo_steps_per_s": ppo, "env_over_raw": stepped / ceiling, "ppo_over_raw": ppo / ceiling,
                      "ppo_update_share": update_share, "forces_share": forces_share, "soles_share": soles_share,
                      "forces_slowdown": forces_slowdown, "reset_forward_share": forward_s * stepped / num_envs,
-                     "gpu_memory_gib": memory})
+                     "gpu_memory_gib": memory, "decimation": env.cfg.control.decimation})
         del env, runner  # the runner holds the env: free both before the next size is built
         if device.startswith("cuda"):
             torch.cuda.empty_cache()

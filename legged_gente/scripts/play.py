@@ -22,9 +22,11 @@ from legged_gente.utils.export import deployment_metadata, export_onnx
 
 
 def export_policy(runner, env, export_dir: Path, checkpoint, task: str) -> Path:
-    """The actor as ``export_dir/policy.onnx``: one file, input the 'policy' observation group, with the
-    deployment metadata (observation names and scales, action scale, default joint positions, PD gains, dt)."""
-    return export_onnx(runner.alg.get_policy(), export_dir / "policy.onnx", deployment_metadata(env, checkpoint, task))
+    """The actor as ``export_dir/policy.onnx``: one file, input the actor's observation groups (the 'policy' group
+    by default; ``runner.obs_groups``), with the deployment metadata (observation names and scales, action scale,
+    default joint positions, PD gains, dt)."""
+    actor = runner.alg.get_policy()
+    return export_onnx(actor, export_dir / "policy.onnx", deployment_metadata(env, checkpoint, task, actor.obs_groups))
 
 
 def plot_tracking(log: dict[str, np.ndarray], dt: float, path: Path) -> None:

@@ -9,6 +9,7 @@ import logging
 import os
 import sys
 import warnings
+from fnmatch import fnmatchcase
 from pathlib import Path
 
 
@@ -219,19 +220,44 @@ def _parse_override(text: str) -> tuple[list[str], str]:
     return path, value.strip()
 
 
+# The fields (dotted, one pattern per part) where None is a documented setting that --set may give.
+NONE_SETTINGS = (
+    "algorithm.desired_kl",  # no KL target: the learning rate stays fixed (rsl-rl's PPO; validate_cfgs)
+    "observations.*.*",  # the term dropped (terms.obs_terms)
+    "observations.*.*.clip",  # the term not clamped (terms.ObsTerm)
+    "observations.*.*.when",  # the term always in its group (terms.ObsTerm)
+    "forces.foot_water_geom_names",  # the foot_geom_names (ForcesConfig)
+    "forces.sole_length", "forces.sole_width",  # the sole's size from the foot geoms (ForcesConfig)
+)
+
+
+def _none_is_a_setting(name: str) -> bool:
+    parts = name.split(".")
+    return any(len(pattern) == len(parts) and all(map(fnmatchcase, parts, pattern))
+               for pattern in (p.split(".") for p in NONE_SETTINGS))
+
+
 def _override_value(text: str, current, name: str):
-    """The override's value as a Python literal (never evaluated as code), of the same type as ``current``."""
+    """The override's value as a Python literal (never evaluated as code), of the same type as ``current``; None
+    where the field is already None or None is one of its settings (``NONE_SETTINGS``)."""
     try:
         value = ast.literal_eval(text)
     except (ValueError, SyntaxError):
         value = text  # a bare word: a string
-    if isinstance(current, str) and not isinstance(value, str):
+    if value is None and _none_is_a_setting(name):
+        return None
+    if isinstance(current, str) and not isinstance(value, str) and value is not None:
         value = text
     expected = type(current)
     if _is_section(current):
         fields = sorted(n for n in dir(current) if not n.startswith("_"))
         raise ValueError(f"--set {name}={text}: {name} is a config section, not a field; set one of its fields, e.g. "
                          f"--set {name}.{fields[0] if fields else 'FIELD'}=...; its fields: {', '.join(fields)}")
+    if value is None and current is not None:
+        word = " (quote the word: 'None')" if expected is str else ""
+        raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; None is "
+                         f"not one of its settings (only of {', '.join(NONE_SETTINGS)}); give a value of that "
+                         f"type{word}")
     if current is None or isinstance(value, expected) and not (isinstance(value, bool) and expected is int):
         return value
     if expected is float and isinstance(value, int) and not isinstance(value, bool):
