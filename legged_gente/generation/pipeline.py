@@ -56,7 +56,7 @@ def generate_spec(
         else:
             from legged_gente.generation.backends.planner import plan_text
 
-            result = plan_text(text, size_x, size_y)
+            result = plan_text(text, size_x, size_y, resolution=resolution)
     else:
         if not base_url or not model:
             raise ValueError("the openai backend needs --base-url (e.g. http://localhost:8000/v1) and --model.")

@@ -25,13 +25,14 @@ MODES = ("set", "add")
 
 
 def param_schema(param: Param) -> dict[str, Any]:
-    """JSON schema of one terrain parameter, with its unit, range, default and doc in the description."""
+    """JSON schema of one terrain parameter, with its unit, range, default and doc in the description; a categorical
+    parameter offers the choices usable when the schema is built (a soil preset once registered)."""
     if param.choices is not None:
         return {
             "type": "string",
-            "enum": list(param.choices),
+            "enum": param.offered(),
             "default": param.default,
-            "description": f"{param.doc} One of {list(param.choices)}; default {param.default!r}.",
+            "description": f"{param.doc} One of {param.offered()}; default {param.default!r}.",
         }
     schema: dict[str, Any] = {"type": "integer" if param.integer else "number"}
     if param.low is not None:

@@ -8,8 +8,10 @@ heights in the overlap and "add" calls stack, which is how a scene is layered.
 
 Every accepted call builds: the terrain's own parameter rules (``AtomicTerrain.check_params``, the same check
 the tile builder runs), a region that holds at least one cell, and stacked heights within the builder's bound
-(:func:`check_height_stack`, a worst-case bound; a spec beyond it is built once to decide). Input is bounded before it is parsed (lengths, nesting, counts, finite numbers,
-integers a float can hold), and only :class:`ValidationError` leaves this module, its messages truncated.
+(:func:`check_height_stack`, a worst-case bound; a spec beyond it is built once to decide). Where the resolution
+is known, a call is also refused if its feature is finer than the cells can hold (:data:`GRID_RULES`). Input is
+bounded before it is parsed (lengths, nesting, counts, finite numbers, integers a float can hold), and only
+:class:`ValidationError` leaves this module, its messages truncated.
 """
 
 from __future__ import annotations
@@ -18,13 +20,14 @@ import dataclasses
 import json
 import math
 import numbers
-from typing import Any, Iterable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 import jsonschema
 import numpy as np
 from jsonschema import Draft202012Validator
 
 from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_regions
+from legged_gente.terrain import atomic
 from legged_gente.terrain.composition import (
     MAX_ABS_HEIGHT,
     Operation,
@@ -197,6 +200,9 @@ _Validator = jsonschema.validators.extend(Draft202012Validator, {"positiveArea":
 def _validation_schema(terrain: AtomicTerrain, size_x: float, size_y: float) -> dict[str, Any]:
     schema = arguments_schema(terrain, size_x, size_y)
     schema["properties"]["region"]["oneOf"][1]["positiveArea"] = True
+    for name, param in terrain.params.items():
+        if param.registered is not None:  # the terrain's own check refuses an unregistered choice, saying what to do
+            del schema["properties"][name]["enum"]
     return schema
 
 
@@ -252,6 +258,78 @@ def _describe(tool: str, err: jsonschema.ValidationError, schema: Mapping[str, A
     return [f"{tool}: {arg}={_fmt(err.instance)}: {err.message}."]
 
 
+@dataclasses.dataclass(frozen=True)
+class GridRule:
+    """``param`` (m) of a terrain must reach ``cells`` cells (exceed them with ``strict``; 0 passes with ``zero_ok``).
+
+    The builder samples heights at the cell points ``i * resolution``: a feature below the rule's span can hold no
+    point and vanish, as ``why`` says. ``span`` names the span for the message, with ``{r}`` for the resolution and
+    ``{bound}`` for the span in metres ("one {r} m cell").
+    """
+
+    param: str
+    cells: float
+    span: str
+    why: str
+    strict: bool = False
+    zero_ok: bool = False
+
+    def problem(self, tool: str, value: float, resolution: float) -> str | None:
+        """Why ``value`` is finer than cells of ``resolution`` m can hold (one line with the fix), or None."""
+        bound = self.cells * resolution
+        holds = value > bound * (1 + 1e-9) if self.strict else value >= bound * (1 - 1e-9)  # 1e-9: float rounding
+        if holds or (self.zero_ok and value == 0.0):
+            return None
+        up = math.ceil(bound * 1e4 - 1e-6) / 1e4  # the bound in 0.1 mm, rounded the safe way
+        allowed = ("0 or " if self.zero_ok else "") + (f"> {bound:g}" if self.strict else f">= {up:g}")
+        coarsest = value / self.cells  # the coarsest resolution that holds the feature (exclusive when strict)
+        finer = math.floor(coarsest * 1e4 + 1e-6) / 1e4
+        finest = SPEC_SCHEMA["properties"]["resolution"]["minimum"]
+        if self.strict:
+            fix = f", or a --resolution below {coarsest:g} m" if coarsest > finest else ""
+        else:
+            fix = f", or --resolution {finer:g} m or finer" if finer >= finest else ""
+        span = self.span.format(r=f"{resolution:g}", bound=f"{bound:.4g}")
+        return (f"{tool}: {self.param}={value:g} m is {'not more than' if self.strict else 'under'} {span}, so "
+                f"{self.why}; use {self.param} {allowed} m{fix}.")
+
+
+_ONE = "one {r} m cell"
+_BETWEEN = "can fall between the cell points"
+_TREAD = GridRule("step_width", 1.0, _ONE, "two risers can fall between neighbouring cells and merge steps")
+GRID_RULES: dict[Callable[..., Any], tuple[GridRule, ...]] = {
+    # Each rule follows from the terrain function's own test of a cell point (terrain/atomic.py): a closed or
+    # half-open interval of width w >= resolution always holds a cell point; an open one needs w > resolution.
+    atomic.stairs: (_TREAD,),
+    atomic.pyramid_stairs: (_TREAD,),
+    atomic.stepping_stones: (
+        GridRule("stone_size", 1.0, _ONE, f"a stone {_BETWEEN}"),
+        GridRule("stone_distance", 1.0, _ONE, f"a gap {_BETWEEN} and join two stones", zero_ok=True),
+    ),
+    atomic.gap: (
+        GridRule("gap_width", 1.0, _ONE, f"the trench {_BETWEEN}", zero_ok=True),
+        GridRule("platform", 1.0, _ONE, f"the platform {_BETWEEN}"),
+    ),
+    atomic.pit: (GridRule("width", 1.0, _ONE, f"the pit {_BETWEEN}", strict=True),),
+    atomic.discrete_obstacles: (GridRule("min_size", 1.0, _ONE, f"a block {_BETWEEN}"),),
+    # a rock shows where a cell point lies inside its radius; a cell's centre is resolution / sqrt(2) from them all
+    atomic.rocks: (GridRule("min_radius", 1.0 / math.sqrt(2.0), "half the diagonal of a {r} m cell ({bound} m)",
+                            f"a rock {_BETWEEN}"),),
+    atomic.river: (GridRule("width", 1.0, _ONE, f"the channel {_BETWEEN}", strict=True),),
+    # Nyquist: at two cells per wavelength the cell points can all sit on the zero crossings
+    atomic.waves: (GridRule("wavelength", 2.0, "two {r} m cells", f"the crests and troughs {_BETWEEN}", strict=True),),
+}
+"""Resolution rules of the built-in terrains, by function. Not ruled: pillars (the builder fills the cell nearest a
+thin pillar's axis), the spacing and octaves of random roughness (random_uniform, natural_ground, hills: a sub-cell
+wavelength is sampled, not lost, and GenTe's own specs use it), and the spawn ``platform`` (0 means none)."""
+
+
+def grid_problems(terrain: AtomicTerrain, params: Mapping[str, Any], resolution: float) -> list[str]:
+    """Why the checked ``params`` of ``terrain`` describe features finer than cells of ``resolution`` m can hold."""
+    found = (rule.problem(terrain.name, params[rule.param], resolution) for rule in GRID_RULES.get(terrain.fn, ()))
+    return [p for p in found if p is not None]
+
+
 def validate_call(
     tool: str,
     arguments: Mapping[str, Any] | str,
@@ -262,8 +340,8 @@ def validate_call(
 ) -> ToolCall:
     """Validate one tool call (``arguments`` a dict or the model's JSON string); return it normalised.
 
-    With ``resolution`` (m) the region must also hold at least one cell. Raises :class:`ValidationError`
-    listing every problem found, and nothing else.
+    With ``resolution`` (m) the region must also hold at least one cell and the features must not be finer than
+    the cells (:data:`GRID_RULES`). Raises :class:`ValidationError` listing every problem found, and nothing else.
     """
     registry = ATOMIC_TERRAINS if registry is None else registry
     if not isinstance(tool, str) or tool not in registry:
@@ -290,10 +368,13 @@ def validate_call(
     call = ToolCall(tool, params, region, mode)
     check_height_stack([call], size_x, size_y, registry)  # a call that alone exceeds the bound never builds
     if resolution is not None:
+        problems = grid_problems(terrain, params, resolution)
         try:
             Region(*call.rect(size_x, size_y)).cells(resolution)
         except ValueError as exc:
-            raise ValidationError([f"{tool}: {exc}"]) from None
+            problems.append(f"{tool}: {exc}")
+        if problems:
+            raise ValidationError(problems)
     return call
 
 

@@ -48,15 +48,23 @@ def water(shape, resolution, rng, heights, depth, flow, speed, direction, omega,
 
 
 SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
-"""Built-in presets of ``legged_gente.terrain.soil`` plus "custom" (register it there first)."""
+"""Built-in presets of ``legged_gente.terrain.soil`` plus "custom" (register it there first: until then a model is
+not offered it)."""
+
+SOIL_PRESET = Param(
+    "dry_sand",
+    "soil preset; 'custom' needs register_custom_soil('custom', ...) from legged_gente.terrain.soil",
+    choices=SOIL_CHOICES,
+    registered=SOIL_PRESETS,
+)
 
 
 def _soil_rules(p) -> None:
     if p["preset"] not in SOIL_PRESETS:
         raise ValueError(
-            f"soil: preset {p['preset']!r} is not registered; call legged_gente.terrain.soil."
-            f"register_custom_soil({p['preset']!r}, kc=..., kphi=..., n=..., c=..., mu=..., K=..., bulldoze_c=..., bulldoze_g=...) "
-            f"first or use one of {sorted(SOIL_PRESETS)}."
+            f"soil: preset {p['preset']!r} is not registered; use one of {SOIL_PRESET.offered()}, or register it "
+            f"from Python first: legged_gente.terrain.soil.register_custom_soil({p['preset']!r}, kc=..., kphi=..., "
+            f"n=..., c=..., mu=..., K=..., bulldoze_c=..., bulldoze_g=...)."
         )
 
 
@@ -64,13 +72,7 @@ def _soil_rules(p) -> None:
     "soil",
     "physical",
     "Deformable soil the feet sink into: sand, snow, mud or clay (Bekker pressure-sinkage, bulldozing, shear).",
-    {
-        "preset": Param(
-            "dry_sand",
-            "soil preset; 'custom' needs register_custom_soil('custom', ...) from legged_gente.terrain.soil",
-            choices=SOIL_CHOICES,
-        )
-    },
+    {"preset": SOIL_PRESET},
     rules=_soil_rules,
 )
 def soil(shape, resolution, rng, heights, preset):

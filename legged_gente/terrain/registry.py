@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-from typing import Any, Callable, Literal
+from typing import Any, Callable, Literal, Mapping
 
 import numpy as np
 
@@ -39,14 +39,19 @@ class Param:
     high: float | None = None
     choices: tuple[str, ...] | None = None
     integer: bool = False
+    registered: Mapping[str, Any] | None = dataclasses.field(default=None, compare=False, repr=False)
+    """Where choices that name things registered at run time must be (the soil presets) before they can be used:
+    :meth:`offered` lists those it holds now; the terrain's ``rules`` refuse the others, saying how to register."""
+
+    def offered(self) -> list[str]:
+        """The choices usable now, in order: all of ``choices``, or those ``registered`` holds."""
+        return [c for c in self.choices if self.registered is None or c in self.registered]
 
     def check(self, name: str, value: Any, terrain: str) -> Any:
         """Return ``value`` if valid, else raise ValueError naming the terrain, the parameter and the fix."""
         if self.choices is not None:
             if value not in self.choices:
-                raise ValueError(
-                    f"{terrain}: {name}={value!r} is not one of {list(self.choices)}; pick one of those."
-                )
+                raise ValueError(f"{terrain}: {name}={value!r} is not one of {self.offered()}; pick one of those.")
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ValueError(f"{terrain}: {name} must be a number ({self.unit}), got {type(value).__name__} {value!r}.")

@@ -483,8 +483,10 @@ def plan_text(
     size_x: float = 20.0,
     size_y: float = 20.0,
     registry: Mapping[str, AtomicTerrain] | None = None,
+    resolution: float | None = None,
 ) -> GenerationResult:
-    """Deterministic tool calls for a scene description (see the module docstring for the rules)."""
+    """Deterministic tool calls for a scene description (see the module docstring for the rules); with the tile's
+    ``resolution`` (m), a recipe call whose features are finer than its cells is skipped with a warning."""
     registry = ATOMIC_TERRAINS if registry is None else registry
     warnings: list[str] = []
     cues, per_cue = _bind_all(text, warnings)
@@ -513,6 +515,12 @@ def plan_text(
                 call = validate_call(step.tool, args, size_x, size_y, registry)
             except ValidationError as exc:  # a recipe bug: say which cue and step
                 raise ValidationError([f"planner cue '{cue.name}': {m}" for m in exc.messages]) from None
+            if resolution is not None:
+                try:
+                    validate_call(step.tool, args, size_x, size_y, registry, resolution)
+                except ValidationError as exc:  # finer than the grid (e.g. rocks at 0.2 m cells): keep the rest
+                    warnings += [f"skipped: planner cue '{cue.name}': {m}" for m in exc.messages]
+                    continue
             (geometric_calls if terrain.kind == "geometric" else physical_calls).append(call)
     # All geometry first, then materials: the order in which the terrain library applies them.
     return GenerationResult(geometric_calls + physical_calls, warnings, notes, model=None)
