@@ -2,6 +2,8 @@
 ["policy", "critic"]): the export's metadata describes every column the network takes, and gente-evaluate
 --exported feeds it the same groups."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import torch
@@ -49,12 +51,7 @@ def test_the_metadata_names_every_column_of_the_actors_groups(exported):
 def test_evaluate_exported_feeds_the_groups_the_file_takes(exported):
     env, runner, path = exported
 
-    class Evaluation:  # what load_policy_and_file reads of an evaluation
-        pass
-
-    evaluation = Evaluation()
-    evaluation.env = env
-    policy, _ = load_policy_and_file(evaluation, exported=str(path))
+    policy, _ = load_policy_and_file(SimpleNamespace(env=env), exported=str(path))  # an evaluation's env alone
     obs = env.get_observations()
     with torch.inference_mode():
         expected = runner.get_inference_policy()(obs).numpy()
