@@ -37,3 +37,10 @@ def test_a_csv_without_label_or_file_is_a_usage_error(tool, tmp_path, capsys, mo
         tool.main([str(tmp_path / "out.png"), item])
     assert stop.value.code == 2 and message in capsys.readouterr().err
     assert not (tmp_path / "out.png").exists()
+
+
+def test_a_skip_raw_label_no_csv_has_is_a_usage_error(tool, tmp_path, capsys):
+    a = benchmark_csv(tmp_path / "a.csv")
+    with pytest.raises(SystemExit) as stop:
+        tool.main([str(tmp_path / "out.png"), f"before={a}", "--skip_raw", "befor"])
+    assert stop.value.code == 2 and "--skip_raw ['befor']: no CSV has that label" in capsys.readouterr().err

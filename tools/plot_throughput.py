@@ -34,6 +34,9 @@ def main(argv=None) -> None:
             parser.error(f"{item!r}: give each CSV as LABEL=PATH, e.g. \"H100=benchmark.csv\"")
         if not Path(item.split("=", 1)[1]).is_file():
             parser.error(f"{item!r}: no such file; give a CSV of gente-benchmark --csv")
+    unknown = sorted(set(args.skip_raw) - {item.split("=", 1)[0] for item in args.csvs})
+    if unknown:
+        parser.error(f"--skip_raw {unknown}: no CSV has that label; the labels are those before '=' in LABEL=PATH")
     fig, ax = plt.subplots(figsize=(10, 4))
     for style, item in zip(styles, args.csvs):
         label, path = item.split("=", 1)
