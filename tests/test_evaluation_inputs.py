@@ -83,3 +83,11 @@ def test_waypoint_paths_turn_back_by_the_runs_own_tile_edge_margin():
     behind = evaluation.make_task(tile_edge_margin=2.0).waypoints[0, :, 0] - (x_lo + 11.0)
     assert torch.allclose(ahead, torch.tensor([1.8, 3.6, 5.4, 7.2]))
     assert torch.allclose(behind, torch.tensor([-1.8, -3.6, -5.4, -7.2]))
+
+
+def test_a_generated_terrain_folder_names_its_spec_not_a_manifest(tmp_path):
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    (tmp_path / "spec.json").write_text("{}")  # what gente-generate writes, beside its terrain_cfg.py
+    with pytest.raises(FileNotFoundError, match=r"holds one generated terrain, not a benchmark .*pass its .*spec\.json"):
+        load_benchmark(tmp_path)

@@ -68,6 +68,9 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     root = benchmark_root(root)
     manifest = root / "manifest.json"
     if not manifest.is_file():
+        if (root / "spec.json").is_file():  # gente-generate's output: one terrain, not a benchmark
+            raise FileNotFoundError(f"{root} holds one generated terrain, not a benchmark (no manifest.json); pass "
+                                    f"its {root / 'spec.json'}")
         raise FileNotFoundError(f"{manifest} not found; pass a benchmark folder with a manifest.json, or a shipped "
                                 f"benchmark: {shipped_benchmarks()}.")
     try:
