@@ -394,14 +394,17 @@ def main(argv=None) -> None:
         parser.error("--num_envs values must be >= 1")
     if args.steps < 1 or args.iterations < 0:
         parser.error(f"--steps {args.steps} must be >= 1 and --iterations {args.iterations} >= 0 (0 skips PPO)")
-    if args.terrain_build:
-        from legged_gente.terrain.benchmark import benchmark_grid, describe
-
-        print(describe(benchmark_grid()), flush=True)
+    if args.profile_envs is not None and not args.profile:
+        parser.error("--profile_envs picks the num_envs that --profile profiles; add --profile TRACE_JSON or leave it "
+                     "out")
     if args.profile_envs is not None and args.profile_envs not in args.num_envs:
         parser.error(f"--profile_envs {args.profile_envs} is not one of --num_envs {args.num_envs}")
     if args.check_sync and not args.device.startswith("cuda"):
         parser.error("--check_sync needs a CUDA device (--device cuda)")
+    if args.terrain_build:
+        from legged_gente.terrain.benchmark import benchmark_grid, describe
+
+        print(describe(benchmark_grid()), flush=True)
     run_command("gente-benchmark", measure, args)
 
 

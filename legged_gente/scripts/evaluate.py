@@ -17,7 +17,7 @@ import numpy as np
 
 from legged_gente.utils.args import (
     Parser, add_verbose, apply_overrides, check_output, flag, import_mujoco, quiet_third_party, resolve_device,
-    run_command)
+    run_command, seed)
 
 import_mujoco("gente-evaluate")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
@@ -66,7 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"m; end a robot's measured episode when its base comes this close to its tile's edge, where "
                         f"its terrain ends (default {TILE_EDGE_MARGIN}); 'off' measures on past the edge, on the next "
                         f"tile or the border")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed, default=0, help="random seed, in [0, 2**32) (default 0)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     p.add_argument(*flag("--no_progress"), action="store_true", help="no progress bar")

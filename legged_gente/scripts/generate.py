@@ -29,7 +29,7 @@ from legged_gente.generation.validation import (
     spec_field_problem,
     tile_problem,
 )
-from legged_gente.utils.args import Parser, check_output, flag, one_line
+from legged_gente.utils.args import Parser, check_output, flag, one_line, seed
 
 
 def _positive(most: float = math.inf):
@@ -46,16 +46,6 @@ def _positive(most: float = math.inf):
         return value
 
     return parse
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if not 0 <= value < 2**32:
-        raise argparse.ArgumentTypeError(f"must be in [0, 2**32), got {text}")
-    return value
 
 
 def _error(exc: BaseException, code: int) -> int:
@@ -79,7 +69,7 @@ def build_parser() -> Parser:
     p.add_argument(*flag("--api-key-env"), default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
     p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), default=60.0, help="request timeout in seconds (default 60)")
     p.add_argument(*flag("--max-retries"), type=int, default=3, help=f"correction rounds for invalid tool calls (default 3, at most {MAX_RETRIES})")
-    p.add_argument("--seed", type=_seed, default=0, help="terrain seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="terrain seed (default 0)")
     p.add_argument("--size", type=_positive(), default=20.0, help="tile side in metres (default 20)")
     p.add_argument("--resolution", type=_positive(), default=0.1, help="cell size in metres (default 0.1)")
     p.add_argument("--name", help="terrain name (snake_case); default from the text or image file name")
@@ -99,8 +89,14 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--image {args.image} is not a file.")
     if args.backend == "openai" and not (args.base_url and args.model):
         parser.error("--backend openai needs --base-url and --model.")
-    if args.backend == "planner" and (args.base_url or args.model or args.two_phase or args.toolset != "ours"):
-        parser.error("--base-url/--model/--two-phase/--toolset are for --backend openai.")
+    if args.backend == "planner" and (args.base_url or args.model or args.vision_model or args.two_phase
+                                      or args.toolset != "ours"):
+        parser.error("--base-url/--model/--vision-model/--two-phase/--toolset are for --backend openai.")
+    if args.two_phase and args.image is None:
+        parser.error("--two-phase describes the --image first; give --image or leave out --two-phase.")
+    if args.vision_model and not args.two_phase:
+        parser.error("--vision-model describes the image in --two-phase; add --two-phase (and --image) or leave it "
+                     "out.")
     if not 0 <= args.max_retries <= MAX_RETRIES:
         parser.error(f"--max-retries must be between 0 and {MAX_RETRIES}, got {args.max_retries}.")
     # the spec's own limits, checked before anything is generated

@@ -31,6 +31,17 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {one_line(message)}\n")
 
 
+def seed(text: str) -> int:
+    """An argparse type: a seed numpy and torch both take, in [0, 2**32) (beyond it torch's error names no flag)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2**32), got {text}")
+    return value
+
+
 def build_parser(description: str, prog: str | None = None, training: bool = True) -> Parser:
     """The flags shared by gente-train, gente-play and gente-view; ``training=False`` leaves out those only
     training uses (--max_iterations, --resume, --run_name)."""
@@ -46,7 +57,7 @@ def build_parser(description: str, prog: str | None = None, training: bool = Tru
                                                   "folder anywhere (default: the latest under logs/<experiment>/)")
     parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
     parser.add_argument(*flag("--experiment_name"), help="logs/<experiment_name>/")
-    parser.add_argument("--seed", type=int, help="random seed")
+    parser.add_argument("--seed", type=seed, help="random seed, in [0, 2**32)")
     parser.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     parser.add_argument("--terrain", help="'plane', a generated terrain spec JSON, or an emitted terrain_cfg.py")
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.FIELD=VALUE", dest="overrides",
