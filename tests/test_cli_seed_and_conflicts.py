@@ -2,6 +2,7 @@
 before anything is built or measured."""
 
 import pytest
+from test_cli_errors import one_line_error
 
 from legged_gente.scripts import benchmark as benchmark_script
 from legged_gente.scripts import evaluate as evaluate_script
@@ -11,15 +12,6 @@ from legged_gente.scripts import train as train_script
 
 def never(*args, **kwargs):
     raise AssertionError("the command ran past its flag checks")
-
-
-def one_line_error(capsys, main, argv) -> str:
-    with pytest.raises(SystemExit) as exit_info:
-        main(argv)
-    err = capsys.readouterr().err
-    assert exit_info.value.code == 2, err
-    assert "Traceback" not in err
-    return [line for line in err.splitlines() if line.strip()][-1]
 
 
 # torch.manual_seed takes neither; numpy and gente-generate take [0, 2**32)
