@@ -5,12 +5,12 @@ from __future__ import annotations
 import importlib.util
 import inspect
 import json
-import math
 import traceback
 from pathlib import Path
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
 from legged_gente.terrain.composition import tile_spec_from_document
+from legged_gente.terrain.terrain import whole_cells
 
 
 def apply_terrain_arg(value: str, env_cfg) -> None:
@@ -40,7 +40,7 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         terrain.terrain_length, terrain.terrain_width = float(spec.size_x), float(spec.size_y)
         terrain.resolution = float(spec.resolution)
         # the flat border around the tile is laid in the spec's cells: widened (by less than a cell) to whole ones
-        terrain.border_size = math.ceil(terrain.border_size / terrain.resolution - 1e-6) * terrain.resolution
+        terrain.border_size = whole_cells(terrain.border_size, terrain.resolution)
         terrain.num_rows = terrain.num_cols = 1
         return
     if path.suffix == ".py":

@@ -16,7 +16,6 @@ import dataclasses
 import importlib
 import importlib.util
 import keyword
-import math
 import os
 import shutil
 import tempfile
@@ -25,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from legged_gente.generation.spec import TerrainSpec
+from legged_gente.terrain.terrain import whole_cells
 
 MESH_FORMATS = ("obj", "glb", "ply", "stl")
 """Mesh files ``emit(..., mesh=...)`` writes (the terrain library's ``Terrain.export_mesh``)."""
@@ -159,7 +159,7 @@ def emit(
             shutil.copyfile(file if file.is_absolute() else (spec.base_dir or Path.cwd()) / file, stage / map_name)
             spec = dataclasses.replace(spec, heightmap={**spec.heightmap, "file": map_name}, base_dir=stage)
         border = getattr(base_class, "border_size", None)  # the grid lays it in whole cells: rounded up to them
-        border = None if border is None else math.ceil(float(border) / spec.resolution - 1e-6) * spec.resolution
+        border = None if border is None else whole_cells(float(border), spec.resolution)
         _write(spec, stage, base_module, base_attr, class_name, mesh_name, border)
         for name in (map_name, "spec.json", "preview.png", mesh_name, "terrain_cfg.py"):  # the module last
             if name:

@@ -86,6 +86,12 @@ def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
     return np.repeat(np.arange(p.size), counts)
 
 
+def whole_cells(length: float, resolution: float) -> float:
+    """``length`` (m) widened, by less than a cell, to a whole number of ``resolution`` cells: a border the grid
+    takes at any resolution."""
+    return math.ceil(length / resolution - 1e-6) * resolution
+
+
 def _cells(length: float, resolution: float, what: str) -> int:
     n = length / resolution
     if n < 1 or abs(n - round(n)) > 1e-6:
