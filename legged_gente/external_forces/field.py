@@ -88,25 +88,28 @@ def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
     return out
 
 
-def _body_box(mjm, geoms) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper corners, in their body's frame, of the box around the geoms, each as it is turned in the body
-    (a capsule lying along x spans its length in x): exact for spheres, capsules, cylinders and boxes, the turned
+def geom_body_box(mjm, g: int) -> tuple[np.ndarray, np.ndarray]:
+    """Centre and half extents, in its body's frame, of the box around geom ``g`` as it is turned in the body (a
+    capsule lying along x spans its length in x): exact for spheres, capsules, cylinders and boxes, the turned
     bounding box (``geom_aabb``) of any other geom."""
-    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    for g in geoms:
-        rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, mjm.geom_quat[g])
-        rot = rot.reshape(3, 3)
-        r, h, axis = mjm.geom_size[g, 0], mjm.geom_size[g, 1], np.abs(rot[:, 2])
-        centre, half = mjm.geom_pos[g] + rot @ mjm.geom_aabb[g, :3], np.abs(rot) @ mjm.geom_aabb[g, 3:]
-        if mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE:
-            half = np.full(3, r)
-        elif mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE:
-            half = axis * h + r
-        elif mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
-            half = axis * h + r * np.sqrt(np.maximum(1.0 - axis**2, 0.0))
-        lo, hi = np.minimum(lo, centre - half), np.maximum(hi, centre + half)
-    return lo, hi
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, mjm.geom_quat[g])
+    rot = rot.reshape(3, 3)
+    r, h, axis = mjm.geom_size[g, 0], mjm.geom_size[g, 1], np.abs(rot[:, 2])
+    centre, half = mjm.geom_pos[g] + rot @ mjm.geom_aabb[g, :3], np.abs(rot) @ mjm.geom_aabb[g, 3:]
+    if mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE:
+        half = np.full(3, r)
+    elif mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        half = axis * h + r
+    elif mjm.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        half = axis * h + r * np.sqrt(np.maximum(1.0 - axis**2, 0.0))
+    return centre, half
+
+
+def _body_box(mjm, geoms) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners, in their body's frame, of the box around the geoms (``geom_body_box``'s boxes)."""
+    boxes = [geom_body_box(mjm, g) for g in geoms]
+    return np.min([c - h for c, h in boxes], axis=0), np.max([c + h for c, h in boxes], axis=0)
 
 
 def _welded(mjm, body_a: int, body_b: int) -> bool:

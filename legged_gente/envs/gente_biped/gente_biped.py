@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 
 import mujoco
-import numpy as np
 import torch
 
 from legged_gente.envs.base.legged_robot import LeggedRobot
+from legged_gente.external_forces.field import geom_body_box
 from legged_gente.sim.assembly import match_names
 
 
@@ -32,19 +32,14 @@ class GenteBiped(LeggedRobot):
 
     def _sole_depth(self, geom: int) -> float:
         """How far a sole geom reaches below its centre while its foot is level (exact for a sphere at any tilt)."""
-        size, kind = self.mjm.geom_size[geom], self.mjm.geom_type[geom]
-        rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, self.mjm.geom_quat[geom])
-        vertical = np.abs(rot[6:9])  # |cos| of the angle between each geom axis and the foot body's z
-        if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
-            return float(size[0])
-        if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:  # radius + half length along its (z) axis
-            return float(size[0] + size[1] * vertical[2])
-        if kind == mujoco.mjtGeom.mjGEOM_BOX:
-            return float(vertical @ size)
-        shape = mujoco.mjtGeom(kind).name[len("mjGEOM_"):].lower()
-        raise ValueError(f"cfg.asset.sole_geoms: {self.mjm.geom(geom).name} is of type {shape}; soles must be sphere, "
-                         f"capsule or box geoms")
+        kind = int(self.mjm.geom_type[geom])
+        if kind not in (mujoco.mjtGeom.mjGEOM_SPHERE.value, mujoco.mjtGeom.mjGEOM_CAPSULE.value,
+                        mujoco.mjtGeom.mjGEOM_BOX.value):
+            shape = mujoco.mjtGeom(kind).name[len("mjGEOM_"):].lower()
+            raise ValueError(f"cfg.asset.sole_geoms: {self.mjm.geom(geom).name} is of type {shape}; soles must be "
+                             f"sphere, capsule or box geoms")
+        centre, half = geom_body_box(self.mjm, geom)  # in the foot's frame: its z is the vertical of a level foot
+        return float(self.mjm.geom_pos[geom, 2] - (centre[2] - half[2]))
 
     def _gait_phase(self) -> torch.Tensor:
         """Per-foot phase in [0, 1): the feet evenly spaced over the period."""
