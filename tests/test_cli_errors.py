@@ -92,6 +92,31 @@ def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
     assert message in line
 
 
+@pytest.mark.parametrize("flags, message", [
+    (["--speed", "0.8"], "--speed is a flag of --mode waypoints; it does nothing with --mode velocity"),
+    (["--reach_distance", "5"], "--reach_distance is a flag of --mode waypoints; it does nothing with --mode velocity"),
+    (["--mode", "waypoints", "--min_speed", "0.5"], "--min_speed is a flag of --mode velocity; it does nothing with --mode waypoints"),
+    (["--mode", "waypoints", "--stand_fraction", "0"], "--stand_fraction is a flag of --mode velocity; it does nothing"),
+    (["--mode", "waypoints", "--tracking_threshold", "0.1"], "--tracking_threshold is a flag of --mode velocity"),
+    (["--mode", "waypoints", "--min_progress", "0.5"], "--min_progress is a flag of --mode velocity"),
+])
+def test_a_flag_of_the_other_evaluation_mode_is_refused(capsys, tmp_path, flags, message):
+    """--speed with the velocity task used to be ignored: the run scored something else than was asked."""
+    line = one_line_error(capsys, evaluate_script.main, ["--task", "gente_biped_flat", "--baseline", "zero",
+                                                         "--benchmark", "flat", "--device", "cpu", "--no_progress",
+                                                         "--out", str(tmp_path / "out"), *flags])
+    assert message in line
+
+
+def test_the_mode_flags_keep_their_defaults():
+    def parsed(*flags):
+        return evaluate_script.mode_settings(evaluate_script.build_parser().parse_args(["--baseline", "zero",
+                                                                                        "--out", "o", *flags]))
+
+    assert parsed() == {"tracking_threshold": 0.25, "min_progress": 0.7, "min_speed": 0.3, "stand_fraction": 0.1}
+    assert parsed("--mode", "waypoints", "--speed", "0.4") == {"reach_distance": 1.0, "speed": 0.4}
+
+
 def test_the_tile_edge_margin_is_on_by_default_and_can_be_turned_off():
     def margin(*flags):
         return evaluate_script.build_parser().parse_args(["--baseline", "zero", "--out", "o", *flags]).tile_edge_margin

@@ -34,6 +34,24 @@ def edge_margin(text: str) -> float | None:
         raise argparse.ArgumentTypeError(f"{text!r} is not a distance in m; give a number such as 0.5, or 'off'")
 
 
+MODE_FLAGS = {
+    "velocity": {"tracking_threshold": 0.25, "min_progress": 0.7, "min_speed": 0.3, "stand_fraction": 0.1},
+    "waypoints": {"reach_distance": 1.0, "speed": 0.6},
+}
+"""Each evaluation mode's own flags with their defaults: a flag of the other mode would be ignored, so it is refused."""
+
+
+def mode_settings(args) -> dict:
+    """The flags of ``args.mode``, defaults filled in; a flag of the other mode given is an error."""
+    for mode, flags in MODE_FLAGS.items():
+        for name in flags:
+            if mode != args.mode and getattr(args, name) is not None:
+                raise ValueError(f"--{name} is a flag of --mode {mode}; it does nothing with --mode {args.mode}: leave it "
+                                 f"out, or add --mode {mode}.")
+    return {name: default if getattr(args, name) is None else getattr(args, name)
+            for name, default in MODE_FLAGS[args.mode].items()}
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="gente-evaluate", description="Evaluate a locomotion policy on a terrain benchmark.")
     p.add_argument("--task", default="gente_biped", help="registered task name")
@@ -52,16 +70,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(*flag("--episode_s"), type=float, default=None,
                    help="episode length in s (default: 10 for velocity; for waypoints 1.5 times the zigzag's "
                         "length over --speed: 32.1 s at 0.6 m/s)")
-    p.add_argument(*flag("--tracking_threshold"), type=float, default=0.25,
-                   help="m/s; velocity-task success needs a mean tracking error below it")
-    p.add_argument(*flag("--min_progress"), type=float, default=0.7,
-                   help="velocity-task success needs this share of the commanded distance covered along the command")
-    p.add_argument(*flag("--min_speed"), type=float, default=0.3, help="m/s; the slowest moving command of the velocity task")
-    p.add_argument(*flag("--stand_fraction"), type=float, default=0.1,
-                   help="share of robots commanded to stand still (scored as the group stand_still)")
+    p.add_argument(*flag("--tracking_threshold"), type=float, default=None,
+                   help="m/s; velocity-task success needs a mean tracking error below it (default 0.25)")
+    p.add_argument(*flag("--min_progress"), type=float, default=None,
+                   help="velocity-task success needs this share of the commanded distance covered along the command "
+                        "(default 0.7)")
+    p.add_argument(*flag("--min_speed"), type=float, default=None,
+                   help="m/s; the slowest moving command of the velocity task (default 0.3)")
+    p.add_argument(*flag("--stand_fraction"), type=float, default=None,
+                   help="share of robots commanded to stand still, scored as the group stand_still (velocity task; "
+                        "default 0.1)")
     p.add_argument(*flag("--settle_s"), type=float, default=1.0, help="s at the start not counted in the tracking error")
-    p.add_argument(*flag("--reach_distance"), type=float, default=1.0, help="m; waypoint reached within this distance (d)")
-    p.add_argument("--speed", type=float, default=0.6, help="m/s; forward command of the waypoint task")
+    p.add_argument(*flag("--reach_distance"), type=float, default=None,
+                   help="m; waypoint reached within this distance, d (waypoint task; default 1.0)")
+    p.add_argument("--speed", type=float, default=None,
+                   help="m/s; forward command of the waypoint task (default 0.6)")
     p.add_argument(*flag("--tile_edge_margin"), type=edge_margin, default=TILE_EDGE_MARGIN,
                    help=f"m; end a robot's measured episode when its base comes this close to its tile's edge, where "
                         f"its terrain ends (default {TILE_EDGE_MARGIN}); 'off' measures on past the edge, on the next "
@@ -109,7 +132,9 @@ def evaluate(args) -> dict:
     check_output(args.out, "--out")
     if args.overrides:
         check_network_overrides(args)
-    check_success_rule(args.tracking_threshold, args.min_progress)  # before the rollout, not after it
+    settings = mode_settings(args)  # the success rule's two (the velocity task's; unused by waypoints) and the task's
+    rule = {name: settings.pop(name, MODE_FLAGS["velocity"][name]) for name in ("tracking_threshold", "min_progress")}
+    check_success_rule(**rule)  # before the rollout, not after it
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
         if args.limit < 1:
@@ -117,13 +142,12 @@ def evaluate(args) -> dict:
         items = items[: args.limit]
     device = resolve_device(args.device)
     episode_s = args.episode_s if args.episode_s is not None else (
-        waypoint_episode_s(args.speed) if args.mode == "waypoints" else 10.0)
+        waypoint_episode_s(settings["speed"]) if args.mode == "waypoints" else 10.0)
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     apply_overrides(args.overrides, None, evaluation.train_cfg)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
                                                args.pretrained)
-    task = evaluation.make_task(reach_distance=args.reach_distance, speed=args.speed, min_speed=args.min_speed,
-                                stand_fraction=args.stand_fraction, tile_edge_margin=args.tile_edge_margin)
+    task = evaluation.make_task(**settings, tile_edge_margin=args.tile_edge_margin)
     result = evaluation.run(policy, task, settle_s=args.settle_s, progress=not args.no_progress,
                             tile_edge_margin=args.tile_edge_margin)
     meta = {"task": args.task, "benchmark": str(args.benchmark),
@@ -131,13 +155,13 @@ def evaluate(args) -> dict:
             "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed,
             "tile_edge_margin": args.tile_edge_margin}
-    report = build_report(result, items, args.tracking_threshold, meta, args.min_progress)
+    report = build_report(result, items, rule["tracking_threshold"], meta, rule["min_progress"])
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
-    if o["robots"] == 0:
+    if o["robots"] == 0 and args.mode == "velocity":
         print(f"no robot had a moving command (all were told to stand still, --stand_fraction "
-              f"{args.stand_fraction}); raise --robots_per_terrain to score the moving ones.")
+              f"{settings['stand_fraction']}); raise --robots_per_terrain to score the moving ones.")
     heading = o.get("heading_error")
     heading = f"heading error {heading:.1f} deg; " if heading is not None and math.isfinite(heading) else ""
     print(f"success {100 * o['success_rate']:.1f}% over {o['robots']} robots on {o['terrains']} terrains; "
