@@ -412,6 +412,17 @@ def test_the_forwards_stage_gives_the_steps_own_numbers():
     assert all(torch.equal(a, b) for a, b in zip(staged, plain, strict=True))
 
 
+def test_play_shows_the_nominal_robot_as_the_evaluation_scores_it():
+    """gente-play kept training's friction draw (0.5-1.25 per robot), so the robots shown slipped or gripped
+    unlike the evaluation's, which turns friction and mass randomisation off (legged_gym's play does too)."""
+    from legged_gente.envs.task_registry import task_registry
+
+    for task in ("gente_biped", "gente_quadruped"):
+        env_cfg, _ = task_registry.get_play_cfgs(task, 4)
+        rand = env_cfg.domain_rand
+        assert not (rand.randomize_friction or rand.randomize_base_mass or rand.push_robots), task
+
+
 def test_play_draws_every_terrain_type_of_the_task_not_its_first_five_columns():
     """gente-play and gente-view --play (task_registry.get_play_cfgs) build a 5 x 5 grid: as a curriculum its five
     columns would be the first five of the biped's types only (with a warning); drawn by the task's proportions

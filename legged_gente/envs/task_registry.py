@@ -101,6 +101,14 @@ def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
             train_cfg.runner.resume = True
 
 
+def nominal(env_cfg: LeggedRobotCfg) -> None:
+    """The robot as built, for watching and scoring a policy: no observation noise, pushes, or friction and mass
+    draws (legged_gym's play turns off the noise, pushes and friction draw)."""
+    env_cfg.noise.add_noise = False
+    rand = env_cfg.domain_rand
+    rand.push_robots = rand.randomize_friction = rand.randomize_base_mass = False
+
+
 class TaskRegistry:
     def __init__(self) -> None:
         self.tasks: dict[str, tuple[type, type, type]] = {}
@@ -116,12 +124,11 @@ class TaskRegistry:
 
     def get_play_cfgs(self, name: str, num_envs: int) -> tuple[LeggedRobotCfg, LeggedRobotCfgPPO]:
         """The task's configs for watching a policy (gente-play, gente-view --play), as legged_gym's play: at most
-        ``num_envs`` robots, no observation noise or pushes, a grid of at most 5 x 5 tiles whose terrain types are
+        ``num_envs`` robots, the nominal robot (``nominal``), a grid of at most 5 x 5 tiles whose terrain types are
         drawn by the task's proportions (a curriculum's columns would show only its first five types)."""
         env_cfg, train_cfg = self.get_cfgs(name)
         env_cfg.env.num_envs = min(env_cfg.env.num_envs, num_envs)
-        env_cfg.noise.add_noise = False
-        env_cfg.domain_rand.push_robots = False
+        nominal(env_cfg)
         env_cfg.terrain.num_rows = min(env_cfg.terrain.num_rows, 5)
         env_cfg.terrain.num_cols = min(env_cfg.terrain.num_cols, 5)
         if env_cfg.terrain.mode == "curriculum":

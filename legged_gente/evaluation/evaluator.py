@@ -207,7 +207,7 @@ class Evaluation:
 
     def __init__(self, task: str, items: list[Item], robots_per_terrain: int = 16, device: str = "cpu",
                  episode_length_s: float = 10.0, mode: str = "velocity", seed: int = 0):
-        from legged_gente.envs.task_registry import task_registry
+        from legged_gente.envs.task_registry import nominal, task_registry
 
         if robots_per_terrain < 1:
             raise ValueError(f"robots_per_terrain must be >= 1, got {robots_per_terrain}.")
@@ -225,9 +225,7 @@ class Evaluation:
         self.num_steps = episode_steps(episode_length_s, self.dt)
         """Policy steps of the evaluated episode."""
         env_cfg.env.episode_length_s = episode_length_s + 1.0  # the env times no robot out inside it
-        env_cfg.noise.add_noise = False
-        rand = env_cfg.domain_rand
-        rand.push_robots = rand.randomize_friction = rand.randomize_base_mass = False
+        nominal(env_cfg)
         env_cfg.commands.resampling_time = episode_length_s + 1.0  # the task commands, set between steps
         if mode == "waypoints":
             env_cfg.commands.heading_command = True  # waypoints steer through the heading
