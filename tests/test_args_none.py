@@ -3,7 +3,7 @@
 import pytest
 
 from legged_gente.envs.task_registry import apply_args, task_registry, validate_cfgs
-from legged_gente.utils.args import build_parser, parse_args
+from legged_gente.utils.args import apply_overrides, build_parser, parse_args
 
 
 def parsed(*flags):
@@ -50,3 +50,42 @@ def test_none_is_refused_elsewhere_in_one_line(flag, message):
     with pytest.raises(ValueError, match=message) as error:
         apply_args(parsed("--set", flag), env_cfg, train_cfg)
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("flag, message", [
+    # a field whose value is None took any literal: a word for a length failed deep in the force fields' build
+    ("forces.sole_length=abc", r"forces.sole_length=abc: the field is None now; give a value of its type, "
+                               r"float \| None"),
+    ("forces.sole_width=[0.1]", r"float \| None"),
+    ("forces.foot_water_geom_names=None forces.foot_water_geom_names=5", r"list\[str\] \| None"),
+    ("forces.foot_water_geom_names=None forces.foot_water_geom_names=['sole',3]", r"list\[str\] \| None"),
+    ("observations.policy.base_lin_vel.clip=5", r"tuple\[float, float\] \| None"),
+    ("observations.policy.base_lin_vel.clip=(1,2,3)", r"tuple\[float, float\] \| None"),
+    ("observations.policy.base_lin_vel.when=3", r"str \| None"),
+    ("terrain.selected_terrain=[1]", r"str \| None"),
+    ("observations.critic.friction=None observations.critic.friction=ObsTerm", "an observation term can only be dropped"),
+])
+def test_a_field_that_is_none_takes_only_values_of_its_declared_type(flag, message):
+    env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
+    with pytest.raises(ValueError, match=message) as error:
+        apply_args(parsed(*[f for setting in flag.split() for f in ("--set", setting)]), env_cfg, train_cfg)
+    assert "\n" not in str(error.value)
+
+
+def test_a_field_that_is_none_takes_its_declared_type():
+    env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
+    apply_args(parsed("--set", "forces.sole_length=1", "--set", "observations.policy.base_lin_vel.clip=[-1, 2]",
+                      "--set", "terrain.selected_terrain=stairs"), env_cfg, train_cfg)
+    assert env_cfg.forces.sole_length == 1.0 and type(env_cfg.forces.sole_length) is float
+    assert env_cfg.observations.policy.base_lin_vel.clip == (-1.0, 2.0)
+    assert env_cfg.terrain.selected_terrain == "stairs"
+
+
+def test_a_field_that_is_none_and_declares_no_type_is_refused():
+    class Custom:
+        class section:
+            untyped = None
+
+    with pytest.raises(ValueError, match=r"section.untyped=1: the field is None and declares no type; declare it "
+                                         r"in its config class, e.g. untyped: float \| None = None"):
+        apply_overrides(["section.untyped=1"], Custom(), None)

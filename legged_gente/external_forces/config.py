@@ -78,8 +78,8 @@ class ForcesConfig:
     leg_geom_names: list[str] = []
     foot_geom_names: list[str] = []
     foot_water_geom_names: list[str] | None = None
-    sole_length = None
-    sole_width = None
+    sole_length: float | None = None
+    sole_width: float | None = None
     contact_threshold = 1.0
     liftoff_time = 0.02
     soil_friction_cap = 2.0

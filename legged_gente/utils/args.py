@@ -8,6 +8,8 @@ import ast
 import logging
 import os
 import sys
+import types
+import typing
 import warnings
 from fnmatch import fnmatchcase
 from pathlib import Path
@@ -248,9 +250,10 @@ def _none_is_a_setting(name: str) -> bool:
                for pattern in (p.split(".") for p in NONE_SETTINGS))
 
 
-def _override_value(text: str, current, name: str):
-    """The override's value as a Python literal (never evaluated as code), of the same type as ``current``; None
-    where the field is already None or None is one of its settings (``NONE_SETTINGS``)."""
+def _override_value(text: str, current, name: str, owner):
+    """The override's value as a Python literal (never evaluated as code), of the same type as ``current`` (of the
+    type ``owner``'s class declares for the field where ``current`` is None); None where the field is already None
+    or None is one of its settings (``NONE_SETTINGS``)."""
     try:
         value = ast.literal_eval(text)
     except (ValueError, SyntaxError):
@@ -269,7 +272,9 @@ def _override_value(text: str, current, name: str):
         raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; None is "
                          f"not one of its settings (only of {', '.join(NONE_SETTINGS)}); give a value of that "
                          f"type{word}")
-    if current is None or isinstance(value, expected) and not (isinstance(value, bool) and expected is int):
+    if current is None:
+        return _declared_value(value, owner, name, text)
+    if isinstance(value, expected) and not (isinstance(value, bool) and expected is int):
         return value
     if expected is float and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
@@ -280,6 +285,64 @@ def _override_value(text: str, current, name: str):
                          f"strings, e.g. {name}={list(current)[:2]!r}")
     raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; give "
                      f"{'True or False' if expected is bool else 'a value of that type'}")
+
+
+def _declared_value(value, owner, name: str, text: str):
+    """``value`` for a field that is None now, checked against the type its config class declares
+    (``sole_length: float | None = None``): the value alone tells nothing of what the field takes."""
+    if value is None:
+        return None
+    field = name.rsplit(".", 1)[-1]
+    try:
+        hint = typing.get_type_hints(type(owner)).get(field)
+    except (NameError, TypeError):  # an annotation that does not resolve: as if undeclared
+        hint = None
+    if hint is None:
+        if name.startswith("observations.") and name.count(".") == 2:
+            raise ValueError(f"--set {name}={text}: an observation term can only be dropped (=None) by --set; "
+                             f"add it as an ObsTerm in the config class")
+        raise ValueError(f"--set {name}={text}: the field is None and declares no type; declare it in its config "
+                         f"class, e.g. {field}: float | None = None")
+    checked = _as_type(value, hint)
+    if checked is _MISMATCH:
+        shown = str(hint).replace("typing.", "")
+        raise ValueError(f"--set {name}={text}: the field is None now; give a value of its type, {shown}")
+    return checked
+
+
+_MISMATCH = object()
+
+
+def _as_type(value, hint):
+    """``value`` as ``hint`` (float, int, str, bool, list[X], tuple[X, ...], tuple[X, Y], a union of those; an
+    int where a float is declared becomes a float), or ``_MISMATCH``."""
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        for option in args:
+            checked = _as_type(value, option)
+            if checked is not _MISMATCH:
+                return checked
+        return _MISMATCH
+    if hint is type(None):
+        return None if value is None else _MISMATCH
+    if hint is float:
+        return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else _MISMATCH
+    if hint in (list, tuple):
+        return hint(value) if isinstance(value, (list, tuple)) else _MISMATCH
+    if hint in (int, str, bool, dict):
+        return value if isinstance(value, hint) and not (hint is int and isinstance(value, bool)) else _MISMATCH
+    if origin in (list, tuple) and isinstance(value, (list, tuple)):
+        if origin is tuple and args and args[-1] is not Ellipsis:
+            kinds = args if len(args) == len(value) else None
+        else:
+            kinds = [args[0] if args else typing.Any] * len(value)
+        if kinds is None:
+            return _MISMATCH
+        entries = [entry if kind is typing.Any else _as_type(entry, kind) for entry, kind in zip(value, kinds)]
+        return _MISMATCH if any(e is _MISMATCH for e in entries) else origin(entries)
+    if origin is dict and isinstance(value, dict):
+        return value
+    return _MISMATCH
 
 
 def _is_section(value) -> bool:
@@ -340,7 +403,7 @@ def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
             raise ValueError(f"--set {text!r}: {'.'.join(path[:-1])} has no field {path[-1]!r}; its fields: "
                              f"{', '.join(fields)}")
         current, name = getattr(owner, path[-1]), ".".join(path)
-        typed = _override_value(value, current, name)
+        typed = _override_value(value, current, name, owner)
         if path[-1] == "hidden_dims":
             _check_layer_widths(name, typed)
         setattr(owner, path[-1], _typed_entries(typed, current, name, value))

@@ -34,7 +34,7 @@ class LeggedRobotCfg(BaseConfig):
         num_cols = 20  # terrain types
         terrain_types = ["flat", "random_uniform"]
         terrain_proportions = [0.5, 0.5]
-        selected_terrain = None  # atomic terrain name for mode "selected"
+        selected_terrain: str | None = None  # atomic terrain name for mode "selected"
         selected_params: dict = {}
         generated_specs: list = []  # spec JSON paths for mode "generated"
         # difficulty of the last row (the first is 0): 1 is each terrain's standard top level (steps and obstacles
@@ -196,7 +196,7 @@ class LeggedRobotCfg(BaseConfig):
         enabled = True  # off: no force kernels are installed at all
         # the fields scale contact friction by cell friction / the ground geom's friction, which in an env is
         # terrain.static_friction: one setting, so this one stays None (the env passes static_friction)
-        friction_reference = None
+        friction_reference: float | None = None
 
 
 class LeggedRobotCfgPPO(BaseConfig):
