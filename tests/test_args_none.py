@@ -89,3 +89,15 @@ def test_a_field_that_is_none_and_declares_no_type_is_refused():
     with pytest.raises(ValueError, match=r"section.untyped=1: the field is None and declares no type; declare it "
                                          r"in its config class, e.g. untyped: float \| None = None"):
         apply_overrides(["section.untyped=1"], Custom(), None)
+
+
+def test_a_declared_type_lets_a_field_take_each_of_its_forms():
+    """An observation term's scale is a number or one per column (terms.ObsTerm): --set refused the per-column
+    form of a term whose scale was a number, since it checked against the value's type only."""
+    env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
+    apply_args(parsed("--set", "observations.policy.base_lin_vel.scale=[1,2,3]"), env_cfg, train_cfg)
+    assert env_cfg.observations.policy.base_lin_vel.scale == (1.0, 2.0, 3.0)
+    apply_args(parsed("--set", "observations.policy.base_lin_vel.scale=0.5"), env_cfg, train_cfg)
+    assert env_cfg.observations.policy.base_lin_vel.scale == 0.5
+    with pytest.raises(ValueError, match=r"give a value of its type, float \| tuple\[float, \.\.\.\]"):
+        apply_args(parsed("--set", "observations.policy.base_lin_vel.scale=['a']"), env_cfg, train_cfg)

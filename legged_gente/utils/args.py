@@ -273,7 +273,9 @@ def _override_value(text: str, current, name: str, owner):
                          f"not one of its settings (only of {', '.join(NONE_SETTINGS)}); give a value of that "
                          f"type{word}")
     if current is None:
-        return _declared_value(value, owner, name, text)
+        return _declared_value(value, current, owner, name, text)
+    if _union_forms(_declared_type(owner, name)) > 1:  # a field of several forms (a scale: a number or a tuple)
+        return _declared_value(value, current, owner, name, text)
     if isinstance(value, expected) and not (isinstance(value, bool) and expected is int):
         return value
     if expected is float and isinstance(value, int) and not isinstance(value, bool):
@@ -287,16 +289,14 @@ def _override_value(text: str, current, name: str, owner):
                      f"{'True or False' if expected is bool else 'a value of that type'}")
 
 
-def _declared_value(value, owner, name: str, text: str):
-    """``value`` for a field that is None now, checked against the type its config class declares
-    (``sole_length: float | None = None``): the value alone tells nothing of what the field takes."""
+def _declared_value(value, current, owner, name: str, text: str):
+    """``value`` checked against the type the field's config class declares: for a field that is None now (its
+    value tells nothing of what it takes; ``sole_length: float | None = None``) or that takes several forms (a
+    number or a tuple)."""
     if value is None:
         return None
     field = name.rsplit(".", 1)[-1]
-    try:
-        hint = typing.get_type_hints(type(owner)).get(field)
-    except (NameError, TypeError):  # an annotation that does not resolve: as if undeclared
-        hint = None
+    hint = _declared_type(owner, name)
     if hint is None:
         if name.startswith("observations.") and name.count(".") == 2:
             raise ValueError(f"--set {name}={text}: an observation term can only be dropped (=None) by --set; "
@@ -306,8 +306,23 @@ def _declared_value(value, owner, name: str, text: str):
     checked = _as_type(value, hint)
     if checked is _MISMATCH:
         shown = str(hint).replace("typing.", "")
-        raise ValueError(f"--set {name}={text}: the field is None now; give a value of its type, {shown}")
+        raise ValueError(f"--set {name}={text}: the field is {current!r} now; give a value of its type, {shown}")
     return checked
+
+
+def _declared_type(owner, name: str):
+    """The type ``owner``'s config class declares for the field ``name`` ends in, or None."""
+    try:
+        return typing.get_type_hints(type(owner)).get(name.rsplit(".", 1)[-1])
+    except (NameError, TypeError):  # an annotation that does not resolve: as if undeclared
+        return None
+
+
+def _union_forms(hint) -> int:
+    """How many types other than None a declared union admits (0 for no union)."""
+    if typing.get_origin(hint) not in (typing.Union, types.UnionType):
+        return 0
+    return sum(option is not type(None) for option in typing.get_args(hint))
 
 
 _MISMATCH = object()
