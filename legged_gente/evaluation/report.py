@@ -138,9 +138,10 @@ def build_report(result, items: list[Item], tracking_threshold: float = TRACKING
         groups[STAND_GROUP] = {"terrains": len(np.unique(result.tile[standing])),  # those with a standing robot
                                **summarize_robots({k: v[standing] for k, v in result.metrics.items()}, ok[standing])}
     everything = np.ones_like(ok)
+    # the velocity task's success rule; the waypoint task's (the last waypoint reached) has no threshold
+    rule = {"tracking_threshold": tracking_threshold, "min_progress": min_progress} if result.task == "velocity" else {}
     return {
-        "meta": {"task_mode": result.task, "tracking_threshold": tracking_threshold, "min_progress": min_progress,
-                 **result.params, **(meta or {})},
+        "meta": {"task_mode": result.task, **rule, **result.params, **(meta or {})},
         "overall": {"terrains": len(items), **summarize_robots(*select(everything))},
         "groups": groups,
         "terrains": terrains,

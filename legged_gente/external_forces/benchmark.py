@@ -1,6 +1,6 @@
 """Share of ``mjw.step`` time spent in the terrain force kernels.
 
-``forces_share(mjm, m, d, forces, steps)`` times ``steps`` substeps with the callbacks installed (plus
+``forces_share(m, d, forces, steps)`` times ``steps`` substeps with the callbacks installed (plus
 ``after_substep``) and without, with ``wp.synchronize`` around each timing, and returns both times and
 the share. ``gente-benchmark`` calls it on the env's model; ``python -m legged_gente.external_forces.benchmark``
 runs it on a small built-in wading/soil scene.

@@ -132,9 +132,11 @@ def evaluate(args) -> dict:
     check_output(args.out, "--out")
     if args.overrides:
         check_network_overrides(args)
-    settings = mode_settings(args)  # the success rule's two (the velocity task's; unused by waypoints) and the task's
-    rule = {name: settings.pop(name, MODE_FLAGS["velocity"][name]) for name in ("tracking_threshold", "min_progress")}
-    check_success_rule(**rule)  # before the rollout, not after it
+    settings = mode_settings(args)
+    # the velocity task's success rule (the waypoint task's, the last waypoint reached, has no setting)
+    rule = {name: settings.pop(name) for name in ("tracking_threshold", "min_progress") if name in settings}
+    if rule:
+        check_success_rule(**rule)  # before the rollout, not after it
     items = load_benchmark(args.benchmark, args.items)
     if args.limit is not None:
         if args.limit < 1:
@@ -155,7 +157,7 @@ def evaluate(args) -> dict:
             "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed,
             "tile_edge_margin": args.tile_edge_margin}
-    report = build_report(result, items, rule["tracking_threshold"], meta, rule["min_progress"])
+    report = build_report(result, items, meta=meta, **rule)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
