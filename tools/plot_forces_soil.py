@@ -1,6 +1,6 @@
 """Draw docs/img/forces_soil.png from simulation: one biped foot (41.5 kg on a 0.22 m x 0.096 m sole of four
 2 cm sole spheres, the analytic sole contacts on a heightfield) standing on dry sand, snow and mud, then pushed
-sideways with a slowly rising force.
+along its length (x: its 9.6 cm width bulldozes) with a slowly rising force.
 
 Left: the foot's depth in the sim (what the viewer shows) over the stance, against Bekker's static sinkage
 computed here by hand, z = (p / (kc/b + kphi))^(1/n). Right: how far the foot slides against the push (over each
@@ -114,7 +114,7 @@ def main(argv=None):
     ax0.invert_yaxis()
     ax0.legend(fontsize=7)
     ax1.axvline(1.0, color="k", ls="--", lw=1)
-    ax1.set(xlabel="sideways push / Mohr-Coulomb limit T", ylabel="slide (cm)", ylim=(-1, 30),
+    ax1.set(xlabel="push along x / Mohr-Coulomb limit T", ylabel="slide (cm)", ylim=(-1, 30),
             title="traction: T (dashed), T + bulldozing (dotted)")
     ax1.legend(fontsize=7)
     for ax in (ax0, ax1):

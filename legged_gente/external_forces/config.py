@@ -22,8 +22,8 @@ class ForcesConfig:
                            vertical part first (the paper's horizontal-only drag, of its leg model: the feet,
                            which the paper does not model, keep their drag on the full relative velocity)
     paper_drag_area: bool  GenTe's A = 2 pi r h instead of the projected 2 r h
-    paper_added_mass: bool GenTe's effective weight (added mass only adds weight) instead of the reaction
-                           -m_a * relative acceleration
+    paper_added_mass: bool GenTe's effective weight (added mass only adds weight) instead of the added mass as
+                           inertia in the mass matrix (docs/forces.md)
     paper_flow_force: bool add GenTe's flow term as a force (N) on each submerged segment, on top of the
                            flow entering the drag as a velocity
     leg_geom_names: list[str]   capsule (or cylinder) geoms of the legs that feel water
