@@ -34,7 +34,9 @@ from legged_gente.terrain.composition import (
     Part,
     SPEC_VERSION,
     Region,
+    SEAM_BAND,
     TileSpec,
+    height_advice,
     heightmap_ground,
     stacked_height_bounds,
     tile_spec_from_document,
@@ -387,6 +389,14 @@ def check_height_stack(
     bounds = stacked_height_bounds(calls_tile(calls, size_x, size_y, base=base), registry)
     if bounds.first_beyond is not None:
         call = calls[bounds.first_beyond]
+        if call.mode == "set":  # it replaces what lies below, so its own heights reach beyond the bound
+            x0, y0, x1, y1 = call.rect(size_x, size_y)
+            terrain = (ATOMIC_TERRAINS if registry is None else registry)[call.tool]
+            advice = height_advice(terrain, dict(call.params), x1 - x0 + 2 * SEAM_BAND, y1 - y0 + 2 * SEAM_BAND)
+            raise ValidationError([
+                f"calls[{bounds.first_beyond}] ({call.tool}) can make |height| reach {bounds.peak:.2f} m > "
+                f"{MAX_ABS_HEIGHT} m on its own region; {advice + '; or ' if advice else ''}give it a smaller region."
+            ])
         raise ValidationError([
             f"calls[{bounds.first_beyond}] ({call.tool} with mode {call.mode!r}) can make |height| reach "
             f"{bounds.peak:.2f} m > {MAX_ABS_HEIGHT} m where regions stack; lower its heights, use mode 'set', or move it."

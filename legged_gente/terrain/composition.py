@@ -318,13 +318,12 @@ def _seam_weight(lo: int, hi: int, pad: int, resolution: float) -> np.ndarray:
     return np.maximum(np.maximum(lo - idx, idx - (hi - 1)), 0) * resolution
 
 
-def _height_advice(atomic: AtomicTerrain, params: dict[str, Any], shape: tuple[int, int], resolution: float) -> str:
-    """Which parameters to lower or raise to shrink ``atomic``'s declared heights on a region of ``shape`` cells:
-    those whose bound (lowest or highest value) gives a smaller peak of its ``height_bounds``."""
-    size = (shape[0] * resolution, shape[1] * resolution)
+def height_advice(atomic: AtomicTerrain, params: dict[str, Any], size_x: float, size_y: float) -> str:
+    """Which parameters to lower or raise to shrink ``atomic``'s declared heights on a ``size_x`` x ``size_y`` m
+    region: those whose bound (lowest or highest value) gives a smaller peak of its ``height_bounds``."""
 
     def peak(changed: dict[str, Any]) -> float:
-        lo, hi = atomic.height_bounds({**params, **changed}, *size)
+        lo, hi = atomic.height_bounds({**params, **changed}, size_x, size_y)
         return max(-lo, hi)
 
     now = peak({})
@@ -386,7 +385,7 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
                 advice = "its 'add' operations stack their heights on those below: lower them or stack fewer"
             else:  # the last 'set' alone made these heights: the seam blend never leaves the range of both sides
                 op, atomic, params, _ = geometric[-1]
-                advice = f"{op.terrain} alone does: {_height_advice(atomic, params, work.shape, res)}"
+                advice = f"{op.terrain} alone does: {height_advice(atomic, params, *(n * res for n in work.shape))}"
             raise ValueError(f"part {k} ({[o.terrain for o in part.ops]}) makes |height| reach {peak:.2f} m > "
                              f"{MAX_ABS_HEIGHT} m; {advice}.")
 

@@ -239,26 +239,33 @@ class Terrain:
                     stacklevel=3,
                 )
             for k in range(rows * cols):
-                path = paths[k % len(paths)]
-                plan[divmod(k, cols)] = (path.stem, self._generated_tile(path))
+                plan[divmod(k, cols)] = self._generated_tile(paths[k % len(paths)])
         return plan
 
-    def _generated_tile(self, path: Path):
+    def _generated_tile(self, path: Path) -> tuple[str, Any]:
+        """(name, builder) of the tile of spec file ``path``, named by the spec's ``name`` (every gente-generate
+        output is a ``spec.json``), or by the file's stem for a spec without one."""
+        try:
+            document = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise FileNotFoundError(f"terrain spec {path} does not exist; list the spec.json files that "
+                                    f"gente-generate wrote in cfg.generated_specs.") from None
+        except ValueError as exc:  # json.JSONDecodeError
+            raise ValueError(f"terrain spec {path}: {exc}") from None
+        name = document.get("name") if isinstance(document, dict) else None
+
         def build():
             try:
-                tile = tile_spec_from_document(json.loads(path.read_text()), path.parent)
+                tile = tile_spec_from_document(document, path.parent)
                 if not math.isclose(tile.resolution, self.resolution, rel_tol=1e-9):  # same cells, other metres
                     raise ValueError(f"its cells are {tile.resolution:g} m, the grid's resolution is {self.resolution:g} "
                                      f"m; set terrain.resolution={tile.resolution:g} and the tile size to the spec's "
                                      f"{tile.size_x:g} x {tile.size_y:g} m")
                 return tile.build(ground_friction=float(self.cfg.static_friction))
-            except FileNotFoundError:
-                raise FileNotFoundError(f"terrain spec {path} does not exist; list the spec.json files that "
-                                        f"gente-generate wrote in cfg.generated_specs.") from None
-            except ValueError as exc:  # also json.JSONDecodeError and a parameter out of its range
+            except ValueError as exc:  # also a parameter out of its range
                 raise ValueError(f"terrain spec {path}: {exc}") from None
 
-        return build
+        return (name if isinstance(name, str) and name else path.stem), build
 
     # --------------------------------------------------------------------------------------------- spawning
     def _spawn_origins(self) -> np.ndarray:
