@@ -123,6 +123,26 @@ def test_stairs_have_steps_of_the_declared_height():
     assert np.allclose(down, -h)
 
 
+@pytest.mark.parametrize("cells", [80, 81])
+@pytest.mark.parametrize("platform", [0.0, 0.2])
+def test_stairs_without_a_landing_rise_one_step_at_a_time(cells, platform):
+    """With a landing narrower than a tread (0: none, as the sketch planner's and GenTe's imported stairs ask for)
+    the first step up and the first step down met at the centre in one riser of twice step_height on an even
+    number of cells. A flight has one rise per tread: its middle tread (0.5 m = 5 cells) is centred, then treads of
+    5 cells each way; 80 cells: 7.5 treads each side of the middle one's 5 cells, cut at the ends."""
+    h = heights("stairs", {"step_height": 0.15, "step_width": 0.5, "platform": platform, "direction": "up"},
+                (cells, cells))
+    profile = h[:, 0]
+    rises = np.diff(profile)[np.diff(profile) != 0]
+    assert np.allclose(rises, 0.15, atol=1e-6), rises
+    edges = np.flatnonzero(np.diff(profile))
+    assert np.all(np.diff(edges) == 5), np.diff(edges)
+    assert np.all(profile[cells // 2 - 2: (cells + 1) // 2 + 2] == 0.0)  # the middle tread is the level 0
+    bound = ATOMIC_TERRAINS["stairs"].height_bounds({"step_height": 0.15, "step_width": 0.5, "platform": platform,
+                                                      "direction": "up"}, cells * 0.1, cells * 0.1)
+    assert bound[1] >= profile.max() - 1e-6 and bound[0] <= profile.min() + 1e-6
+
+
 def test_param_validation_errors_are_clear():
     a = ATOMIC_TERRAINS["stairs"]
     with pytest.raises(ValueError, match=r"stairs: step_height=0.9 m is outside \[0.0, 0.3\]"):

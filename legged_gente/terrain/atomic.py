@@ -257,15 +257,19 @@ STAIR_PARAMS = {
 @atomic_terrain(
     "stairs",
     "geometric",
-    "A straight flight of stairs along x through a landing at the centre: rising (up) or falling (down) with +x.",
+    "A straight flight of stairs along x through a landing at the centre (one narrower than a tread: none, the "
+    "middle tread centred): rising (up) or falling (down) with +x.",
     {**STAIR_PARAMS, "direction": Param("up", "up: the stairs rise towards +x; down: they fall", choices=("up", "down"))},
     difficulty=lambda d: {"step_height": _lerp(0.05, 0.2, d)},
     bounds=lambda p, sx, sy: (-_stairs_bound(p, sx / 2.0), _stairs_bound(p, sx / 2.0)),
 )
 def stairs(shape, resolution, rng, step_height, step_width, platform, direction):
     x, _ = _axes(shape, resolution)
-    steps = np.ceil(np.round(np.maximum(np.abs(x) - platform / 2.0, 0.0) / step_width, 9))
-    h = step_height * np.sign(x) * steps * (1.0 if direction == "up" else -1.0)
+    if platform < step_width:  # no landing: one rise per tread, the middle tread centred (else, on an even number
+        steps = np.floor(np.round(x / step_width + 0.5, 9))  # of cells, the first rise each way met in one of 2 h)
+    else:
+        steps = np.sign(x) * np.ceil(np.round(np.maximum(np.abs(x) - platform / 2.0, 0.0) / step_width, 9))
+    h = step_height * steps * (1.0 if direction == "up" else -1.0)
     return np.broadcast_to(h, shape).astype(F32)
 
 
