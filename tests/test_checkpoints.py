@@ -301,3 +301,38 @@ def test_a_stop_after_an_iteration_saves_that_iteration(tmp_path, monkeypatch, c
     run = next((tmp_path / "gente_biped_flat").iterdir())
     assert [p.name for p in run.glob("model_*.pt")] == ["model_0.pt"]
     assert load_checkpoint(run / "model_0.pt")["iter"] == 0
+
+
+def _run_with_small_networks(runner, root: Path) -> Path:
+    """A run folder of gente_biped_flat whose networks (8 wide, recorded in its config.json) are not the task's."""
+    run = root / "gente_biped_flat" / "2026-01-04_00-00-00"
+    run.mkdir(parents=True)
+    runner.current_learning_iteration = 4
+    runner.save(str(run / "model_4.pt"))
+    sizes = {"hidden_dims": [8]}
+    (run / "config.json").write_text(json.dumps({"train": {"actor": sizes, "critic": sizes}}))
+    return run
+
+
+def test_a_run_with_networks_of_its_own_resumes_and_plays(runner, tmp_path):
+    """A run trained with --set actor.hidden_dims=... or from a --pretrained policy (32 x 32) could not be resumed,
+    played or viewed: the runner was built with the task's default networks, which its checkpoint does not fit."""
+    run = _run_with_small_networks(runner, tmp_path)
+    env = runner.env
+    resumed = parse_args(build_parser("test"), ["--task", "gente_biped_flat", "--device", "cpu", "--resume"])
+    loaded, train_cfg, _ = task_registry.make_alg_runner(env, "gente_biped_flat", resumed, log_root=tmp_path)
+    assert loaded.loaded_checkpoint == run / "model_4.pt" and train_cfg.actor.hidden_dims == [8]
+    _, play_cfg = task_registry.get_play_cfgs("gente_biped_flat", 1)  # gente-play and gente-view --play
+    play_cfg.runner.resume = True
+    played, _, _ = task_registry.make_alg_runner(env, "gente_biped_flat", train_cfg=play_cfg, log_root=tmp_path)
+    assert played.loaded_checkpoint == run / "model_4.pt"
+
+
+def test_resuming_refuses_other_network_sizes_in_one_line(runner, tmp_path):
+    _run_with_small_networks(runner, tmp_path)
+    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", "--device", "cpu", "--resume",
+                                             "--set", "actor.hidden_dims=[64,64]"])
+    with pytest.raises(ValueError, match=r"--set actor.hidden_dims=\[64,64\]: a resumed run keeps the networks "
+                                         r"recorded in .*config.json; leave it out") as error:
+        task_registry.make_alg_runner(runner.env, "gente_biped_flat", args, log_root=tmp_path)
+    assert "\n" not in str(error.value)

@@ -159,7 +159,7 @@ class TaskRegistry:
         """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default; an
         unreadable latest checkpoint falls back to the newest readable one). ``log_root``: where runs are
         ("default": ``default_log_root()``; None: no run folder)."""
-        from legged_gente.utils.checkpoints import pretrained_policy
+        from legged_gente.utils.checkpoints import find_checkpoint, pretrained_policy
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 
         pretrained = pretrained_policy(name)[0] if getattr(args, "pretrained", False) else None
@@ -169,11 +169,18 @@ class TaskRegistry:
                 network_sizes_from(pretrained, train_cfg)  # before the flags: a --set that does not fit is an error
             if args is not None:
                 apply_args(args, None, train_cfg)
-        validate_cfgs(None, train_cfg)
         runner_cfg = train_cfg.runner
         if log_root == "default":
             log_root = default_log_root()
         experiment_root = Path(log_root).absolute() / runner_cfg.experiment_name if log_root is not None else None
+        if runner_cfg.resume:  # the networks its checkpoint was trained with (a --pretrained run's: 32 x 32)
+            resumed = find_checkpoint(experiment_root, runner_cfg.load_run, runner_cfg.checkpoint)
+            if network_sizes_from(resumed, train_cfg):
+                for text in getattr(args, "overrides", None) or []:
+                    if text.split(".")[0].strip() in ("actor", "critic"):
+                        raise ValueError(f"--set {text}: a resumed run keeps the networks recorded in "
+                                         f"{resumed.parent / 'config.json'}; leave it out")
+        validate_cfgs(None, train_cfg)
         log_dir = None
         if experiment_root is not None:
             stamp = datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
@@ -236,17 +243,19 @@ class TaskRegistry:
         return runner
 
 
-def network_sizes_from(checkpoint: Path, train_cfg: LeggedRobotCfgPPO) -> None:
+def network_sizes_from(checkpoint: Path, train_cfg: LeggedRobotCfgPPO) -> bool:
     """The actor and critic settings (network sizes) recorded in the ``config.json`` beside ``checkpoint`` (a run
-    folder or a shipped policy's folder), if there is one."""
+    folder or a shipped policy's folder), if there is one. Whether it recorded any."""
     from legged_gente.envs.base.base_config import update_from_dict
 
     config_path = Path(checkpoint).parent / "config.json"
-    if config_path.is_file():
-        train = json.loads(config_path.read_text()).get("train", {})
-        for section in ("actor", "critic"):
-            if section in train:
-                update_from_dict(getattr(train_cfg, section), train[section], section)
+    if not config_path.is_file():
+        return False
+    train = json.loads(config_path.read_text()).get("train", {})
+    recorded = [section for section in ("actor", "critic") if section in train]
+    for section in recorded:
+        update_from_dict(getattr(train_cfg, section), train[section], section)
+    return bool(recorded)
 
 
 def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) -> Path:
