@@ -171,7 +171,7 @@ def evaluate(args) -> dict:
           f"stopped at their tile's edge {o['left_tile']}")
     for name, g in report["groups"].items():
         print(f"  {name:18s} success {100 * g['success_rate']:5.1f}%  ({g['terrains']} terrains)")
-    print(f"wrote {json_path}, {csv_path}")
+    print(f"wrote {json_path}, {csv_path}, {Path(args.out) / 'traces.npz'}")
     return report
 
 

@@ -37,7 +37,8 @@ TRACE_KEYS = ("ids", "dt", "qpos", "cmd", "vel", "active")
 
 
 def build_arg_parser():
-    p = build_parser("See terrains and rollouts in the browser.", prog="gente-view", training=False)
+    p = build_parser("See terrains and rollouts in the browser.", prog="gente-view", training=False,
+                     headless="only serve: open no browser")
     p.add_argument("source", nargs="?", help="spec.json, terrain_cfg.py, benchmark folder or rollout .npz "
                                              "(default: the task's terrain grid)")
     p.add_argument("--port", type=int, default=8080, help="port of the web page (default 8080)")

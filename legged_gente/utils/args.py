@@ -44,9 +44,10 @@ def seed(text: str) -> int:
     return value
 
 
-def build_parser(description: str, prog: str | None = None, training: bool = True) -> Parser:
+def build_parser(description: str, prog: str | None = None, training: bool = True,
+                 headless: str = "never open a viewer window") -> Parser:
     """The flags shared by gente-train, gente-play and gente-view; ``training=False`` leaves out those only
-    training uses (--max_iterations, --resume, --run_name)."""
+    training uses (--max_iterations, --resume, --run_name); ``headless``: what --headless means to the command."""
     parser = Parser(prog=prog, description=description)
     parser.add_argument("--task", default="gente_biped", help="registered task name")
     parser.add_argument(*flag("--num_envs"), type=int, help="number of parallel robots (worlds)")
@@ -54,7 +55,7 @@ def build_parser(description: str, prog: str | None = None, training: bool = Tru
         parser.add_argument(*flag("--max_iterations"), type=int, help="PPO iterations to run")
         parser.add_argument("--resume", action="store_true", help="continue from a checkpoint")
         parser.add_argument(*flag("--run_name"), help="suffix of the run folder")
-    parser.add_argument("--headless", action="store_true", help="never open a viewer window")
+    parser.add_argument("--headless", action="store_true", help=headless)
     parser.add_argument(*flag("--load_run"), help="run folder name under logs/<experiment>/, or the path of a run "
                                                   "folder anywhere (default: the latest under logs/<experiment>/)")
     parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
