@@ -106,6 +106,15 @@ def test_flags_are_checked_against_the_spec_before_any_request(tmp_path, capsys,
     assert srv.requests == [] and not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("flag", [["--timeout", "5"], ["--max-retries", "1"], ["--api-key-env", "MY_KEY"]])
+def test_the_planner_refuses_the_model_servers_flags(tmp_path, capsys, flag):
+    """They were accepted and ignored by the default (offline) planner: a run that did not do what was asked."""
+    line = _flag_error(capsys, ["--text", "hills", "--out", str(tmp_path / "o"), *flag])
+    assert line == (f"gente-generate: error: {flag[0]} is for --backend openai (the planner sends no request); leave "
+                    f"it out or add --backend openai.")
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_malformed_api_key_is_refused_and_never_printed(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("MY_KEY", "sk-SECRET-1234567890\n")
     with FakeServer([]) as srv:

@@ -53,6 +53,10 @@ def _error(exc: BaseException, code: int) -> int:
     return code
 
 
+SERVER_DEFAULTS = {"timeout": 60.0, "max_retries": 3, "api_key_env": "GENTE_API_KEY"}
+"""The model server's flags and their defaults; the planner sends no request, so it refuses them."""
+
+
 def build_parser() -> Parser:
     p = Parser(prog="gente-generate", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     src = p.add_argument_group("input (at least one)")
@@ -66,9 +70,9 @@ def build_parser() -> Parser:
     p.add_argument(*flag("--two-phase"), action="store_true", help="VLM describes the image, then the LLM calls the tools")
     p.add_argument("--toolset", choices=("ours", "gente"), default="ours",
                    help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
-    p.add_argument(*flag("--api-key-env"), default="GENTE_API_KEY", help="environment variable holding the API key (default GENTE_API_KEY; 'none' if unset)")
-    p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), default=60.0, help="request timeout in seconds (default 60)")
-    p.add_argument(*flag("--max-retries"), type=int, default=3, help=f"correction rounds for invalid tool calls (default 3, at most {MAX_RETRIES})")
+    p.add_argument(*flag("--api-key-env"), help="environment variable holding the API key (openai backend; default GENTE_API_KEY; 'none' if unset)")
+    p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), help="request timeout in seconds (openai backend; default 60)")
+    p.add_argument(*flag("--max-retries"), type=int, help=f"correction rounds for invalid tool calls (openai backend; default 3, at most {MAX_RETRIES})")
     p.add_argument("--seed", type=seed, default=0, help="terrain seed (default 0)")
     p.add_argument("--size", type=_positive(), default=20.0, help="tile side in metres (default 20)")
     p.add_argument("--resolution", type=_positive(), default=0.1, help="cell size in metres (default 0.1)")
@@ -92,6 +96,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.backend == "planner" and (args.base_url or args.model or args.vision_model or args.two_phase
                                       or args.toolset != "ours"):
         parser.error("--base-url/--model/--vision-model/--two-phase/--toolset are for --backend openai.")
+    for name, default in SERVER_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, default)
+        elif args.backend == "planner":
+            parser.error(f"--{name.replace('_', '-')} is for --backend openai (the planner sends no request); leave "
+                         f"it out or add --backend openai.")
     if args.two_phase and args.image is None:
         parser.error("--two-phase describes the --image first; give --image or leave out --two-phase.")
     if args.vision_model and not args.two_phase:
