@@ -195,8 +195,10 @@ def test_a_bad_manifest_names_its_file(capsys, tmp_path, manifest, message):
 @pytest.mark.parametrize("argv, message", [
     (["--text", "   "], "--text is empty; describe the scene"),
     (["--text", "a hill", "--out", "FILE"], "is a file; give a folder"),
-    (["--text", "a hill", "--max-retries", "-1"], "--max-retries must be between 0 and 10, got -1"),
-    (["--text", "a hill", "--max-retries", "1000000"], "--max-retries must be between 0 and 10, got 1000000"),
+    (["--text", "a hill", "--backend", "openai", "--base-url", "http://127.0.0.1:9/v1", "--model", "m",
+      "--max-retries", "-1"], "--max-retries must be between 0 and 10, got -1"),
+    (["--text", "a hill", "--backend", "openai", "--base-url", "http://127.0.0.1:9/v1", "--model", "m",
+      "--max-retries", "1000000"], "--max-retries must be between 0 and 10, got 1000000"),
 ])
 def test_nonsense_generation_flags(capsys, tmp_path, argv, message):
     (tmp_path / "FILE").write_text("")
