@@ -45,7 +45,7 @@ from legged_gente.envs.task_registry import task_registry
 from legged_gente.utils.distributed import init_process_group, rank_device, torchrun_launch
 
 
-def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compile: bool) -> dict:
+def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compile: bool, device: str) -> dict:
     env_cfg, _ = task_registry.get_cfgs(task)
     env_cfg.env.num_envs = num_envs
     env_cfg.sim.cuda_graph = mode
@@ -53,12 +53,12 @@ def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compil
     env_cfg.noise.add_noise = False  # no random draws in the first steps: they must agree value by value
     env_cfg.domain_rand.push_robots = False
     torch.manual_seed(seed)
-    env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device="cuda"))
+    env, _ = task_registry.make_env(task, env_cfg=env_cfg, args=argparse.Namespace(device=device))
     actions = torch.Generator().manual_seed(seed)
     first, rewards, resets, levels = [], [], [], []
     with torch.inference_mode():
         for step in range(steps):
-            a = (torch.rand(num_envs, env.num_actions, generator=actions) * 2 - 1).cuda()
+            a = (torch.rand(num_envs, env.num_actions, generator=actions) * 2 - 1).to(env.device)
             obs, rew, done, _ = env.step(a)
             if step < 3:
                 first.append((obs["policy"].clone(), obs["critic"].clone(), rew.clone()))
@@ -209,7 +209,8 @@ def main() -> None:
     parser.add_argument("--num_envs", type=int, default=512)
     parser.add_argument("--steps", type=int, default=300)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--device", default="cuda", help="cuda, or cpu for the PPO update check without graphs")
+    parser.add_argument("--device", default="cuda", help="cuda, cuda:N, or cpu (every check without graphs: the "
+                        "PPO update against rsl-rl's; the env and evaluation runs then agree trivially)")
     parser.add_argument("--ppo_envs", type=int, default=4096, help="envs of the synthetic PPO rollouts")
     parser.add_argument("--tolerance", type=float, default=1e-3,
                         help="largest accepted parameter and relative loss difference of the PPO updates")
@@ -234,13 +235,13 @@ def main() -> None:
         print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance} (fp32) or "
               f"--bf16_tolerance {args.bf16_tolerance} (bf16), or its critic warm-up did not hold the actor")
     if not args.ppo_only:
-        if env_steps(args.task, args.num_envs, args.steps, args.seed):
+        if env_steps(args.task, args.num_envs, args.steps, args.seed, device):
             print("the env step agrees across graph and compile modes")
         else:
             print(f"MISMATCH: the env step differs across graph and compile modes (first steps by more than "
                   f"{ENV_TOLERANCE}, or mean rewards by more than {STATISTICS_TOLERANCE:.0%})")
             agree = False
-        if evaluation_agrees(args.task):
+        if evaluation_agrees(args.task, device=device):
             print("the evaluation agrees through the whole-step graph and with plain launches")
         else:
             print("MISMATCH: the evaluation differs between the whole-step graph and plain launches")
@@ -262,12 +263,12 @@ def largest(differences: list[float]) -> float:
     return max((d if not math.isnan(d) else math.inf for d in differences), default=0.0)
 
 
-def env_steps(task: str, num_envs: int, steps: int, seed: int) -> bool:
+def env_steps(task: str, num_envs: int, steps: int, seed: int, device: str = "cuda") -> bool:
     """The env-step graph with the torch logic compiled (the default), without, and the physics-only graph
-    without (see :func:`compare_env_runs`)."""
-    runs = {"env_step+compile": run(task, num_envs, steps, "env_step", seed, True),
-            "env_step": run(task, num_envs, steps, "env_step", seed, False),
-            "physics": run(task, num_envs, steps, "physics", seed, False)}
+    without (see :func:`compare_env_runs`); on the CPU, where nothing is captured or compiled, three plain runs."""
+    runs = {"env_step+compile": run(task, num_envs, steps, "env_step", seed, True, device),
+            "env_step": run(task, num_envs, steps, "env_step", seed, False, device),
+            "physics": run(task, num_envs, steps, "physics", seed, False, device)}
     return compare_env_runs(runs)
 
 

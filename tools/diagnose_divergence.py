@@ -133,6 +133,7 @@ def main(argv=None) -> None:
     from legged_gente.envs.base.step_runner import StepRunner
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
+    from legged_gente.utils.args import resolve_device
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--task", default="gente_quadruped")
@@ -150,6 +151,10 @@ def main(argv=None) -> None:
     p.add_argument("--no_progress", action="store_true", help="no progress bar")
     p.add_argument("--csv", help="one row per diverged robot (the header alone when none diverged)")
     args = p.parse_args(argv)
+    try:
+        args.device = resolve_device(args.device)  # a GPU that is not there: one line, before the env is built
+    except ValueError as error:
+        p.error(str(error))
 
     items = load_benchmark(args.benchmark, args.items)[: args.limit]
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", args.seed)

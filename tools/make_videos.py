@@ -3,12 +3,13 @@
     MUJOCO_GL=egl python tools/make_videos.py docs/videos            # every clip, then the GIF
     MUJOCO_GL=egl python tools/make_videos.py /tmp/v --clips river   # one clip
 
-Each clip: one robot, the policy shipped in resources/policies/gente_biped (``--pretrained``), gente-play's
-settings (no observation noise, no pushes) and a fixed command — walk straight ahead (+x) at ``speed`` with
-heading 0, spawned at the tile's centre with yaw 0 — on one tile of the terrain named below (seeded), with a
-2 m border. Frames come from :class:`legged_gente.viewer.video.VideoRenderer` (material colours, 1 m checker,
-water surface and flow arrows, a sun with shadows, a camera following the base), every ``--every``-th policy
-step, encoded with ffmpeg (libx264, CRF ``--crf``); the GIF is part of the river clip, smaller and slower-framed.
+Each clip: one robot, the policy shipped in resources/policies/gente_biped (``--pretrained``), no observation
+noise and no pushes (training's friction draw kept, which gente-play turns off) and a fixed command — walk
+straight ahead (+x) at ``speed`` with heading 0, spawned at the tile's centre with yaw 0 — on one tile of the
+terrain named below (seeded), with a 2 m border. Frames come from
+:class:`legged_gente.viewer.video.VideoRenderer` (material colours, 1 m checker, water surface and flow arrows, a
+sun with shadows, a camera following the base), every ``--every``-th policy step, encoded with ffmpeg (libx264,
+CRF ``--crf``); the GIF is part of the river clip, smaller and slower-framed.
 ``clips.json`` lists per clip: falls, distance walked along x, rise of the base, mean forward velocity.
 """
 

@@ -47,13 +47,17 @@ def read_report(path: str) -> dict[str, dict[str, float]]:
 
 def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float, dict[str, float]]]:
     """(item id, rough share, the report's ``REPORT_COLUMNS`` for it, NaN without a report) per item of
-    ``benchmark``."""
+    ``benchmark``; a report with none of its terrains is a ValueError."""
     from legged_gente.evaluation.benchmark import load_benchmark
 
+    items = load_benchmark(benchmark)
     metrics = read_report(report) if report else {}
+    if report and not metrics.keys() & {item.id for item in items}:
+        raise ValueError(f"{report} has none of the terrains of benchmark {benchmark}; give gente-evaluate's "
+                         f"report.csv of an evaluation on {benchmark}")
     missing = dict.fromkeys(REPORT_COLUMNS, float("nan"))
     rows = []
-    for item in load_benchmark(benchmark):
+    for item in items:
         spec = item.spec()
         heights, _ = spec.build()
         rows.append((item.id, rough_share(heights, spec.resolution), metrics.get(item.id, missing)))
@@ -105,10 +109,19 @@ def main() -> None:
     parser.add_argument("--set", action="append", default=[], dest="overrides", metavar="SECTION.FIELD=VALUE",
                         help="with --curriculum: a config override, as gente-train's --set")
     args = parser.parse_args()
+    if args.curriculum and args.report:
+        parser.error("--report goes with --benchmark (a report scores a benchmark's terrains, not a curriculum)")
+    if args.benchmark and args.overrides:
+        parser.error("--set goes with --curriculum (it changes the task's terrain config; a benchmark's terrains are "
+                     "its specs)")
     if args.curriculum:
         curriculum_table(args.curriculum, args.overrides)
         return
-    print_bins(benchmark_table(args.benchmark, args.report))
+    try:
+        rows = benchmark_table(args.benchmark, args.report)
+    except ValueError as error:
+        parser.error(str(error))
+    print_bins(rows)
 
 
 if __name__ == "__main__":

@@ -109,6 +109,7 @@ def main() -> None:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
     from legged_gente.evaluation.report import MIN_PROGRESS, success as robot_success
+    from legged_gente.utils.args import resolve_device
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--task", required=True)
@@ -126,6 +127,10 @@ def main() -> None:
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--no_progress", action="store_true", help="no progress bar")
     args = parser.parse_args()
+    try:
+        args.device = resolve_device(args.device)  # a GPU that is not there: one line, before the env is built
+    except ValueError as error:
+        parser.error(str(error))
     if not 0.0 <= args.turn_s < args.episode_s - 3.0:
         raise SystemExit(f"--turn_s {args.turn_s}: give a value in [0, episode_s - 3) (episode_s {args.episode_s}).")
 

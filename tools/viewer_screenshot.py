@@ -1,4 +1,5 @@
-"""Screenshot of gente-view in headless Chromium (Debian's chromium + chromium-driver, driven by Selenium).
+"""Screenshot of gente-view in headless Chromium (Debian's chromium + chromium-driver, driven by Selenium: the
+``browser`` extra, ``pip install -e ".[browser]"``).
 
     python tools/viewer_screenshot.py docs/img/viewer_beach.png -- /tmp/beach/spec.json
     python tools/viewer_screenshot.py docs/img/viewer_rollout.png --wait 240 -- rollout.npz --step 60
@@ -11,6 +12,7 @@ Software WebGL (SwiftShader) is slow: the first frame can take a minute on a bus
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import io
 import socket
 import subprocess
@@ -31,6 +33,16 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def browser_missing() -> str | None:
+    """What the screenshot needs and this machine lacks, in one line with the install (None: nothing)."""
+    if importlib.util.find_spec("selenium") is None:
+        return 'Selenium is not installed: pip install -e ".[browser]"'
+    for path in (CHROMIUM, CHROMEDRIVER):
+        if not Path(path).is_file():
+            return f"{path} not found: apt-get install chromium chromium-driver (Debian's)"
+    return None
 
 
 def wait_for_page(url: str, timeout: float, server: subprocess.Popen | None = None) -> None:
@@ -109,6 +121,9 @@ def main(argv=None) -> None:
     args, view_args = parser.parse_args(argv[:split]), argv[split + 1:]  # --help: the usage, before the check below
     if "--" not in argv:
         parser.error("give gente-view's arguments after --")
+    missing = browser_missing()
+    if missing:
+        parser.error(missing)
     port = free_port()
     server = subprocess.Popen([sys.executable, "-m", "legged_gente.scripts.view", *view_args, "--headless",
                                "--no_shadows", "--port", str(port), "--seconds", str(args.wait + 300)])
