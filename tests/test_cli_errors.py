@@ -494,6 +494,16 @@ def test_a_bad_terrain_module_stops_the_viewer_before_its_server(capsys, monkeyp
     assert "terrain_cfg.py:1: SyntaxError" in line
 
 
+@pytest.mark.parametrize("spelling", [["--device", "cuda:99"], ["--device=cuda:99"]])
+def test_the_viewer_takes_the_device_given(capsys, spelling):
+    """gente-view appended '--device cpu' to a command line without the word '--device', so '--device=cuda:99'
+    was replaced by the CPU without a word; the CPU is its default, and a device given is the one used."""
+    assert view_script.build_arg_parser().parse_args([]).device == "cpu"
+    line = one_line_error(capsys, view_script.main, ["--task", "gente_biped_flat", "--headless", "--seconds", "0",
+                                                    *spelling])
+    assert "cuda:99" in line
+
+
 def test_viewer_flags_take_both_spellings():
     parser = view_script.build_arg_parser()
     for spelling in ("--no_shadows", "--no-shadows"):

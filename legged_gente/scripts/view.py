@@ -38,7 +38,7 @@ TRACE_KEYS = ("ids", "dt", "qpos", "cmd", "vel", "active")
 
 def build_arg_parser():
     p = build_parser("See terrains and rollouts in the browser.", prog="gente-view", training=False,
-                     headless="only serve: open no browser")
+                     headless="only serve: open no browser", device="cpu")  # the viewer's robots are few
     p.add_argument("source", nargs="?", help="spec.json, terrain_cfg.py, benchmark folder or rollout .npz "
                                              "(default: the task's terrain grid)")
     p.add_argument("--port", type=int, default=8080, help="port of the web page (default 8080)")
@@ -175,10 +175,7 @@ def _run_play(env, policy, recorder, steps: int, record: str | None, stop: threa
 
 def main(argv=None) -> None:
     parser = build_arg_parser()
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if "--device" not in argv:
-        argv += ["--device", "cpu"]  # the viewer runs on the CPU unless told otherwise
-    args = parse_args(parser, argv)
+    args = parse_args(parser, sys.argv[1:] if argv is None else argv)
     from legged_gente.viewer.rollout import Rollout, robot_model
     from legged_gente.viewer.scene import BareTerrain, plane_terrain
     from legged_gente.viewer.server import TerrainItem, Viewer

@@ -45,9 +45,10 @@ def seed(text: str) -> int:
 
 
 def build_parser(description: str, prog: str | None = None, training: bool = True,
-                 headless: str = "never open a viewer window") -> Parser:
+                 headless: str = "never open a viewer window", device: str | None = None) -> Parser:
     """The flags shared by gente-train, gente-play and gente-view; ``training=False`` leaves out those only
-    training uses (--max_iterations, --resume, --run_name); ``headless``: what --headless means to the command."""
+    training uses (--max_iterations, --resume, --run_name); ``headless``: what --headless means to the command;
+    ``device``: the command's own default device (else cuda when there is one)."""
     parser = Parser(prog=prog, description=description)
     parser.add_argument("--task", default="gente_biped", help="registered task name")
     parser.add_argument(*flag("--num_envs"), type=int, help="number of parallel robots (worlds)")
@@ -61,7 +62,8 @@ def build_parser(description: str, prog: str | None = None, training: bool = Tru
     parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
     parser.add_argument(*flag("--experiment_name"), help="logs/<experiment_name>/")
     parser.add_argument("--seed", type=seed, help="random seed, in [0, 2**32)")
-    parser.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
+    parser.add_argument("--device", default=device,
+                        help=f"cpu | cuda | cuda:N (default: {device or 'cuda if available'})")
     parser.add_argument("--terrain", help="'plane', a generated terrain spec JSON, or an emitted terrain_cfg.py")
     parser.add_argument("--set", action="append", default=[], metavar="SECTION.FIELD=VALUE", dest="overrides",
                         help="override any config field (repeatable), e.g. --set terrain.solved_top_level=stay "
