@@ -1,6 +1,8 @@
 """Fixtures shared by the test files."""
 
 import importlib.util
+import re
+import sys
 from pathlib import Path
 
 import pytest
@@ -15,8 +17,10 @@ def load_file():
 
     def load(relative: str):
         path = ROOT / relative
-        spec = importlib.util.spec_from_file_location(path.stem, path)
+        name = "repo_file_" + re.sub(r"\W", "_", relative)  # registered: a dataclass looks its module up by name
+        spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
         spec.loader.exec_module(module)
         return module
 

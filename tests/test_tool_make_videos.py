@@ -26,3 +26,16 @@ def test_a_clip_of_no_length_is_a_usage_error(tmp_path):
     done = subprocess.run([sys.executable, str(ROOT / "tools" / "make_videos.py"), str(tmp_path), "--seconds", "0"],
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 2 and "--seconds must be > 0" in done.stderr
+
+
+def test_clips_film_the_nominal_robot(load_file):
+    """The clips kept training's friction draw (0.5-1.25 per robot): each film showed a robot on another friction
+    than the one gente-play and the evaluation show."""
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.utils.args import apply_overrides
+
+    tool = load_file("tools/make_videos.py")
+    env_cfg, train_cfg = task_registry.get_cfgs("gente_biped")
+    apply_overrides(tool.clip_settings(tool.CLIPS[0]), env_cfg, train_cfg)
+    rand = env_cfg.domain_rand
+    assert not (rand.randomize_friction or rand.randomize_base_mass or rand.push_robots or env_cfg.noise.add_noise)

@@ -4,7 +4,7 @@
     MUJOCO_GL=egl python tools/make_videos.py /tmp/v --clips river   # one clip
 
 Each clip: one robot, the policy shipped in resources/policies/gente_biped (``--pretrained``), no observation
-noise and no pushes (training's friction draw kept, which gente-play turns off) and a fixed command — walk
+noise, pushes, or friction and mass draws (the nominal robot, as gente-play shows it) and a fixed command — walk
 straight ahead (+x) at ``speed`` with heading 0, spawned at the tile's centre with yaw 0 — on one tile of the
 terrain named below (seeded), with a 2 m border. Frames come from
 :class:`legged_gente.viewer.video.VideoRenderer` (material colours, 1 m checker, water surface and flow arrows, a
@@ -64,6 +64,7 @@ def clip_settings(clip: Clip) -> list[str]:
         f"commands.ranges.lin_vel_x=[{clip.speed},{clip.speed}]", "commands.ranges.lin_vel_y=[0.0,0.0]",
         "commands.ranges.heading=[0.0,0.0]", "commands.still_fraction=0.0", "commands.resampling_time=1000.0",
         "domain_rand.random_init_yaw=False", "domain_rand.init_lin_vel_xy_noise=0.0", "domain_rand.push_robots=False",
+        "domain_rand.randomize_friction=False", "domain_rand.randomize_base_mass=False",
         "noise.add_noise=False", "sim.torch_compile=False",
     ]
 
