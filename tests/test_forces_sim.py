@@ -1,5 +1,7 @@
 """TerrainForces in tiny MuJoCo-Warp worlds on the CPU: drag, energy, floating draft, tide, sinkage, friction."""
 
+import math
+
 import mujoco
 import mujoco_warp as mjw
 import numpy as np
@@ -235,7 +237,11 @@ def test_sinkage_grows_with_load_as_bekker_in_sim():
     fn = f.foot_fn.numpy()
     weight = mjm.body_mass[1:3] * 9.81
     np.testing.assert_allclose(fn, np.broadcast_to(weight, fn.shape), rtol=0.02)
-    kc, kphi, n = (f.soil_params.numpy()[:, 0, q][:, None] for q in range(3))
+    # this world's draws of Wong's dry sand (kc 0.99 kN/m^2.1, kphi 1528.43 kN/m^3.1, n 1.1; std 20 %, 15 %, 5 %, see
+    # test_soil_parameters_are_drawn_per_env_from_the_table_values): within 4 std of the table row
+    kc, kphi, n = (f.soil_params.numpy()[:, 0, q][:, None].astype(np.float64) for q in range(3))
+    for value, mean, std in ((kc, 0.99e3, 0.2), (kphi, 1528.43e3, 0.15), (n, 1.1, 0.05)):
+        assert np.all(np.abs(value / mean - 1.0) < 4 * std), (value, mean)
     z_ref = (weight / 0.01 / (kc / 0.1 + kphi)) ** (1 / n)  # Bekker, sole 0.1 m x 0.1 m: p = W / A, b = 0.1 m
     z = f.foot_sinkage.numpy()
     # the rut keeps the deepest sinkage of the stance: the landing transient may add a little (plastic soil)
@@ -247,6 +253,40 @@ def test_sinkage_grows_with_load_as_bekker_in_sim():
     np.testing.assert_allclose(lowered, np.minimum(z, SoilCfg.max_rut_depth), rtol=0.05)
     obs = f.privileged_obs().numpy().reshape(2, 2, -1)
     assert np.all(obs[..., 3] == 1.0) and np.allclose(obs[..., 4], z)
+
+
+def test_soil_parameters_are_drawn_per_env_from_the_table_values(custom_soil):
+    """Each env draws each soil parameter from N(mean, std) of its preset, truncated below at 10 % of the mean. Dry
+    sand is Wong's Table 2.3 row (kc 0.99 kN/m^2.1, kphi 1528.43 kN/m^3.1, n 1.1, c 1.04 kPa, phi 28 deg) with the
+    scatter the presets give (std 20 % kc, 15 % kphi, 5 % n, 15 % c, 10 % tan phi, 20 % K = 2.5 cm) and Bekker's
+    bulldozing coefficients 0.67 c K_pc = 0.67 * 1040 * 19.70 = 13.7 kN/m^2 and 0.5 gamma K_pgamma = 0.5 * 15.7e3 *
+    33.6 = 264 kN/m^3 (test_bulldozing_coefficients_by_hand). A soil whose kphi std equals its mean has Phi(-0.9)
+    = 18.4 % of its draws below 10 % of the mean: those are exactly 0.1 mean."""
+    wp.set_device(DEV)
+    custom_soil("wide_t", kc=0.0, kphi=(1.0e6, 1.0e6), n=1.0, c=0.0, mu=0.5, K=0.02, bulldoze_c=0.0, bulldoze_g=0.0)
+    mat = MaterialMap.rigid(SHAPE)
+    mat.soil[:] = 0
+    mat.soil_presets = ["dry_sand", "wide_t"]
+    n = 4000
+    _, _, f = make(world(leg("x", z=0.3)), mat, Cfg(), nworld=n, install=False)
+    draws = f.soil_params.numpy().astype(np.float64)
+    assert draws.shape == (n, 2, 10)
+    tan28 = np.tan(np.radians(28.0))
+    #               kc      kphi       n    c       mu     K      bulldoze_c          bulldoze_g
+    means = np.array([0.99e3, 1528.43e3, 1.1, 1.04e3, tan28, 0.025, 0.67 * 1.04e3 * 19.70, 0.5 * 15.7e3 * 33.6])
+    stds = means * np.array([0.2, 0.15, 0.05, 0.15, 0.1, 0.2, 0.2, 0.2])
+    sand = draws[:, 0, :8]
+    # sample mean within 4 standard errors (sd / sqrt(n)); the bulldozing values are the hand ones to 1 %
+    tol = 4 * stds / np.sqrt(n) + np.r_[np.zeros(6), 0.01 * means[6:]]
+    np.testing.assert_array_less(np.abs(sand.mean(0) - means), tol)
+    np.testing.assert_allclose(sand.std(0), stds, rtol=0.1)
+    assert np.all(draws[:, 0, 8:] == 0.0)  # zeta 0 and model 0 (Bekker)
+    assert len(np.unique(sand[:, 0])) > n // 2  # one draw per env, not one for all
+    kphi = draws[:, 1, 1]
+    assert kphi.min() == pytest.approx(0.1e6, rel=1e-6)
+    floor = np.mean(np.isclose(kphi, 0.1e6, rtol=1e-6))
+    assert floor == pytest.approx(0.5 * math.erfc(0.9 / math.sqrt(2.0)), abs=4 * math.sqrt(0.184 * 0.816 / n))
+    assert np.all(draws[:, 1, [0, 2, 3, 4, 5]] == np.float32([0.0, 1.0, 0.0, 0.5, 0.02]))  # std 0: the mean
 
 
 def test_bulldozing_opposes_motion():
@@ -290,8 +330,13 @@ def test_ice_cell_lowers_sliding_friction():
     set_qvel(d, [[1.0, 0.0], [1.0, 0.0]])
     for _ in range(100):
         mjw.step(m, d)
-    travel = d.qpos.numpy()[:, 0] - np.array([-1.0, 0.2])
-    assert travel[0] < 0.08 and travel[1] > 0.35  # mu=1: v^2/(2 mu g) = 5 cm; ice: still sliding after 0.5 s
+    travel, v = d.qpos.numpy()[:, 0] - np.array([-1.0, 0.2]), d.qvel.numpy()[:, 0]
+    # Coulomb sliding decelerates at mu g. mu = 1: stops after v0^2 / (2 mu g) = 1 / 19.62 = 5.1 cm. Ice, mu = 0.05:
+    # still sliding after t = 0.5 s at v0 - mu g t = 1 - 0.245 = 0.755 m/s, having gone v0 t - mu g t^2 / 2 = 0.439 m
+    # (the bound tells mu = 0.05 from 0.1, which would leave 0.377 m and 0.51 m/s)
+    assert travel[0] == pytest.approx(1.0 / (2 * 1.0 * 9.81), abs=0.003) and abs(v[0]) < 1e-3
+    assert travel[1] == pytest.approx(0.5 - 0.5 * 0.05 * 9.81 * 0.25, abs=0.005)
+    assert v[1] == pytest.approx(1.0 - 0.05 * 9.81 * 0.5, abs=0.005)
 
 
 def test_benchmark_reports_a_share():

@@ -278,6 +278,26 @@ def test_soil_forces_act_at_the_contact_plane():
     assert torque_y == pytest.approx((contact_z - com[2]) * fx, rel=1e-4)
 
 
+def test_bulldozing_fades_linearly_below_its_speed_reg():
+    """Below forces.bulldozing_speed_reg (0.05 m/s) Bekker's bulldozing b (bulldoze_c z + bulldoze_g z^2) is scaled by
+    |v| / 0.05 (no chatter about zero speed): at 0.3 m/s the whole force, at 0.01 m/s a fifth of it, at 0.05 m/s
+    the whole again; b = 0.09 m, the sole's width across the motion."""
+    wp.set_device(DEV)
+    speeds = [0.3, 0.01, 0.05]
+    m, d, f = make(foot_world(20.0), soil_map("t_sand_bull"), nworld=3)
+    assert Cfg.bulldozing_speed_reg == 0.05
+    run(m, d, f, 60)
+    q = d.qvel.numpy()
+    q[:, 0] = speeds
+    d.qvel.assign(q)
+    mjw.step(m, d)
+    z = f.foot_sinkage.numpy()[:, 0]
+    assert np.all(z > 0.005)
+    full = 0.09 * (1.4e4 * z + 2.6e5 * z * z)
+    np.testing.assert_allclose(f.foot_force.numpy()[:, 0, 0], -full * np.minimum(np.array(speeds) / 0.05, 1.0),
+                               rtol=1e-4)
+
+
 def test_rft_sole_sinks_to_zeta_and_drags_with_alpha_x():
     """A 20 kg foot on an RFT medium sinks until zeta |z| A carries its weight, and dragged sideways in its rut
     the medium resists with RFT's horizontal stress on its sole plate, alpha_x(0, 0) |z| A = 0.136 zeta z A =

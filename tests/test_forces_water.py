@@ -107,6 +107,42 @@ def test_crossflow_drag_on_tilted_legs(tilt_deg):
     np.testing.assert_allclose(d.xfrc_applied.numpy()[0, 1, 3:], 0.0, atol=1e-4)
 
 
+SLIDE_Z = '<joint type="slide" axis="0 0 1"/>'
+
+
+def test_the_papers_leg_options_by_hand():
+    """A leg tilted 45 deg (axis a = (sin 45, 0, cos 45)) deep under water. Sinking at v = 0.6 m/s its cross-flow is
+    v_n = v - (v.a) a = (v/2, 0, -v/2), |v_n| = v / sqrt 2: F = -0.5 rho cd (2 r L) |v_n| v_n. GenTe's options:
+    vertical_drag=False drops the vertical part of the relative velocity first (a sinking leg feels none);
+    paper_drag_area takes 2 pi r L instead of 2 r L (pi times the force). At rest under gravity the leg is buoyed by
+    rho g V, V = pi r^2 L; paper_added_mass adds the added mass ca rho V as weight instead: (1 - ca) rho g V, half
+    of it at ca = 0.5. The paper's eps (noise_std) scales drag and buoyancy per env."""
+    v = 0.6
+    vn = np.array([v / 2, 0.0, -v / 2])
+    drag = -0.5 * RHO * CD * (2 * R * L) * np.linalg.norm(vn) * vn
+    for options, expect in (({}, drag), ({"vertical_drag": False}, np.zeros(3)),
+                            ({"paper_drag_area": True}, math.pi * drag)):
+        m, d, f = make(model(leg_body(SLIDE_Z, euler="0 45 0")), water(surface=3.0), type("C", (Cfg,), options))
+        assign(d.qvel, [[-v]])
+        mjw.step(m, d)
+        np.testing.assert_allclose(f.seg_force.numpy()[0, 0], expect, rtol=1e-3, atol=1e-4, err_msg=str(options))
+    weight = RHO * G * math.pi * R**2 * L  # rho g V of the displaced water: 14.5 N
+    for options, expect in (({}, weight), ({"paper_added_mass": True, "added_mass_coefficient": 0.5}, 0.5 * weight)):
+        m, d, f = make(model(leg_body(SLIDE_Z, euler="0 45 0"), gravity=True), water(surface=3.0),
+                       type("C", (Cfg,), options))
+        mjw.step(m, d)
+        np.testing.assert_allclose(f.seg_force.numpy()[0, 0], [0.0, 0.0, expect], rtol=1e-3, atol=1e-4,
+                                   err_msg=str(options))
+    m, d, f = make(model(leg_body(SLIDE_Z, euler="0 45 0"), gravity=True), water(surface=3.0),
+                   type("C", (Cfg,), {"noise_std": 0.1}), nworld=4)
+    eps = f.eps.numpy()
+    assert np.ptp(eps) > 0.01  # four different draws
+    assign(d.qvel, np.full((4, 1), -v))
+    mjw.step(m, d)
+    np.testing.assert_allclose(f.seg_force.numpy()[:, 0], eps[:, None] * (drag + [0.0, 0.0, weight]), rtol=1e-3,
+                               atol=1e-4)
+
+
 def test_crossflow_drag_on_tilted_leg_crossing_the_surface():
     # 45 deg, surface 5 cm above the centre: the drag acts on the wetted volume V (strip integral of circular
     # segments, by hand below) as on a wetted length V / (pi r^2): F = -0.5 rho cd 2 r V/(pi r^2) |v_n| v_n.
@@ -315,6 +351,29 @@ def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
         assign(d.qvel, [[-v, -v]])
         mjw.step(m, d)
         np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], expect, rtol=1e-4)
+
+
+def test_half_submerged_soles_moving_sideways_get_the_drag_of_their_wet_part():
+    """The same soles, centres at the surface, towed horizontally at 0.5 m/s: only the wet half of each side face
+    resists. Box 0.2 x 0.1 x 0.04 m along x: its 0.1 x 0.04 m face pair, half wet, 0.5 rho 1.17 (0.004 / 2) v^2 =
+    0.2925 N; along y its 0.2 x 0.04 m pair, 0.585 N (Hoerner's flat plate). The sphere (r 3 cm) shows the flow a
+    half disc: 0.5 rho 0.47 (pi r^2 / 2) v^2 = 0.0831 N."""
+    z_w, v = 0.5, 0.5
+    for axis in ("1 0 0", "0 1 0"):
+        mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="{axis}"/>'
+                    '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
+                    f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="{axis}"/>'
+                    '<geom name="ball" type="sphere" size=".03" mass="1"/></body>')
+        cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"]})
+        m, d, f = make(mjm, water(surface=z_w), cfg)
+        assign(d.qvel, [[v, v]])
+        mjw.step(m, d)
+        k = 0 if axis == "1 0 0" else 1
+        face = 4 * 0.05 * 0.02 if k == 0 else 4 * 0.1 * 0.02  # m^2, the face pair normal to the motion
+        expect = [-0.5 * RHO * 1.17 * face / 2 * v * v, -0.5 * RHO * 0.47 * math.pi * 0.03**2 / 2 * v * v]
+        got = f.foot_water_force.numpy()[0]
+        np.testing.assert_allclose(got[:, k], expect, rtol=1e-4)
+        np.testing.assert_allclose(got[:, 1 - k], 0.0, atol=1e-6)
 
 
 def test_feet_lifted_out_of_the_water_lose_their_forces_and_added_mass():
