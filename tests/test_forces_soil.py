@@ -22,7 +22,7 @@ SOLE_XY = [(0.09, 0.025), (0.09, -0.025), (-0.09, 0.025), (-0.09, -0.025)]
 SOLE_AREA = 0.22 * 0.09
 
 @pytest.fixture(scope="module", autouse=True)
-def test_soils():
+def registered_test_soils():
     """Wong, Theory of Ground Vehicles, Table 2.3: dry sand (LLL), snow (U.S.) and sandy loam at 32 % moisture
     (Hanamoto, the "mud" preset's means), with no bulldozing and no scatter so the tests see the traction limit and
     the sinkage alone; and dry sand with bulldozing. Removed again after this module's tests."""

@@ -186,9 +186,9 @@ def test_soil_presets_follow_the_forces_module():
     assert set(SOIL_PRESETS) <= set(ATOMIC_TERRAINS["soil"].params["preset"].choices)
     patch = physical("soil", {"preset": "snow"}, np.zeros((4, 4), np.float32))
     assert patch.soil == "snow"
-    if "custom" not in SOIL_PRESETS:
-        with pytest.raises(ValueError, match="register_custom_soil"):
-            physical("soil", {"preset": "custom"}, np.zeros((4, 4), np.float32))
+    assert "custom" not in SOIL_PRESETS  # a name for the user's own soils, registered under their own names
+    with pytest.raises(ValueError, match="register_custom_soil"):
+        physical("soil", {"preset": "custom"}, np.zeros((4, 4), np.float32))
 
 
 def test_low_friction_presets_and_monotone_difficulty():
