@@ -149,6 +149,19 @@ def test_gente_play_video_without_offscreen_gl_is_one_line(tmp_path, gl):
         and "set MUJOCO_GL=egl" in lines[-1], lines[-1]
 
 
+def test_gente_play_video_with_no_gl_set_is_one_line(tmp_path):
+    """MUJOCO_GL unset and no display: MuJoCo tries GLFW, whose two warnings came before the one-line error (Warp's
+    native CUDA-driver notice on a machine without a GPU is printed before Python can quiet it)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY", "PYOPENGL_PLATFORM")}
+    done = subprocess.run([sys.executable, "-m", "legged_gente.scripts.play", "--task", "gente_biped_flat",
+                           "--pretrained", "--video", "--headless", "--steps", "1", "--num_envs", "1", "--device",
+                           "cpu", "--log_root", str(tmp_path)], env=env, timeout=600, capture_output=True, text=True)
+    lines = [line for line in done.stderr.strip().splitlines() if not line.startswith("Warp CUDA warning")]
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("gente-play: error: MUJOCO_GL is unset: offscreen rendering failed") \
+        and "set MUJOCO_GL=egl" in lines[0], lines[0]
+
+
 def test_a_renderer_without_a_gl_context_is_a_one_line_error(terrain, monkeypatch, capsys):
     """MUJOCO_GL=egl without libEGL: the renderer's creation fails; gente-play says so in one line."""
     import mujoco

@@ -208,6 +208,7 @@ THIRD_PARTY_NOISE = (
     (UserWarning, r".*(Failed to load image Python extension|torchvision)", ""),
     (UserWarning, r".*torch\.jit\.\w+.*deprecated", ""),
     (FutureWarning, r".*treespec", ""),  # torch.utils._pytree, raised from copyreg during torch.export
+    (UserWarning, "", r"glfw(\.|$)"),  # MuJoCo's GLFW backend without a display: its OpenGL error says it all
 )
 # Python loggers of third-party libraries whose warnings are not the user's (torch.onnx: "torchvision is not
 # installed. Skipping torchvision::nms" at every ONNX export)

@@ -114,7 +114,8 @@ class VideoRenderer:
         try:
             self.renderer = mujoco.Renderer(self.model, height=height, width=width)
         except Exception as error:  # no GL context: say how to get one
-            raise OffscreenGLError(f"MUJOCO_GL={os.environ.get('MUJOCO_GL')}: offscreen rendering failed "
+            backend = f"MUJOCO_GL={os.environ['MUJOCO_GL']}" if "MUJOCO_GL" in os.environ else "MUJOCO_GL is unset"
+            raise OffscreenGLError(f"{backend}: offscreen rendering failed "
                                    f"({type(error).__name__}: {error}); {GL_FIX}") from error
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = True
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
