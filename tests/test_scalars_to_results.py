@@ -29,3 +29,19 @@ def test_a_chunk_resumed_from_an_older_checkpoint_replaces_the_iterations_it_red
     assert [float(r["terrain_level"]) for r in rows] == [1.0] * 11 + [2.0] * 9
     assert float(rows[-1]["wall_s"]) == round(20 * 0.25, 1)  # 0.2 s collection + 0.05 s learning, 20 iterations
     assert int(rows[-1]["diverged_resets_cumulative"]) == 20
+
+
+def test_iterations_before_the_first_finished_episode_count(tmp_path):
+    """The first iterations of a run log no episode length until an episode ends: they were dropped, with their
+    time, so wall_s was short of the training time it says it sums."""
+    _chunk(tmp_path / "a.csv", range(0, 5), level=1.0)
+    rows = list(csv.reader(open(tmp_path / "a.csv")))
+    rows[1][1] = rows[2][1] = ""  # iterations 0 and 1: no episode has ended yet
+    with open(tmp_path / "a.csv", "w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    out = tmp_path / "out.csv"
+    subprocess.run([sys.executable, str(TOOL), str(out), str(tmp_path / "a.csv")], check=True)
+    results = list(csv.DictReader(open(out)))
+    assert [int(r["iteration"]) for r in results] == list(range(5))
+    assert [r["mean_episode_length"] for r in results][:3] == ["", "", "900"]
+    assert float(results[-1]["wall_s"]) == round(5 * 0.25, 1)

@@ -5,7 +5,8 @@ rew_tracking_lin_vel, mean_reward, env_steps_per_s, terrain_level, diverged_rese
 Episode/diverged_resets is the count per logging interval (one iteration); the results column sums it over
 the run. (Runs before the divergence fix logged a running total per chunk; their results files were made so.)
 
-wall_s is the training time rsl-rl measures (collection + learning, summed over iterations): process start-up
+wall_s is the training time rsl-rl measures (collection + learning, summed over iterations, also those before the
+first finished episode, whose episode columns are empty): process start-up
 and the pause between resumed chunks are not in it. When a chunk was resumed from a checkpoint older than the
 previous chunk's last iteration, the iterations it redid are counted once, from the later chunk.
 
@@ -33,7 +34,7 @@ def main() -> None:
     args = parser.parse_args()
     iterations = []  # (iteration, seconds, diverged resets, results values), in training order
     for path in args.chunks:
-        rows = [r for r in csv.DictReader(open(path)) if r["Train/mean_episode_length"] != ""]
+        rows = [r for r in csv.DictReader(open(path)) if r.get("Perf/collection_time")]  # every iteration logs it
         if not rows:
             raise SystemExit(f"{path}: no training iterations (is it a tb_export CSV of a run?)")
         # a chunk resumed from a checkpoint older than the previous chunk's last iteration redid those iterations
