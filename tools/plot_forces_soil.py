@@ -9,7 +9,7 @@ bulldozing of a foot sunk z: up to T the soil's shear holds it, bar the slip tha
 (Janosi-Hanamoto: about 4 cm by 0.9 T on dry sand); beyond, the foot creeps as fast as the bulldozing (faded in
 below 5 cm/s) lets it, and once the push passes T + R_b it slides away.
 
-Preset means (no per-episode scatter), CPU, about a minute:
+Preset means (no per-episode scatter), CPU, about 15 s:
     PYTHONPATH=$PWD python tools/plot_forces_soil.py [--out docs/img/forces_soil.png]
 """
 
