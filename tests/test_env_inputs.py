@@ -77,3 +77,15 @@ def test_an_interval_under_half_a_policy_step_is_refused_not_rounded_up(section,
     setattr(getattr(cfg, section), field, 0.005)
     with pytest.raises(ValueError, match=rf"cfg.{section}.{field}=0.005 s is under half a policy step \(0.02 s\)"):
         GenteBiped(cfg, device="cpu")
+
+
+@pytest.mark.parametrize("field, value", [("soft_dof_pos_limit", 0.0), ("soft_dof_pos_limit", 1.5),
+                                          ("soft_dof_pos_limit", float("nan")), ("soft_torque_limit", 0.0),
+                                          ("soft_torque_limit", -1.0)])
+def test_soft_limits_are_shares_of_the_hard_ones(field, value):
+    """A soft limit of 0 made the limit terms penalise everything, and with an unlimited joint or actuator 0 * inf
+    = NaN, which the total then dropped for that world; above 1 the joint range grew past the model's."""
+    cfg = cfg_of()
+    setattr(cfg.rewards, field, value)
+    with pytest.raises(ValueError, match=rf"cfg.rewards.{field}={value}; use a share of the hard limit"):
+        GenteBiped(cfg, device="cpu")

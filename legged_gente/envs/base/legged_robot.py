@@ -143,6 +143,9 @@ class LeggedRobot(VecEnv):
         for name, seconds in intervals:  # counted in whole policy steps: under half a step would round to none
             checks.append((seconds >= dt / 2, f"cfg.{name}={seconds} s is under half a policy step ({dt:g} s); use "
                                               f"at least {dt:g} s"))
+        for name in ("soft_dof_pos_limit", "soft_torque_limit"):  # legged_gym's shares of the joint range and force
+            value = getattr(cfg.rewards, name)
+            checks.append((0 < value <= 1, f"cfg.rewards.{name}={value}; use a share of the hard limit, in (0, 1]"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
