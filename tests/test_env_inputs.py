@@ -89,3 +89,11 @@ def test_soft_limits_are_shares_of_the_hard_ones(field, value):
     setattr(cfg.rewards, field, value)
     with pytest.raises(ValueError, match=rf"cfg.rewards.{field}={value}; use a share of the hard limit"):
         GenteBiped(cfg, device="cpu")
+
+
+def test_set_param_refuses_a_soft_limit_outside_its_share(env):
+    with pytest.raises(ValueError, match=r"rewards.soft_torque_limit=0.0; use a share of the hard limit, in \(0, 1\]"):
+        env.set_param("rewards.soft_torque_limit", 0.0)
+    env.set_param("rewards.soft_torque_limit", 0.8)
+    assert float(env.params.rewards.soft_torque_limit) == pytest.approx(0.8)
+    env.set_param("rewards.soft_torque_limit", 1.0)

@@ -31,6 +31,7 @@ from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand
 
 CUDA_GRAPH_MODES = ("env_step", "physics", "off")  # the values of cfg.sim.cuda_graph
 COMMAND_RANGES = ("lin_vel_x", "lin_vel_y", "ang_vel_yaw", "heading")  # cfg.commands.ranges, in command order
+SOFT_LIMITS = ("soft_dof_pos_limit", "soft_torque_limit")  # legged_gym's shares of the joint range and force
 
 
 def _quat_mul(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
@@ -143,7 +144,7 @@ class LeggedRobot(VecEnv):
         for name, seconds in intervals:  # counted in whole policy steps: under half a step would round to none
             checks.append((seconds >= dt / 2, f"cfg.{name}={seconds} s is under half a policy step ({dt:g} s); use "
                                               f"at least {dt:g} s"))
-        for name in ("soft_dof_pos_limit", "soft_torque_limit"):  # legged_gym's shares of the joint range and force
+        for name in SOFT_LIMITS:
             value = getattr(cfg.rewards, name)
             checks.append((0 < value <= 1, f"cfg.rewards.{name}={value}; use a share of the hard limit, in (0, 1]"))
         checks.append((cfg.forces.friction_reference is None,
@@ -262,6 +263,8 @@ class LeggedRobot(VecEnv):
             raise ValueError(f"{path} takes a value of shape {tuple(target.shape)}, got {value!r}.")
         if group == "commands" and name in COMMAND_RANGES and not float(new[0]) <= float(new[1]):
             raise ValueError(f"{path}={list(value)}; use [low, high], low <= high.")
+        if group == "rewards" and name in SOFT_LIMITS and not 0 < float(new) <= 1:
+            raise ValueError(f"{path}={value}; use a share of the hard limit, in (0, 1].")
         target.copy_(new)
         owner = self.cfg.commands.ranges if len(parts) == 3 else getattr(self.cfg, group)
         setattr(owner, name, value)
