@@ -328,17 +328,24 @@ def test_tilted_cylinder_buoyancy_matches_the_strip_integral(tilt_deg):
         assert f.seg_force.numpy()[0, 0, 2] == pytest.approx(expect, rel=1e-3, abs=1e-4)
 
 
+def two_soles(z_w, axis="0 0 1", gravity=False, **settings):
+    """A box sole 0.2 x 0.1 x 0.04 m and a sphere sole r = 3 cm, each on a slide joint along ``axis``, their centres
+    at height ``z_w`` (the water surface in the tests), 1 m apart; their forces (ForcesConfig ``settings``), feet 0
+    and 1."""
+    mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="{axis}"/>'
+                '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
+                f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="{axis}"/>'
+                '<geom name="ball" type="sphere" size=".03" mass="1"/></body>', gravity=gravity)
+    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"], **settings})
+    return make(mjm, water(surface=z_w), cfg)
+
+
 def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
     # A level box sole 0.2 x 0.1 x 0.04 m and a sphere sole r = 3 cm, each with its centre at the surface:
     # buoyancy rho g V/2. The box moving down at 0.5 m/s: its bottom face (0.2 x 0.1, all wet) takes plate drag
     # 0.5 rho 1.17 A v^2 upwards (Hoerner's flat plate); the sphere moving down: 0.5 rho 0.47 (pi r^2 / 2) v^2.
     z_w, v = 0.5, 0.5
-    mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
-                '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
-                f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
-                '<geom name="ball" type="sphere" size=".03" mass="1"/></body>', gravity=True)
-    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"]})
-    m, d, f = make(mjm, water(surface=z_w), cfg)
+    m, d, f = two_soles(z_w, gravity=True)
     mjw.step(m, d)
     box_v, ball_v = 0.2 * 0.1 * 0.04, 4 / 3 * math.pi * 0.03**3
     np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], [RHO * G * box_v / 2, RHO * G * ball_v / 2],
@@ -347,7 +354,7 @@ def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
               RHO * G * ball_v / 2 + 0.5 * RHO * 0.47 * math.pi * 0.03**2 / 2 * v * v]
     # vertical_drag=False (the paper's horizontal drag) concerns the legs' model only: the feet keep theirs
     for vertical_drag in (True, False):
-        m, d, f = make(mjm, water(surface=z_w), type("C", (cfg,), {"vertical_drag": vertical_drag}))
+        m, d, f = two_soles(z_w, gravity=True, vertical_drag=vertical_drag)
         assign(d.qvel, [[-v, -v]])
         mjw.step(m, d)
         np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], expect, rtol=1e-4)
@@ -360,12 +367,7 @@ def test_half_submerged_soles_moving_sideways_get_the_drag_of_their_wet_part():
     half disc: 0.5 rho 0.47 (pi r^2 / 2) v^2 = 0.0831 N."""
     z_w, v = 0.5, 0.5
     for axis in ("1 0 0", "0 1 0"):
-        mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="{axis}"/>'
-                    '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
-                    f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="{axis}"/>'
-                    '<geom name="ball" type="sphere" size=".03" mass="1"/></body>')
-        cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"]})
-        m, d, f = make(mjm, water(surface=z_w), cfg)
+        m, d, f = two_soles(z_w, axis)
         assign(d.qvel, [[v, v]])
         mjw.step(m, d)
         k = 0 if axis == "1 0 0" else 1
@@ -380,13 +382,7 @@ def test_feet_lifted_out_of_the_water_lose_their_forces_and_added_mass():
     # The box and sphere soles half submerged: each point's added-mass scale is its wet fraction, 1/2. Raised
     # 0.1 m (above their half-heights of 0.02 and 0.03 m) they are dry: no water force, no force on their bodies,
     # and no added mass left over from the wet substep.
-    z_w = 0.5
-    mjm = model(f'<body name="foot0" pos="0 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
-                '<geom name="box" type="box" size=".1 .05 .02" mass="1"/></body>'
-                f'<body name="foot1" pos="1 0 {z_w}"><joint type="slide" axis="0 0 1"/>'
-                '<geom name="ball" type="sphere" size=".03" mass="1"/></body>')
-    cfg = type("C", (Cfg,), {"leg_geom_names": [], "foot_geom_names": ["box", "ball"]})
-    m, d, f = make(mjm, water(surface=z_w), cfg)
+    m, d, f = two_soles(0.5)
     mjw.step(m, d)
     np.testing.assert_allclose(f.point_mass.numpy()[:, 0], [0.5, 0.5], rtol=1e-4)
     assign(d.qpos, [[0.1, 0.1]])
