@@ -57,8 +57,9 @@ import numpy as np
 import torch
 
 from legged_gente.evaluation.benchmark import TILE_EDGE_MARGIN, Item, tile_geometry
-from legged_gente.evaluation.tasks import (WAYPOINT_LATERAL, WAYPOINT_SPACING, WAYPOINT_SPEED, WAYPOINTS, VelocityTask,
-                                           WaypointTask, zigzag_waypoints)
+from legged_gente.evaluation.tasks import (MIN_SPEED, REACH_DISTANCE, STAND_FRACTION, WAYPOINT_LATERAL,
+                                           WAYPOINT_SPACING, WAYPOINT_SPEED, WAYPOINTS, VelocityTask, WaypointTask,
+                                           zigzag_waypoints)
 from legged_gente.terrain.composition import MAX_ABS_HEIGHT
 from legged_gente.utils.torch_math import quat_rotate_inverse, wrap_to_pi, yaw_of, yaw_quat
 
@@ -255,9 +256,10 @@ class Evaluation:
                                  dtype=torch.float32, device=self.tile.device)
         return bounds + torch.tensor([margin, margin, -margin, -margin], device=bounds.device)
 
-    def make_task(self, reach_distance: float = 1.0, speed: float = WAYPOINT_SPEED, num_waypoints: int = WAYPOINTS,
-                  spacing: float = WAYPOINT_SPACING, lateral: float = WAYPOINT_LATERAL, min_speed: float = 0.3,
-                  stand_fraction: float = 0.1, tile_edge_margin: float | None = TILE_EDGE_MARGIN):
+    def make_task(self, reach_distance: float = REACH_DISTANCE, speed: float = WAYPOINT_SPEED,
+                  num_waypoints: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING, lateral: float = WAYPOINT_LATERAL,
+                  min_speed: float = MIN_SPEED, stand_fraction: float = STAND_FRACTION,
+                  tile_edge_margin: float | None = TILE_EDGE_MARGIN):
         """The run's commands: the velocity task, or waypoint paths kept within ``tile_edge_margin`` of their tile
         where they can turn back (the margin ``run`` ends a measured episode at; None: the tile's edge)."""
         env = self.env

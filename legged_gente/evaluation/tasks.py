@@ -16,6 +16,11 @@ import math
 
 import torch
 
+MIN_SPEED, STAND_FRACTION = 0.3, 0.1
+"""The velocity task's defaults: the slowest moving command (m/s) and the share of robots told to stand still."""
+REACH_DISTANCE = 1.0
+"""The waypoint task's default d (m): a waypoint is reached within it."""
+
 
 def _uniform(lo: float, hi: float, n: int, generator: torch.Generator) -> torch.Tensor:
     return lo + (hi - lo) * torch.rand(n, generator=generator)
@@ -25,7 +30,7 @@ class VelocityTask:
     name = "velocity"
 
     def __init__(self, num_robots: int, ranges, heading_command: bool, device: str, seed: int = 0,
-                 min_speed: float = 0.3, stand_fraction: float = 0.1):
+                 min_speed: float = MIN_SPEED, stand_fraction: float = STAND_FRACTION):
         if not 0.0 <= stand_fraction <= 1.0:
             raise ValueError(f"stand_fraction must be in [0, 1], got {stand_fraction}.")
         if not min_speed > 0:

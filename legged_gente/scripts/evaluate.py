@@ -35,21 +35,27 @@ def edge_margin(text: str) -> float | None:
 
 
 MODE_FLAGS = {
-    "velocity": {"tracking_threshold": 0.25, "min_progress": 0.7, "min_speed": 0.3, "stand_fraction": 0.1},
-    "waypoints": {"reach_distance": 1.0, "speed": 0.6},
+    "velocity": ("tracking_threshold", "min_progress", "min_speed", "stand_fraction"),
+    "waypoints": ("reach_distance", "speed"),
 }
-"""Each evaluation mode's own flags with their defaults: a flag of the other mode would be ignored, so it is refused."""
+"""Each evaluation mode's own flags: a flag of the other mode would be ignored, so it is refused."""
 
 
 def mode_settings(args) -> dict:
-    """The flags of ``args.mode``, defaults filled in; a flag of the other mode given is an error."""
+    """The flags of ``args.mode``, defaults (the evaluation's own) filled in; a flag of the other mode given is an
+    error."""
+    from legged_gente.evaluation.report import MIN_PROGRESS, TRACKING_THRESHOLD  # imported here: --help needs no torch
+    from legged_gente.evaluation.tasks import MIN_SPEED, REACH_DISTANCE, STAND_FRACTION, WAYPOINT_SPEED
+
+    defaults = {"tracking_threshold": TRACKING_THRESHOLD, "min_progress": MIN_PROGRESS, "min_speed": MIN_SPEED,
+                "stand_fraction": STAND_FRACTION, "reach_distance": REACH_DISTANCE, "speed": WAYPOINT_SPEED}
     for mode, flags in MODE_FLAGS.items():
         for name in flags:
             if mode != args.mode and getattr(args, name) is not None:
-                raise ValueError(f"--{name} is a flag of --mode {mode}; it does nothing with --mode {args.mode}: leave it "
-                                 f"out, or add --mode {mode}.")
-    return {name: default if getattr(args, name) is None else getattr(args, name)
-            for name, default in MODE_FLAGS[args.mode].items()}
+                raise ValueError(f"--{name} is a flag of --mode {mode}; it does nothing with --mode {args.mode}: "
+                                 f"leave it out, or add --mode {mode}.")
+    given = {name: getattr(args, name) for name in MODE_FLAGS[args.mode]}
+    return {name: defaults[name] if value is None else value for name, value in given.items()}
 
 
 def build_parser() -> argparse.ArgumentParser:
