@@ -70,9 +70,9 @@ def build_parser() -> Parser:
     p.add_argument(*flag("--two-phase"), action="store_true", help="VLM describes the image, then the LLM calls the tools")
     p.add_argument("--toolset", choices=("ours", "gente"), default="ours",
                    help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
-    p.add_argument(*flag("--api-key-env"), help="environment variable holding the API key (openai backend; default GENTE_API_KEY; 'none' if unset)")
-    p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), help="request timeout in seconds (openai backend; default 60)")
-    p.add_argument(*flag("--max-retries"), type=int, help=f"correction rounds for invalid tool calls (openai backend; default 3, at most {MAX_RETRIES})")
+    p.add_argument(*flag("--api-key-env"), help=f"environment variable holding the API key (openai backend; default {SERVER_DEFAULTS['api_key_env']}; 'none' if unset)")
+    p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), help=f"request timeout in seconds (openai backend; default {SERVER_DEFAULTS['timeout']:g})")
+    p.add_argument(*flag("--max-retries"), type=int, help=f"correction rounds for invalid tool calls (openai backend; default {SERVER_DEFAULTS['max_retries']}, at most {MAX_RETRIES})")
     p.add_argument("--seed", type=seed, default=0, help="terrain seed (default 0)")
     p.add_argument("--size", type=_positive(), default=20.0, help="tile side in metres (default 20)")
     p.add_argument("--resolution", type=_positive(), default=0.1, help="cell size in metres (default 0.1)")
