@@ -238,8 +238,9 @@ class Terrain:
                     f"set num_rows * num_cols = {len(paths)} for one tile per spec.",
                     stacklevel=3,
                 )
+            tiles = [self._generated_tile(path) for path in paths]  # each spec read once, however often it repeats
             for k in range(rows * cols):
-                plan[divmod(k, cols)] = self._generated_tile(paths[k % len(paths)])
+                plan[divmod(k, cols)] = tiles[k % len(paths)]
         return plan
 
     def _generated_tile(self, path: Path) -> tuple[str, Any]:
