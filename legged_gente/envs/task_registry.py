@@ -101,6 +101,15 @@ def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
             train_cfg.runner.resume = True
 
 
+NETWORK_SECTIONS = ("actor", "critic")
+"""The train config's sections of network settings, which a run's config.json records."""
+
+
+def sets_a_network(override: str) -> bool:
+    """Whether a ``--set SECTION.FIELD=VALUE`` sets a network setting (``NETWORK_SECTIONS``)."""
+    return override.split(".")[0].strip() in NETWORK_SECTIONS
+
+
 def nominal(env_cfg: LeggedRobotCfg) -> None:
     """The robot as built, for watching and scoring a policy: no observation noise, pushes, or friction and mass
     draws (legged_gym's play turns off the noise, pushes and friction draw)."""
@@ -175,11 +184,10 @@ class TaskRegistry:
         experiment_root = Path(log_root).absolute() / runner_cfg.experiment_name if log_root is not None else None
         if runner_cfg.resume:  # the networks its checkpoint was trained with (a --pretrained run's: 32 x 32)
             resumed = find_checkpoint(experiment_root, runner_cfg.load_run, runner_cfg.checkpoint)
-            if network_sizes_from(resumed, train_cfg):
-                for text in getattr(args, "overrides", None) or []:
-                    if text.split(".")[0].strip() in ("actor", "critic"):
-                        raise ValueError(f"--set {text}: a resumed run keeps the networks recorded in "
-                                         f"{resumed.parent / 'config.json'}; leave it out")
+            given = next(filter(sets_a_network, getattr(args, "overrides", None) or []), None)
+            if network_sizes_from(resumed, train_cfg) and given is not None:
+                raise ValueError(f"--set {given}: a resumed run keeps the networks recorded in "
+                                 f"{resumed.parent / 'config.json'}; leave it out")
         validate_cfgs(None, train_cfg)
         log_dir = None
         if experiment_root is not None:
@@ -252,7 +260,7 @@ def network_sizes_from(checkpoint: Path, train_cfg: LeggedRobotCfgPPO) -> bool:
     if not config_path.is_file():
         return False
     train = json.loads(config_path.read_text()).get("train", {})
-    recorded = [section for section in ("actor", "critic") if section in train]
+    recorded = [section for section in NETWORK_SECTIONS if section in train]
     for section in recorded:
         update_from_dict(getattr(train_cfg, section), train[section], section)
     return bool(recorded)

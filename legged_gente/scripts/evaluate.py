@@ -109,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
 def check_network_overrides(args) -> None:
     """``--set`` gives only the network sizes (actor.*, critic.*) of a --checkpoint without a config.json beside
     it (one with it takes them from there): checked on a fresh config before anything is built."""
-    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.envs.task_registry import sets_a_network, task_registry
 
     if not args.checkpoint:
         raise ValueError("--set sets the network sizes of a --checkpoint; leave it out with --exported, "
@@ -121,7 +121,7 @@ def check_network_overrides(args) -> None:
     env_cfg, train_cfg = task_registry.get_cfgs(args.task)
     apply_overrides(args.overrides, env_cfg, train_cfg)  # the names, types and layer widths
     for text in args.overrides:
-        if text.split(".")[0].strip() not in ("actor", "critic"):
+        if not sets_a_network(text):
             raise ValueError(f"--set {text}: gente-evaluate sets only the network sizes (actor.*, critic.*) of a "
                              f"--checkpoint without config.json; the evaluation's settings are its flags.")
 
