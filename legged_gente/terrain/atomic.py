@@ -54,7 +54,11 @@ def _flatten_centre(h: np.ndarray, resolution: float, platform: float, ramp: flo
 
 
 def _clear_centre(h: np.ndarray, resolution: float, platform: float) -> np.ndarray:
-    """Set the central square of side ``platform`` to 0 (obstacles that would overlap it are cut)."""
+    """Set the central square of side ``platform`` to 0 (obstacles that would overlap it are cut); 0 clears nothing
+    (not even the centre cell of an odd-sized region, which would stand alone at 0: a post in a floor, a hole in a
+    pillar)."""
+    if platform <= 0.0:
+        return h
     h[_chebyshev(h.shape, resolution) <= platform / 2.0 + EDGE] = 0.0
     return h
 
@@ -287,6 +291,8 @@ def stairs(shape, resolution, rng, step_height, step_width, platform, direction)
 def pyramid_stairs(shape, resolution, rng, step_height, step_width, platform, direction):
     d = _chebyshev(shape, resolution)
     steps = np.ceil(np.round(np.maximum(d - platform / 2.0, 0.0) / step_width, 9))
+    if platform <= 0.0:  # no platform: the first ring covers the centre (else, on an odd number of cells, the
+        steps = np.maximum(steps, 1.0)  # centre cell alone stays at 0: a one-cell pit in the top step, or a post)
     h = step_height * steps
     return (h if direction == "up" else -h).astype(F32)
 
