@@ -75,7 +75,9 @@ class LeggedRobot(VecEnv):
         self.num_envs = int(cfg.env.num_envs)
         self.dt = cfg.sim.dt * cfg.control.decimation  # s, policy step
         self.max_episode_length_s = cfg.env.episode_length_s
-        self.max_episode_length = int(math.ceil(self.max_episode_length_s / self.dt))
+        # policy steps, a partial last one counted whole; the quotient rounded first (0.14 s / 0.02 s is
+        # 7.000000000000001 in binary floating point: 7 steps, not 8)
+        self.max_episode_length = int(math.ceil(round(self.max_episode_length_s / self.dt, 9)))
         self._log_every = train_cfg_steps_per_env
         self._validate_cfg()
 
@@ -222,7 +224,8 @@ class LeggedRobot(VecEnv):
         self.push_robots, self.max_push_vel_xy = bool(rand.push_robots), float(rand.max_push_vel_xy)
         self.random_init_yaw, self.init_lin_vel_xy_noise = bool(rand.random_init_yaw), float(rand.init_lin_vel_xy_noise)
         self.joint_pos_noise = float(cfg.init_state.joint_pos_noise)
-        self._resample_steps = int(round(cfg.commands.resampling_time / self.dt))  # >= 1 (_validate_cfg)
+        # whole policy steps; half a step (the least _validate_cfg accepts) is one, not round()'s 0
+        self._resample_steps = max(1, int(round(cfg.commands.resampling_time / self.dt)))
         self._push_steps = max(1, int(round(rand.push_interval_s / self.dt)))  # 1 where pushes are off
         init = cfg.init_state
         self.init_base_state = torch.tensor(list(init.pos) + list(init.rot) + list(init.lin_vel) + list(init.ang_vel),
