@@ -20,6 +20,7 @@ terrain forces. Anything else that needs external pushes must change velocities 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -34,7 +35,7 @@ from legged_gente.external_forces import water as W
 from legged_gente.external_forces import water_models as WM
 from legged_gente.external_forces.config import ForcesConfig
 from legged_gente.terrain.soil import preset_table
-from legged_gente.terrain.materials import MaterialMap
+from legged_gente.terrain.materials import FLOW_KINDS, NO_SOIL, MaterialMap
 
 
 _ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]
@@ -59,6 +60,30 @@ def _check_values(cfg) -> None:
                 where = " (in an env: set cfg.terrain.static_friction)" if name == "friction_reference" else ""
                 raise ValueError(f"forces.{name}={value!r} must be a number {'>' if positive else '>='} 0{where}; "
                                  f"the default is {getattr(ForcesConfig, name)}.")
+
+
+def _check_material(material: MaterialMap, shape: tuple[int, int]) -> None:
+    """One ValueError naming the first layer of the map the kernels would misread: another shape than the heights'
+    grid (read out of its bounds at the heights' cell indices), a flow kind the flow formula does not know (still
+    water, silently), a soil index below NO_SOIL (rigid ground, silently), a non-finite value or a negative
+    friction (a frictionless contact)."""
+    for field in dataclasses.fields(MaterialMap):
+        if field.name == "soil_presets":
+            continue
+        layer = np.asarray(getattr(material, field.name))
+        if layer.shape != shape:
+            raise ValueError(f"material.{field.name} has shape {layer.shape}; the heights' grid is {shape}: give "
+                             f"every layer of the MaterialMap one value per heightfield cell.")
+        if field.name == "flow_kind":
+            bad, fix = layer[~np.isin(layer, tuple(FLOW_KINDS.values()))], "use 0 (still), 1 (current) or 2 (tide)"
+        elif field.name == "soil":
+            bad, fix = layer[layer < NO_SOIL], f"use {NO_SOIL} (rigid ground) or an index into soil_presets"
+        elif field.name == "friction":
+            bad, fix = layer[~(layer >= 0) | ~np.isfinite(layer)], "friction must be a finite number >= 0"
+        else:
+            bad, fix = layer[~np.isfinite(layer)], "its values must be finite (NO_WATER marks a dry cell)"
+        if bad.size:
+            raise ValueError(f"material.{field.name} holds {bad.flat[0]}; {fix}.")
 
 
 def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
@@ -189,6 +214,7 @@ class TerrainForces:
         if heights.ndim != 2 or heights.shape != material.shape:
             raise ValueError(f"heights {heights.shape} and material map {material.shape} must be the same 2-D "
                              f"grid; build both from the same Terrain.")
+        _check_material(material, heights.shape)
         if not resolution > 0:
             raise ValueError(f"resolution must be > 0 m, got {resolution}.")
         self.m, self.d, self.cfg = m, d, cfg
