@@ -16,7 +16,7 @@ import math
 from pathlib import Path
 
 from legged_gente.evaluation.benchmark import KINDS
-from legged_gente.evaluation.report import CATEGORIES
+from legged_gente.evaluation.report import CATEGORIES, METRIC_COLUMNS
 
 RESOLVED_AT = 2.0
 """A mean difference counts as resolved beyond this many standard errors (about 95 % two-sided)."""
@@ -35,7 +35,11 @@ def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], fl
     terrains = {}
     for row in rows:
         if row["row"] == "terrain":
-            value = float(row[metric]) if row[metric] else math.nan
+            try:
+                value = float(row[metric]) if row[metric] else math.nan
+            except ValueError:
+                raise ValueError(f"--metric {metric}: {path} holds {row[metric]!r} there, not a number; give a numeric "
+                                 f"column: {', '.join(METRIC_COLUMNS)}.") from None
             terrains[row["name"]] = ({row["kind"], *filter(None, row["categories"].split("+"))}, value)
     return terrains
 

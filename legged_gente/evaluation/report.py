@@ -25,7 +25,8 @@ CATEGORY_OF_TOOL = {
     "pyramid_stairs": "slopes_and_stairs",
 }
 """Atomic terrain -> category. Base-ground atomics (flat, natural_ground, random_uniform, waves) have none,
-except a ``flat`` call at a non-zero height: a raised block (a sketch's black obstacle) or a sunken floor."""
+except a ``flat`` call at a non-zero height over part of the tile: a raised block (a sketch's black obstacle) or a
+sunken floor. Over the whole tile it raises or lowers all of it (GenTe's transcripts do): no obstacle."""
 BASE_GROUND = ("flat", "natural_ground", "random_uniform", "waves")
 CATEGORIES = ("water", "soil", "obstacles", "slopes_and_stairs")
 
@@ -37,8 +38,11 @@ def categories_of(spec) -> list[str]:
     """The categories of a spec's calls, in CATEGORIES order; raises for an atomic with no category decision."""
     found = set()
     for call in spec.calls:
-        if call.tool == "flat" and float(call.params["height"]) != 0.0:
-            found.add("obstacles")
+        if call.tool == "flat":
+            x0, y0, x1, y1 = call.rect(spec.size_x, spec.size_y)
+            whole = x0 <= 0.0 and y0 <= 0.0 and x1 >= spec.size_x and y1 >= spec.size_y
+            if float(call.params["height"]) != 0.0 and not whole:  # a block or a floor, with edges on the tile
+                found.add("obstacles")
         elif call.tool in CATEGORY_OF_TOOL:
             found.add(CATEGORY_OF_TOOL[call.tool])
         elif call.tool not in BASE_GROUND:
