@@ -2,8 +2,9 @@
 
 GenTe (Gao et al. 2025, github.com/HaronW/GenTe) has models call terrain functions on a 200 x 200 grid of
 0.1 m cells (a 20 m x 20 m tile) with int16 heights of 0.005 m. Its multi-part prompts split the tile into
-four parts (argument ``part`` 1-4); its single-part prompts apply every call to the whole tile. Every GenTe
-height function adds to the current heights, so translated geometric calls use mode ``add``.
+four parts (argument ``part`` 1-4); its single-part prompts apply every call to the whole tile. GenTe's height
+functions add to the current heights (its obstacles, pillars, gap and pyramid stairs write their blocks' heights over
+them instead), so translated geometric calls use mode ``add``.
 
 :data:`GENTE_TOOLS` is our own description of the tool schema GenTe serves (names, arguments, their types and
 what GenTe's code does with them), written from GenTe's code and schema; :func:`gente_tool_schemas` serves
@@ -141,14 +142,17 @@ def _offset(height: float, source: str, issues: Issues) -> list[tuple[str, dict[
 
 
 def _slope(args, sx, sy, issues, name):
-    """GenTe's slopes rise ``slope`` m per m towards the centre (peak slope * d_max); ours fall from 0 there."""
+    """GenTe's slopes rise ``slope`` m per m from 0 at the region's edges towards its centre; ours fall from 0 at the
+    platform's edge, so they are lifted by the fall from there to the edges (GenTe's peak: slope * d_max)."""
     slope = float(args["slope"])
+    platform = 0.0
+    if name == "pyramid_sloped_terrain":  # GenTe's function default platform_size is 1 m
+        platform = _fit("pyramid_slope", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)
     d_max = (sx + sy) / 2.0 if name == "sloped_terrain" else sx / 2.0  # GenTe: Manhattan vs along-x half extent
-    calls = _offset(slope * d_max, f"{name}.slope (peak slope*{d_max:g} m)", issues)
+    rise = d_max - platform / 2.0
+    calls = _offset(slope * rise, f"{name}.slope (slope*{rise:g} m to the edges)", issues)
     params = {"slope": _fit("pyramid_slope", "slope", math.atan(abs(slope)), f"atan(|slope|) of {name}.slope", issues),
-              "direction": "down" if slope >= 0 else "up", "platform": 0.0}
-    if "platform_size" in args:
-        params["platform"] = _fit("pyramid_slope", "platform", float(args["platform_size"]), "platform_size", issues)
+              "direction": "down" if slope >= 0 else "up", "platform": platform}
     return calls + [("pyramid_slope", params)]
 
 
@@ -207,6 +211,13 @@ def _uniform(args, sx, sy, issues):
               "spacing": _fit("random_uniform", "spacing", spacing, "downsampled_scale*0.1 m", issues),
               "step": _fit("random_uniform", "step", step_m, "step (GenTe: int(step/0.1)*0.005 m)", issues),
               "platform": 0.0}
+    if 0.0 < params["amplitude"] <= params["step"]:
+        # GenTe draws from min_height + k*step (k = 0, 1, ...): at least two levels; our random_uniform rounds its
+        # nodes in [-amplitude, amplitude] towards 0 by the step, which would make every node 0 (flat ground)
+        issues.append(Issue("simplified", f"GenTe's heights are levels {params['step']:g} m apart from {lo:g} m; "
+                                          f"a quantum not below the amplitude {params['amplitude']:g} m would flatten "
+                                          f"ours, so they are imported without one."))
+        params["step"] = 0.0
     return _offset((hi + lo) / 2.0, "(min_height+max_height)/2", issues) + [("random_uniform", params)]
 
 
@@ -220,7 +231,8 @@ def _obstacles(args, sx, sy, issues):
               "min_size": _fit("discrete_obstacles", "min_size", lo, "min_size", issues),
               "max_size": _fit("discrete_obstacles", "max_size", hi, "max_size", issues),
               "density": _fit("discrete_obstacles", "density", float(args["num_rects"]) / (sx * sy), "num_rects/area", issues),
-              "platform": _fit("discrete_obstacles", "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
+              "platform": 0.0}
+    _ignored(args, ("platform_size",), "GenTe's discrete_obstacles_terrain converts it but clears no platform", issues)
     return [("discrete_obstacles", params)]  # lo <= hi, and _fit keeps the order
 
 
@@ -352,12 +364,12 @@ GENTE_TOOLS: dict[str, GenteTool] = {t.name: t for t in [
     GenteTool("pyramid_sloped_terrain", "A pyramid rising to a flat top at the centre.",
               {"terrain": HANDLE, "slope": GenteArg("number", "rise per metre towards the centre", True), "platform_size": PLATFORM},
               BOTH, lambda a, sx, sy, i: _slope(a, sx, sy, i, "pyramid_sloped_terrain"),
-              "flat(slope*side/2) + pyramid_slope(atan|slope|, direction, platform)"),
+              "flat(slope*(side/2 - platform/2)) + pyramid_slope(atan|slope|, direction, platform (default 1 m))"),
     GenteTool("discrete_obstacles_terrain", "Random rectangular blocks.",
               {"terrain": HANDLE, "max_height": GenteArg("number", "largest block height [m]", True),
                "min_size": GenteArg("number", "smallest block side [m]", True), "max_size": GenteArg("number", "largest block side [m]", True),
                "num_rects": GenteArg("integer", "number of blocks", True), "platform_size": PLATFORM},
-              BOTH, _obstacles, "discrete_obstacles(max_height, min_size, max_size, density=num_rects/area, platform)"),
+              BOTH, _obstacles, "discrete_obstacles(max_height, min_size, max_size, density=num_rects/area, platform 0); platform_size ignored"),
     GenteTool("wave_terrain", "Sine waves along both axes.",
               {"terrain": HANDLE, "num_waves": GenteArg("integer", "periods across the part", True),
                "amplitude": GenteArg("number", "peak-to-peak height of one axis' wave [m]")},

@@ -80,6 +80,12 @@ def load_items(root: Path, kind: str) -> list[dict]:
         raise ValueError(f"{path} holds no 'items' list; write {{\"items\": [{{\"labels\": [...], ...}}, ...]}}.")
     items = items["items"]
     for i, item in enumerate(items):
+        if not isinstance(item, dict) or not isinstance(item.get("labels"), list):
+            raise ValueError(f"{path}: item {i} has no 'labels' list; write {{\"labels\": [...], ...}} with labels "
+                             f"from {list(FEATURES)}.")
+        needed = "text" if kind == "text" else "file"
+        if not isinstance(item.get(needed), str):
+            raise ValueError(f"{path}: item {i} has no '{needed}'; give each item its {needed} as a string.")
         bad = sorted(set(item["labels"]) - set(FEATURES))
         if bad:
             raise ValueError(f"{path}: item {i} has unknown label(s) {bad}; labels are {list(FEATURES)}.")
