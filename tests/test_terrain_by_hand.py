@@ -129,6 +129,17 @@ def test_random_uniform_is_bilinear_between_quantised_nodes():
     assert np.allclose(h[1::2, 1::2], mid, atol=1e-6)
 
 
+@pytest.mark.parametrize("amplitude", [0.01, 0.02])
+def test_random_uniform_refuses_an_amplitude_its_step_rounds_to_flat_ground(amplitude):
+    """Nodes are drawn in [-amplitude, amplitude] and rounded towards 0 by the step: with amplitude <= step every
+    node is 0, a flat tile asked for as rough; refused, naming both values. Just above the step, levels 0 and
+    +-step appear."""
+    with pytest.raises(ValueError, match=r"random_uniform: amplitude .* step 0.02"):
+        ATOMIC_TERRAINS["random_uniform"].check_params({"amplitude": amplitude, "step": 0.02})
+    h = heights("random_uniform", {"amplitude": 0.03, "spacing": 0.2, "step": 0.02, "platform": 0.0}, (21, 21))
+    assert set(np.round(np.unique(h[::2, ::2]), 6)) == {-0.02, 0.0, 0.02}
+
+
 def test_river_cross_section():
     """Along x (direction 0), 2.0 m wide bank top to bank top, banks 0.5 m, 0.4 m deep, on 41 cells of 0.05 m across
     (y = (j - 20) * 0.05): the bed |y| <= 0.5 (j = 10..30) at -0.4 m; mid-bank |y| = 0.75 (j = 5, 35) at

@@ -126,6 +126,13 @@ def _bilinear_upsample(nodes: np.ndarray, shape: tuple[int, int], resolution: fl
     )
 
 
+def _random_uniform_rules(params: dict) -> None:
+    """Nodes in [-amplitude, amplitude] rounded towards 0 by the step are all 0 when amplitude <= step."""
+    if 0.0 < params["step"] and 0.0 < params["amplitude"] <= params["step"]:
+        raise ValueError(f"random_uniform: amplitude {params['amplitude']!r} m is not above step {params['step']!r} m, "
+                         f"which rounds every height to 0 (flat ground); give an amplitude above the step, or step 0.")
+
+
 @atomic_terrain(
     "random_uniform",
     "geometric",
@@ -133,11 +140,13 @@ def _bilinear_upsample(nodes: np.ndarray, shape: tuple[int, int], resolution: fl
     {
         "amplitude": Param(0.05, "largest |height| of the roughness", "m", 0.0, 0.3),
         "spacing": Param(0.2, "distance between the random height nodes", "m", 0.05, 2.0),
-        "step": Param(0.005, "height quantum the node heights are rounded to (0: none)", "m", 0.0, 0.1),
+        "step": Param(0.005, "height quantum the node heights are rounded towards 0 by (0: none; below the amplitude)", "m",
+                      0.0, 0.1),
         "platform": PLATFORM,
     },
     difficulty=lambda d: {"amplitude": _lerp(0.02, 0.1, d)},
     bounds=lambda p, sx, sy: (-p["amplitude"], p["amplitude"]),
+    rules=_random_uniform_rules,
 )
 def random_uniform(shape, resolution, rng, amplitude, spacing, step, platform):
     n = (int(np.ceil((shape[0] - 1) * resolution / spacing)) + 2, int(np.ceil((shape[1] - 1) * resolution / spacing)) + 2)
