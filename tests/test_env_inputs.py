@@ -97,3 +97,13 @@ def test_set_param_refuses_a_soft_limit_outside_its_share(env):
     env.set_param("rewards.soft_torque_limit", 0.8)
     assert float(env.params.rewards.soft_torque_limit) == pytest.approx(0.8)
     env.set_param("rewards.soft_torque_limit", 1.0)
+
+
+@pytest.mark.parametrize("field, value", [("clip_actions", 0.0), ("clip_actions", -1.0),
+                                          ("clip_observations", 0.0), ("clip_observations", float("nan"))])
+def test_clip_limits_are_positive(field, value):
+    """A negative clip_actions crossed the clamp's bounds (every action became one constant); 0 zeroed them all."""
+    cfg = cfg_of()
+    setattr(cfg.normalization, field, value)
+    with pytest.raises(ValueError, match=rf"cfg.normalization.{field}={value}; use a positive bound"):
+        GenteBiped(cfg, device="cpu")

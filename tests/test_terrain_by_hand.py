@@ -249,3 +249,21 @@ def test_add_stacks_a_pyramid_slope_on_raised_ground():
     assert h[20, 20] == pytest.approx(0.5, abs=1e-6)
     assert h[40, 20] == pytest.approx(1.5, abs=1e-6) and h[0, 40] == pytest.approx(1.5, abs=1e-6)
     assert h[30, 25] == pytest.approx(1.0, abs=1e-6)
+
+
+def test_a_river_whose_channel_misses_its_region_is_refused():
+    """The channel's axis lies |offset| from the region's centre: with offset 10 m on a 10 m x 10 m region (axis
+    along y) the whole channel (2.5 m wide) lies beyond the region's edge at 5 m, and nothing was carved, silently.
+    Validation refuses it (the channel's edge at 10 - 1.25 m lies 3.75 m beyond the region's at 5 m); a direct build
+    warns; offset 6 m (channel edge at 4.75 m) validates and carves its bank."""
+    from legged_gente.generation.validation import ValidationError, validate_call
+
+    params = {"width": 2.5, "depth": 0.4, "bank_width": 0.5, "direction": math.pi / 2, "offset": 10.0}
+    with pytest.raises(ValidationError, match=r"river: the channel .* outside its 10 m x 10 m region, 3.75 m from it "
+                                              r"at the nearest; move it in by changing offset"):
+        validate_call("river", {"region": {"x0": 0, "y0": 0, "x1": 10, "y1": 10}, **params}, 10.0, 10.0)
+    with pytest.warns(UserWarning, match="misses its region"):
+        assert heights("river", params, (101, 101)).min() == 0.0
+    validate_call("river", {"region": {"x0": 0, "y0": 0, "x1": 10, "y1": 10}, **params, "offset": 6.0}, 10.0, 10.0)
+    h = heights("river", {**params, "offset": 6.0}, (101, 101))
+    assert h.min() < -0.01  # the cells within 4.75-5 m lie on the bank

@@ -368,6 +368,11 @@ def validate_call(
         region = tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
     mode = arguments.get("mode", "set") if terrain.kind == "geometric" else None
     call = ToolCall(tool, params, region, mode)
+    if terrain.fn is atomic.river:  # a channel beside its region carves nothing
+        x0, y0, x1, y1 = call.rect(size_x, size_y)
+        problem = atomic.river_outside(params, x1 - x0, y1 - y0)
+        if problem:
+            raise ValidationError([problem + "."])
     check_height_stack([call], size_x, size_y, registry)  # a call that alone exceeds the bound never builds
     if resolution is not None:
         problems = grid_problems(terrain, params, resolution)

@@ -8,6 +8,8 @@ curriculum varies (heights, depths), so for one seed a harder difficulty scales 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .registry import Param, atomic_terrain, min_le_max
@@ -495,6 +497,26 @@ def rocks(shape, resolution, rng, max_height, min_radius, max_radius, density, p
 
 
 # ----------------------------------------------------------------------------------------------------- river
+def _channel_distance(x, y, direction, offset, meander_amplitude, meander_wavelength):
+    """Distance (m) across the channel from points (x, y), measured from the region's centre, to its meandering axis."""
+    along = x * np.cos(direction) + y * np.sin(direction)
+    across = -x * np.sin(direction) + y * np.cos(direction)
+    return np.abs(across - offset - meander_amplitude * np.sin(2.0 * np.pi * along / meander_wavelength))
+
+
+def river_outside(p, size_x: float, size_y: float) -> str | None:
+    """Why a river's channel lies wholly outside a region of ``size_x`` x ``size_y`` m (None if it does not),
+    from the region sampled every 2 cm."""
+    x = np.linspace(-size_x / 2.0, size_x / 2.0, max(2, int(np.ceil(size_x / 0.02)) + 1))[:, None]
+    y = np.linspace(-size_y / 2.0, size_y / 2.0, max(2, int(np.ceil(size_y / 0.02)) + 1))[None, :]
+    s = _channel_distance(x, y, p["direction"], p["offset"], p["meander_amplitude"], p["meander_wavelength"])
+    if s.min() < p["width"] / 2.0:
+        return None
+    return (f"river: the channel ({p['width']:g} m wide, offset {p['offset']:g} m, meanders {p['meander_amplitude']:g} m) "
+            f"lies wholly outside its {size_x:g} m x {size_y:g} m region, {s.min() - p['width'] / 2.0:.2f} m from it at "
+            f"the nearest; move it in by changing offset")
+
+
 def _river_rules(p) -> None:
     if p["bank_width"] > p["width"] / 2.0:
         raise ValueError(f"river: bank_width={p['bank_width']} m exceeds half the width ({p['width'] / 2.0} m); "
@@ -520,9 +542,11 @@ def _river_rules(p) -> None:
 )
 def river(shape, resolution, rng, width, depth, bank_width, direction, offset, meander_amplitude, meander_wavelength):
     x, y = _axes(shape, resolution)
-    along = x * np.cos(direction) + y * np.sin(direction)
-    across = -x * np.sin(direction) + y * np.cos(direction)
-    s = np.abs(across - offset - meander_amplitude * np.sin(2.0 * np.pi * along / meander_wavelength))
+    s = _channel_distance(x, y, direction, offset, meander_amplitude, meander_wavelength)
+    if depth > 0.0 and not (s < width / 2.0).any():  # validation refuses this (river_outside); a direct build warns
+        warnings.warn(f"river: the channel ({width:g} m wide, offset {offset:g} m from the centre) misses its region "
+                      f"({shape[0] * resolution:g} m x {shape[1] * resolution:g} m): nothing is carved; give an offset "
+                      f"that keeps it inside the region.", stacklevel=2)
     bed = width / 2.0 - bank_width
     # Cosine bank profile: 0 at the bed edge, 1 at the bank top, smooth at both ends.
     t = np.clip((s - bed) / max(bank_width, 1e-9), 0.0, 1.0)

@@ -123,6 +123,10 @@ class LeggedRobot(VecEnv):
              "cfg.init_state: pos, lin_vel and ang_vel take 3 numbers, rot 4 (w, x, y, z)"),
             (abs(sum(q * q for q in cfg.init_state.rot) - 1.0) < 1e-3,
              f"cfg.init_state.rot={list(cfg.init_state.rot)} is not a unit quaternion; use (w, x, y, z) of norm 1"),
+            (cfg.normalization.clip_actions > 0,
+             f"cfg.normalization.clip_actions={cfg.normalization.clip_actions}; use a positive bound"),
+            (cfg.normalization.clip_observations > 0,
+             f"cfg.normalization.clip_observations={cfg.normalization.clip_observations}; use a positive bound"),
             (cfg.domain_rand.init_lin_vel_xy_noise >= 0,
              f"cfg.domain_rand.init_lin_vel_xy_noise={cfg.domain_rand.init_lin_vel_xy_noise}; use >= 0 (m/s)"),
         ]
