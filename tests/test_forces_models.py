@@ -281,3 +281,12 @@ def test_rft_kernel_matches_reference():
         face = models.rft_face_force(vels[i], depths[i], 0.09, 4.64e5, 0.05)
         np.testing.assert_allclose(faces.numpy()[i], face, rtol=1e-4, atol=1e-4)
     assert np.count_nonzero(np.abs(faces.numpy()).max(1) > 1.0) > 100  # most of the random faces are sunk and moving
+
+
+@pytest.mark.parametrize("value", ["abc", (1.0, "x"), None, [1.0, 2.0, 3.0]])
+def test_a_custom_soil_value_that_is_no_number_or_pair_names_its_parameter(value):
+    """numpy's 'could not convert string to float' named neither the parameter nor the fix."""
+    params = dict(kc=1e3, kphi=2e5, n=1.0, c=2e3, mu=0.3, K=0.01, bulldoze_c=1.0, bulldoze_g=1.0)
+    with pytest.raises(ValueError, match=r"register_custom_soil\('peat_v'\): kc=.* is not a number or a \(mean, std\) "
+                                         r"pair; give e.g. kc=\(1000.0, 100.0\) or kc=1000.0"):
+        register_custom_soil("peat_v", **{**params, "kc": value})

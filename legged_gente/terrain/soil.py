@@ -163,6 +163,18 @@ SOIL_PRESETS: dict[str, SoilPreset] = {
 }
 
 
+def _mean_std(soil: str, param: str, value) -> tuple[float, float]:
+    """A ``(mean, std)`` pair of floats from a pair or a bare number (std 0)."""
+    try:
+        pair = tuple(float(x) for x in value) if np.ndim(value) else (float(value), 0.0)
+    except (TypeError, ValueError):
+        pair = ()
+    if len(pair) != 2:
+        raise ValueError(f"register_custom_soil({soil!r}): {param}={value!r} is not a number or a (mean, std) pair; give "
+                         f"e.g. {param}=(1000.0, 100.0) or {param}=1000.0.")
+    return pair
+
+
 def register_custom_soil(name: str, **params) -> SoilPreset:
     """Add a soil to :data:`SOIL_PRESETS` under ``name``.
 
@@ -183,10 +195,7 @@ def register_custom_soil(name: str, **params) -> SoilPreset:
             f"{list(PARAM_NAMES[:-1])} as (mean, std) pairs (and optionally zeta=..., model=..., source=...)."
         )
     params = {"zeta": 0.0, **params}
-    fields = {
-        p: tuple(float(x) for x in params[p]) if np.ndim(params[p]) else (float(params[p]), 0.0)
-        for p in PARAM_NAMES
-    }
+    fields = {p: _mean_std(name, p, params[p]) for p in PARAM_NAMES}
     preset = SoilPreset(**fields, model=str(params.get("model", "bekker")), source=str(params.get("source", "custom")))
     SOIL_PRESETS[name] = preset
     return preset
