@@ -52,7 +52,7 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
         checks += [("runner.save_interval", r.save_interval, int, 1), ("runner.num_steps_per_env", r.num_steps_per_env, int, 1),
                    ("algorithm.num_mini_batches", a.num_mini_batches, int, 1),
                    ("algorithm.num_learning_epochs", a.num_learning_epochs, int, 1),
-                   ("runner.max_iterations", r.max_iterations, int, 0)]
+                   ("runner.max_iterations", r.max_iterations, int, 1)]  # rsl-rl saves a final checkpoint even after none
     for name, value, kind, low in checks:
         number = isinstance(value, (int, float)) and not isinstance(value, bool)
         if not number or (kind is int and value != int(value)):
@@ -193,6 +193,9 @@ class TaskRegistry:
         if experiment_root is not None:
             stamp = datetime.now().strftime("%Y-%m-%d_%H-%M-%S")
             log_dir = str(experiment_root / (stamp + (f"_{runner_cfg.run_name}" if runner_cfg.run_name else "")))
+            base, n = log_dir, 1
+            while Path(log_dir).exists():  # another run started in the same second: never share its folder
+                log_dir, n = f"{base}_{n}", n + 1
         runner = GenteOnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=log_dir, device=env.device)
         runner.task_name = name
         # the config (and the run's config.json) says what runs: bf16 applies on CUDA only (GenteOnPolicyRunner)

@@ -78,7 +78,12 @@ def train(args) -> Path | None:
     env, env_cfg = task_registry.make_env(args.task, args)
     runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
     if log_dir is not None:
-        Path(log_dir).mkdir(parents=True, exist_ok=True)
+        Path(log_dir).parent.mkdir(parents=True, exist_ok=True)
+        try:  # exclusive: a run that took this name since make_alg_runner chose it is never written into
+            Path(log_dir).mkdir()
+        except FileExistsError:
+            raise ValueError(f"run folder {log_dir} was created by another run starting at the same moment; start this "
+                             f"one again, or give it a --run_name") from None
         (Path(log_dir) / "config.json").write_text(json.dumps(run_record(args.task, env, env_cfg, train_cfg),
                                                               indent=1, default=str))
         print(f"Logging to {log_dir}")

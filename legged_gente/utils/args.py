@@ -119,8 +119,8 @@ def parse_args(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace
         parser.error(str(error))
     if args.num_envs is not None and args.num_envs < 1:
         parser.error("--num_envs must be >= 1")
-    if getattr(args, "max_iterations", None) is not None and args.max_iterations < 0:
-        parser.error("--max_iterations must be >= 0")
+    if getattr(args, "max_iterations", None) is not None and args.max_iterations < 1:
+        parser.error(f"--max_iterations {args.max_iterations}: train at least 1 iteration")
     if getattr(args, "steps", None) is not None and args.steps < 1:  # gente-play's and gente-view's rollouts
         parser.error(f"--steps {args.steps}: roll out at least 1 policy step")
     for text in args.overrides:
