@@ -133,7 +133,7 @@ def main(argv=None) -> None:
     from legged_gente.envs.base.step_runner import StepRunner
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
-    from legged_gente.utils.args import resolve_device
+    from legged_gente.utils.args import resolve_device, run_command
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--task", default="gente_quadruped")
@@ -156,12 +156,18 @@ def main(argv=None) -> None:
     except ValueError as error:
         p.error(str(error))
 
-    items = load_benchmark(args.benchmark, args.items)[: args.limit]
-    evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity", args.seed)
-    if args.plain_launches:
-        evaluation.env._runner = StepRunner(evaluation.env, compile=False, graph=False)
-    policy = load_policy(evaluation, checkpoint=args.checkpoint, pretrained=args.pretrained,
-                         baseline=None if (args.checkpoint or args.pretrained) else "zero")
+    def build(args):
+        """The evaluation and the policy; a wrong benchmark, item, task or checkpoint is one line (run_command)."""
+        items = load_benchmark(args.benchmark, args.items)[: args.limit]
+        evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity",
+                                args.seed)
+        if args.plain_launches:
+            evaluation.env._runner = StepRunner(evaluation.env, compile=False, graph=False)
+        policy = load_policy(evaluation, checkpoint=args.checkpoint, pretrained=args.pretrained,
+                             baseline=None if (args.checkpoint or args.pretrained) else "zero")
+        return evaluation, policy
+
+    evaluation, policy = run_command(p.prog, build, args)
     rows, summary = diagnose(evaluation, policy, progress=not args.no_progress)
     print(report(rows, summary))
     if args.csv:

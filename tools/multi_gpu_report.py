@@ -13,6 +13,7 @@ import argparse
 import csv
 import re
 import statistics
+from pathlib import Path
 
 FIELDS = ("Steps per second", "Mean reward", "Mean episode length")
 
@@ -46,11 +47,18 @@ def main() -> None:
     if args.gpus < 2:
         parser.error(f"--gpus {args.gpus}: the second run trains on 2 or more GPUs; give how many it used")
     multi = f"{args.gpus}gpu"
+    for path in (args.one_gpu_log, args.multi_gpu_log):
+        if not Path(path).is_file():
+            parser.error(f"{path}: no such file; give the console log of a training run (rank 0)")
     runs = {"1gpu": parse(args.one_gpu_log), multi: parse(args.multi_gpu_log)}
     for name, rows in runs.items():
         if len(rows) <= args.skip:
             raise SystemExit(f"{name}: only {len(rows)} iterations logged (need > --skip {args.skip}); train "
                              f"longer or see its log")
+        unmeasured = sorted(i for i, r in rows.items() if "Steps per second" not in r)
+        if unmeasured:
+            raise SystemExit(f"{name}: iteration {unmeasured[0]} logs no 'Steps per second' (an rsl-rl log of "
+                             f"another format, or cut short); give a console log of this rsl-rl-lib's runner")
     sps = {name: statistics.mean(r["Steps per second"] for i, r in rows.items() if i >= min(rows) + args.skip)
            for name, rows in runs.items()}
     common = min(max(rows) for rows in runs.values())

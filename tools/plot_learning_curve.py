@@ -1,8 +1,11 @@
 """Plot a training CSV from docs/results (iteration, wall_s, mean_episode_length, rew_tracking_lin_vel, ...
-and, on a curriculum, terrain_level) against training wall time."""
+and, on a curriculum, terrain_level) against training wall time. An empty cell (the iterations before the first
+finished episode log no episode length) is a gap in its line."""
 
 import argparse
 import csv
+import math
+from pathlib import Path
 
 import matplotlib
 
@@ -20,6 +23,8 @@ def main(argv=None) -> None:
     parser.add_argument("--mark", type=float, nargs="*", default=[], help="minutes to mark (e.g. resumes)")
     parser.add_argument("--title", default="")
     args = parser.parse_args(argv)
+    if not Path(args.csv).is_file():
+        parser.error(f"{args.csv}: no such file; give a training CSV of docs/results (tools/scalars_to_results.py)")
     with open(args.csv, newline="") as f:
         reader = csv.DictReader(f)
         rows = list(reader)
@@ -29,13 +34,17 @@ def main(argv=None) -> None:
         what = f"no column {', '.join(missing)}" if missing else "no rows"
         parser.error(f"{args.csv}: {what}; give a training CSV of docs/results (tools/scalars_to_results.py)")
     t = [float(r["wall_s"]) / 60 for r in rows]
+
+    def column(name: str, scale: float = 1.0) -> list[float]:
+        return [float(r[name]) / scale if r[name] else math.nan for r in rows]  # NaN: a gap in the line
+
     fig, ax = plt.subplots(figsize=(7, 3.6))
-    ax.plot(t, [float(r["mean_episode_length"]) / args.max_episode_length for r in rows], label="episode length / max")
-    ax.plot(t, [float(r["rew_tracking_lin_vel"]) for r in rows], label="tracking_lin_vel / max")
+    ax.plot(t, column("mean_episode_length", args.max_episode_length), label="episode length / max")
+    ax.plot(t, column("rew_tracking_lin_vel"), label="tracking_lin_vel / max")
     ax.axhline(0.9, color="tab:blue", ls=":", lw=1)
     ax.axhline(0.8, color="tab:orange", ls=":", lw=1)
     if args.levels:
-        ax.plot(t, [float(r["terrain_level"]) / args.levels for r in rows], color="tab:green",
+        ax.plot(t, column("terrain_level", args.levels), color="tab:green",
                 label=f"mean terrain level / {args.levels}")
         ax.axhline(args.level_target / args.levels, color="tab:green", ls=":", lw=1)
     for minute in args.mark:

@@ -12,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 OLD_CSV_DECIMATION = 4
+COLUMNS = ("num_envs", "raw_substeps_per_s", "env_steps_per_s", "ppo_steps_per_s")  # of gente-benchmark --csv
 
 
 def raw_ceiling(row: dict) -> float:
@@ -32,8 +33,16 @@ def main(argv=None) -> None:
     for item in args.csvs:
         if "=" not in item:
             parser.error(f"{item!r}: give each CSV as LABEL=PATH, e.g. \"H100=benchmark.csv\"")
-        if not Path(item.split("=", 1)[1]).is_file():
+        path = Path(item.split("=", 1)[1])
+        if not path.is_file():
             parser.error(f"{item!r}: no such file; give a CSV of gente-benchmark --csv")
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            rows = list(reader)
+        missing = [c for c in COLUMNS if c not in (reader.fieldnames or [])]
+        if missing or not rows:
+            what = f"no column {', '.join(missing)}" if missing else "no rows"
+            parser.error(f"{item!r}: {what}; give a CSV of gente-benchmark --csv")
     unknown = sorted(set(args.skip_raw) - {item.split("=", 1)[0] for item in args.csvs})
     if unknown:
         parser.error(f"--skip_raw {unknown}: no CSV has that label; the labels are those before '=' in LABEL=PATH")

@@ -34,8 +34,15 @@ def main() -> None:
     args = parser.parse_args()
     iterations = []  # (iteration, seconds, diverged resets, results values), in training order
     for path in args.chunks:
-        rows = [r for r in csv.DictReader(open(path)) if r.get("Perf/collection_time")]  # every iteration logs it
-        if not rows:
+        try:
+            with open(path, newline="") as f:
+                reader = csv.DictReader(f)
+                rows = [r for r in reader if r.get("Perf/collection_time")]  # every iteration logs it
+        except OSError as error:
+            raise SystemExit(f"{path}: {error.strerror}; give a scalars CSV of python -m "
+                             f"legged_gente.utils.tb_export")
+        missing = [c for c in ("step", "Perf/learning_time") if c not in (reader.fieldnames or [])]
+        if not rows or missing:
             raise SystemExit(f"{path}: no training iterations (is it a tb_export CSV of a run?)")
         # a chunk resumed from a checkpoint older than the previous chunk's last iteration redid those iterations
         iterations = [it for it in iterations if it[0] < int(rows[0]["step"])]

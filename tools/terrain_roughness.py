@@ -18,6 +18,8 @@ import csv
 import numpy as np
 from scipy.ndimage import maximum_filter, minimum_filter
 
+from legged_gente.utils.args import USER_ERRORS, error_text
+
 BINS = (0.0, 0.02, 0.1, 0.3, 1.0)
 
 
@@ -41,8 +43,11 @@ REPORT_COLUMNS = ("success_rate", "fall_rate", "tracking_error")  # per terrain,
 def read_report(path: str) -> dict[str, dict[str, float]]:
     """Per terrain of a report.csv: its ``REPORT_COLUMNS`` (NaN where empty: no moving robot there)."""
     with open(path, newline="") as f:
-        return {r["name"]: {k: float(r[k] or "nan") for k in REPORT_COLUMNS}
-                for r in csv.DictReader(f) if r["row"] == "terrain"}
+        reader = csv.DictReader(f)
+        missing = [c for c in ("row", "name", *REPORT_COLUMNS) if c not in (reader.fieldnames or [])]
+        if missing:
+            raise ValueError(f"{path}: no column {', '.join(missing)}; give gente-evaluate's report.csv")
+        return {r["name"]: {k: float(r[k] or "nan") for k in REPORT_COLUMNS} for r in reader if r["row"] == "terrain"}
 
 
 def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float, dict[str, float]]]:
@@ -114,13 +119,13 @@ def main() -> None:
     if args.benchmark and args.overrides:
         parser.error("--set goes with --curriculum (it changes the task's terrain config; a benchmark's terrains are "
                      "its specs)")
-    if args.curriculum:
-        curriculum_table(args.curriculum, args.overrides)
-        return
-    try:
+    try:  # a wrong benchmark, report, task or --set: one line
+        if args.curriculum:
+            curriculum_table(args.curriculum, args.overrides)
+            return
         rows = benchmark_table(args.benchmark, args.report)
-    except ValueError as error:
-        parser.error(str(error))
+    except USER_ERRORS as error:
+        parser.error(error_text(error))
     print_bins(rows)
 
 

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from legged_gente.evaluation.report import MIN_PROGRESS
+from legged_gente.utils.args import run_command
 
 EPISODE_S = 10.0
 SETTLE_S = 1.0  # gente-evaluate's --settle_s
@@ -79,7 +80,8 @@ def main() -> None:
     parser.add_argument("--robots_per_terrain", type=int, default=64)
     parser.add_argument("--seed", type=int, default=0, help="as gente-evaluate's --seed")
     args = parser.parse_args()
-    r = edge_paths(args.benchmark, args.task, args.robots_per_terrain, args.seed)
+    # a wrong benchmark, task or robot count: one line (run_command)
+    r = run_command(parser.prog, lambda a: edge_paths(a.benchmark, a.task, a.robots_per_terrain, a.seed), args)
     total = len(r["leave"])
     print(f"{args.benchmark}: {r['terrains']} terrains, {total} moving robots ({args.task}'s commands, "
           f"seed {args.seed})")

@@ -93,8 +93,12 @@ def failing_terrains(report: str, max_fall_rate: float = 0.2, max_success: float
     """The terrains of a gente-evaluate report.csv where robots stay up (fall rate below ``max_fall_rate``) and
     still fail (success below ``max_success``)."""
     names = []
-    with open(report) as f:
-        for row in csv.DictReader(f):
+    with open(report, newline="") as f:
+        reader = csv.DictReader(f)
+        missing = [c for c in ("row", "name", "success_rate", "fall_rate") if c not in (reader.fieldnames or [])]
+        if missing:
+            raise SystemExit(f"{report}: no column {', '.join(missing)}; give gente-evaluate's report.csv")
+        for row in reader:
             if row["row"] == "terrain" and row["success_rate"] and row["fall_rate"]:
                 if float(row["fall_rate"]) < max_fall_rate and float(row["success_rate"]) < max_success:
                     names.append(row["name"])
@@ -109,7 +113,7 @@ def main() -> None:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
     from legged_gente.evaluation.report import MIN_PROGRESS, success as robot_success
-    from legged_gente.utils.args import resolve_device
+    from legged_gente.utils.args import resolve_device, run_command
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--task", required=True)
@@ -134,10 +138,15 @@ def main() -> None:
     if not 0.0 <= args.turn_s < args.episode_s - 3.0:
         raise SystemExit(f"--turn_s {args.turn_s}: give a value in [0, episode_s - 3) (episode_s {args.episode_s}).")
 
-    ids = failing_terrains(args.report) if args.report else args.items  # None: all
-    items = load_benchmark(args.benchmark, ids)
-    evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity")
-    act = load_policy(evaluation, checkpoint=args.checkpoint, baseline=args.baseline, pretrained=args.pretrained)
+    def build(args):
+        """The evaluation and the policy; a wrong report, benchmark, item, task or checkpoint is one line."""
+        ids = failing_terrains(args.report) if args.report else args.items  # None: all
+        items = load_benchmark(args.benchmark, ids)
+        evaluation = Evaluation(args.task, items, args.robots_per_terrain, args.device, args.episode_s, "velocity")
+        return items, evaluation, load_policy(evaluation, checkpoint=args.checkpoint, baseline=args.baseline,
+                                              pretrained=args.pretrained)
+
+    items, evaluation, act = run_command(parser.prog, build, args)
     env = evaluation.env
     if not env.heading_command:
         raise SystemExit(f"{args.task} commands a yaw rate, not a heading: its commanded path is no straight line; "
@@ -170,7 +179,7 @@ def main() -> None:
     normal = np.stack([-direction[robots, 1], direction[robots, 0]], axis=1)
     along = np.einsum("ntk,nk->nt", path, direction[robots]).max(axis=1)
     sideways = np.abs(np.einsum("ntk,nk->nt", path, normal)).max(axis=1)
-    moved = np.linalg.norm(xy[robots, -1] - xy[robots, -last], axis=1) / (last * evaluation.dt)
+    moved = np.linalg.norm(xy[robots, -1] - xy[robots, -1 - last], axis=1) / (last * evaluation.dt)  # over last steps
     stalled = moved < 0.3 * speed[robots]
     fell = m["fell"][robots]
     print(f"{len(items)} terrains, {int(moving.sum())} moving robots: {int(success.sum())} succeed, "
