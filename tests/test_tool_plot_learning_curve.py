@@ -1,4 +1,4 @@
-"""tools/plot_learning_curve.py (the learning-curve figures of README.md and docs/performance.md): a results CSV
+"""tools/plot_learning_curve.py (the learning-curve figures of README.md and docs/performance_log.md): a results CSV
 of tools/scalars_to_results.py drawn against wall time; a CSV without a column it draws is a one-line usage error."""
 
 import csv

@@ -127,7 +127,7 @@ class GentePPO(PPO):
     def compile_update(self) -> None:
         """Let the update run the actor's and critic's MLPs compiled by TorchInductor (``torch.compile``), which
         fuses their elementwise work (the ELUs, their gradients, the bias gradients): that work, not the matrix
-        products, bounds the update (docs/performance.md). Only the update uses the compiled MLPs; the models,
+        products, bounds the update (docs/performance_log.md). Only the update uses the compiled MLPs; the models,
         their state dict, ``act`` and exports stay as they are. They compile in the first update (seconds),
         before its graphs are captured."""
         self._compiled_mlps = [(model, torch.compile(model.mlp, dynamic=False)) for model in (self.actor, self.critic)

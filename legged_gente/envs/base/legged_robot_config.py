@@ -237,7 +237,7 @@ class LeggedRobotCfgPPO(BaseConfig):
         # bf16 autocast in the loss's forward pass (rsl-rl's option), on CUDA devices only (on the CPU it made the
         # update slower, so the runner keeps fp32 there). On an H100 at 8192 robots with the compiled update: PPO
         # +7 % (the update 16-17 % of an iteration instead of 22 %); two seeds of 1000 iterations learned per
-        # iteration as fp32 did (docs/performance.md)
+        # iteration as fp32 did (docs/performance_log.md)
         use_mixed_precision = True
 
     class runner:
@@ -254,14 +254,14 @@ class LeggedRobotCfgPPO(BaseConfig):
         matmul_precision = "high"
         # CUDA: GentePPO's update runs the actor's and critic's MLPs compiled by TorchInductor
         # (GentePPO.compile_update); on an H100 at 8192 robots the update took 63-64 ms instead of 69-70 ms
-        # (PPO +2.0 %; docs/performance.md)
+        # (PPO +2.0 %; docs/performance_log.md)
         compile_update = True
         obs_groups = {"actor": ["policy"], "critic": ["critic"]}
         # fine-tuning a shipped policy (gente-train --pretrained): its critic is not shipped, so the first
         # iterations train the fresh critic alone, the actor held fixed (GentePPO.freeze_actor). Meanwhile the
         # shipped actor carries the restarted curriculum up (to level ~10 of the biped's 0-15 by iteration 800):
         # an actor released on the bottom levels specialises to them and lost 3x more on gente_original
-        # (docs/performance.md; chosen on that evaluation set, which biases its score there). Ignored when
+        # (docs/performance_log.md; chosen on that evaluation set, which biases its score there). Ignored when
         # training from scratch or resuming.
         critic_warmup_iterations = 800
         resume = False
