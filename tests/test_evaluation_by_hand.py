@@ -215,3 +215,27 @@ def test_compare_names_the_fix_for_a_column_that_is_not_a_number(tmp_path):
     path.write_text("row,name,kind,categories,robots,success_rate\nterrain,t0,text,water,4,0.5\n")
     with pytest.raises(ValueError, match=r"--metric kind: .*'text'.* not a number; give a numeric column.*success_rate"):
         compare_reports(path, path, metric="kind")
+
+
+def test_figure_b_plots_each_trace_row_at_the_time_it_was_reached(tmp_path, monkeypatch):
+    """traces.npz row k is recorded after policy step k + 1, so figure (b) plots it at t = (k + 1) dt: with dt =
+    0.02 s and 5 rows the first point is at 0.02 s and the last at 0.10 s (not 0 and 0.08)."""
+    from legged_gente.evaluation import figures
+
+    dt, steps = 0.02, 5
+    traces = tmp_path / "traces.npz"
+    cmd = np.zeros((1, steps, 3), np.float32)
+    np.savez(traces, ids=np.array(["t0"]), dt=np.array(dt), active=np.ones((1, steps), bool), cmd=cmd, vel=cmd)
+    plotted = []
+    real_subplots = figures._plt().subplots
+
+    def subplots(*args, **kwargs):
+        fig, axes = real_subplots(*args, **kwargs)
+        for ax in axes.flat:
+            original = ax.plot
+            ax.plot = lambda x, *a, _orig=original, **k: (plotted.append(np.asarray(x)), _orig(x, *a, **k))[1]
+        return fig, axes
+
+    monkeypatch.setattr(figures._plt(), "subplots", subplots)
+    figures.plot_tracking(traces, tmp_path / "b.png")
+    assert plotted and all(np.allclose(x, [0.02, 0.04, 0.06, 0.08, 0.10]) for x in plotted)

@@ -92,7 +92,7 @@ def plot_tracking(traces: str | Path, out: str | Path, ids: list[str] | None = N
     for c, item in enumerate(chosen):
         k = all_ids.index(item)
         alive = data["active"][k].astype(bool)
-        t = np.arange(alive.size) * dt
+        t = (np.arange(alive.size) + 1) * dt  # row k is recorded after policy step k + 1
         for r, (axis, name) in enumerate(((0, "vx"), (1, "vy"))):
             ax = axes[r, c]
             ax.plot(t[alive], data["cmd"][k, alive, axis], "k--", lw=1, label="command")

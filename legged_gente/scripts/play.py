@@ -35,7 +35,7 @@ def plot_tracking(log: dict[str, np.ndarray], dt: float, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    t = np.arange(len(log["cmd"])) * dt
+    t = (np.arange(len(log["cmd"])) + 1) * dt  # entry k: robot 0 after policy step k + 1
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
     for ax, i, label in zip(axes, range(3), ("vx (m/s)", "vy (m/s)", "yaw rate (rad/s)")):
         ax.plot(t, log["cmd"][:, i], label="command", color="k", linestyle="--")

@@ -1,6 +1,7 @@
 """Rollouts to replay in the viewer: a small npz format, a recorder, and the robot drawn from its MJCF geoms.
 
-Rollout file (``np.savez_compressed``; T policy steps, R robots, K force arrows per robot)::
+Rollout file (``np.savez_compressed``; T policy steps, R robots, K force arrows per robot; row k is the state
+after policy step k + 1, at t = (k + 1) dt)::
 
     version          ()            int, ROLLOUT_VERSION
     task             ()            str, the registered task (its MJCF draws the robot)
@@ -8,16 +9,17 @@ Rollout file (``np.savez_compressed``; T policy steps, R robots, K force arrows 
     qpos             (T, R, nq)    float32, MuJoCo qpos of each robot (free joint: world x y z, quaternion w x y z)
     cmd              (T, R, 3)     float32, commanded vx, vy (m/s, base frame) and yaw rate (rad/s)
     vel              (T, R, 3)     float32, actual vx, vy (m/s, base frame) and yaw rate (rad/s)
-    done             (T, R)        bool, the episode ended at this step (the robot is reset after it)
+    done             (T, R)        bool, the episode ended at this step (the env resets within the step: this
+                                   row's qpos, cmd, vel are the next episode's start, the row before the last)
     fell             (T, R)        bool, ended by a termination (fall), not by the time-out
     force_labels     (K,)          str, "<kind>:<geom or body>", kind one of FORCE_KINDS
-    forces           (T, R, K, 3)  float32, N, world frame (last substep of the policy step)
+    forces           (T, R, K, 3)  float32, N, world frame (last substep of the policy step; 0 on a done row)
     force_points     (T, R, K, 3)  float32, m, where each force acts
     terrain_heights  (nx, ny)      float32, m; terrain_origin (2,) m; terrain_resolution () m
     terrain_<field>  (nx, ny)      the material map (water_surface, flow_kind, flow_speed, flow_direction,
                                    flow_omega, flow_phase, soil, friction) and terrain_soil_presets (S,) str
 
-Force kinds: ``buoyancy`` (Archimedes on each leg segment's submerged part, at its centre of buoyancy),
+Force kinds: ``buoyancy`` (Archimedes on each leg segment's submerged volume, cylinder and caps, as the kernel),
 ``drag`` (the rest of the water force on the segment: drag, added mass, flow), ``soil`` (bulldozing and shear
 under each foot, at the sole).
 """
@@ -31,7 +33,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from legged_gente.terrain.materials import MaterialMap
+from legged_gente.terrain.materials import NO_WATER, MaterialMap
 from legged_gente.viewer.scene import plane_terrain
 
 
@@ -204,42 +206,47 @@ def force_layout(env) -> list[str]:
 def robot_forces(env, robots: np.ndarray, kin: Kinematics) -> tuple[np.ndarray, np.ndarray]:
     """(R, K, 3) forces (N) and their points (m) for ``robots`` now, in :func:`force_layout`'s order.
 
-    The water force of a segment is split into buoyancy, eps * rho g pi r^2 L_sub (Archimedes; the kernel's
-    noise factor eps included), at the submerged part's centroid, and the rest (drag, added mass, flow).
+    The water force of a segment is split into buoyancy, eps * rho g V (Archimedes; V the submerged volume of its
+    cylinder slices and hemispherical caps as the kernel computes it, ``water_models``; the kernel's noise factor
+    eps included), at the volume-weighted mean of the points the kernel applies it at, and the rest (drag, added
+    mass, flow).
     """
-    from legged_gente.external_forces.models import buoyancy
+    from legged_gente.external_forces.water_models import segment_slices, sphere_cap_volume
 
     f = env.forces
     if f is None:
         return np.zeros((len(robots), 0, 3), np.float32), np.zeros((len(robots), 0, 3), np.float32)
     cfg, nseg, nfoot = f.cfg, f.nseg, f.nfoot
     seg_geom, seg_r, seg_half = f.seg_geom.numpy(), f.seg_radius.numpy(), f.seg_halflen.numpy()
+    seg_caps = f.seg_caps.numpy()
     total = f.seg_force.numpy()[robots, :nseg]
     soil = f.foot_force.numpy()[robots, :nfoot]
     eps = f.eps.numpy()[robots]
     foot_body, foot_offset = f.foot_body.numpy()[:nfoot], f.foot_offset.numpy()[:nfoot]
     surface = env.terrain.material.water_surface if env.terrain is not None else None
+
+    def surface_at(p):
+        return float(_surface_at(env.terrain, surface, np.asarray(p)[None])[0]) if surface is not None else NO_WATER
+
     qpos = env.sim.qpos[robots].cpu().numpy()
     out_f = np.zeros((len(robots), 2 * nseg + nfoot, 3), np.float32)
     out_p = np.zeros_like(out_f)
     for k, q in enumerate(qpos):  # a handful of robots, outside the env's step
         d = kin(q)
-        centre, axis = d.geom_xpos[seg_geom[:nseg]], d.geom_xmat[seg_geom[:nseg]].reshape(-1, 3, 3)[:, :, 2]
-        half = (seg_half[:nseg] + seg_r[:nseg])[:, None]
-        ends = np.stack([centre - half * axis, centre + half * axis], 1)
-        lo = ends[np.arange(nseg), ends[:, :, 2].argmin(1)]
-        hi = ends[np.arange(nseg), ends[:, :, 2].argmax(1)]
-        zw = _surface_at(env.terrain, surface, centre) if surface is not None else np.full(nseg, -np.inf)
-        span = np.maximum(hi[:, 2] - lo[:, 2], 1e-9)
-        frac = np.clip((zw - lo[:, 2]) / span, 0.0, 1.0)
-        frac = np.where(hi[:, 2] <= zw, 1.0, frac)
-        lsub = frac * 2 * half[:, 0]
-        point = lo + 0.5 * frac[:, None] * (hi - lo)
-        lift = eps[k] * buoyancy(cfg.water_density, f.g, seg_r[:nseg], lsub)
-        b = np.zeros((nseg, 3))
-        b[:, 2] = np.where(lsub > 0, lift, 0.0)
-        out_f[k, :nseg], out_p[k, :nseg] = b, point
-        out_f[k, nseg:2 * nseg], out_p[k, nseg:2 * nseg] = np.where(lsub[:, None] > 0, total[k] - b, 0.0), point
+        for s in range(nseg):
+            centre, axis = d.geom_xpos[seg_geom[s]], d.geom_xmat[seg_geom[s]].reshape(3, 3)[:, 2]
+            r, half = float(seg_r[s]), float(seg_half[s])
+            parts = [(p, vol) for p, _, vol in segment_slices(centre, axis, r, half, surface_at)]
+            if seg_caps[s]:  # half the submerged sphere at each end of the cylinder part, as the kernel
+                for end in (centre - half * axis, centre + half * axis):
+                    parts.append((end, 0.5 * sphere_cap_volume(r, surface_at(end) - (end[2] - r))))
+            volume = sum(vol for _, vol in parts)
+            if volume <= 0.0:
+                continue
+            point = sum(vol * p for p, vol in parts) / volume
+            lift = np.array([0.0, 0.0, eps[k] * cfg.water_density * f.g * volume])
+            out_f[k, s], out_p[k, s] = lift, point
+            out_f[k, nseg + s], out_p[k, nseg + s] = total[k, s] - lift, point
         rot = d.xmat[foot_body].reshape(-1, 3, 3)
         out_f[k, 2 * nseg:] = soil[k]
         out_p[k, 2 * nseg:] = d.xpos[foot_body] + np.einsum("fij,fj->fi", rot, foot_offset)
@@ -273,6 +280,8 @@ class Recorder:
         vel = torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1)
         forces, points = robot_forces(env, r, self.kin)
         done = env.reset_buf[r].cpu().numpy()
+        # a reset row holds the respawned robot; the env's forces are still the ended episode's: no arrows
+        forces[done], points[done] = 0.0, 0.0
         for key, value in (("qpos", env.sim.qpos[r].cpu().numpy()), ("cmd", env.commands[r, :3].cpu().numpy()),
                            ("vel", vel.cpu().numpy()), ("done", done),
                            ("fell", done & ~env.time_out_buf[r].cpu().numpy()), ("forces", forces),

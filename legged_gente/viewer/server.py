@@ -330,7 +330,8 @@ class RolloutPlayer:
                     name, arrows, FORCE_COLOURS[kind], shaft_radius=0.012, head_radius=0.03, head_length=0.05)
         falls = int(np.asarray(f["fell"])[: t + 1, 0].sum())
         resets = int(np.asarray(f["done"])[: t + 1, 0].sum())
-        self.time_gui.content = (f"t = {t * self.dt:.2f} s of {(len(f['qpos']) - 1) * self.dt:.2f} s; robot 0: "
+        # row t is the state after policy step t + 1 (recorded after each env.step): reached at (t + 1) dt
+        self.time_gui.content = (f"t = {(t + 1) * self.dt:.2f} s of {len(f['qpos']) * self.dt:.2f} s; robot 0: "
                                  f"{resets} resets, {falls} falls so far")
 
     def _plot(self) -> None:
@@ -339,7 +340,7 @@ class RolloutPlayer:
 
         f = _frames(self.source)
         cmd, vel = np.asarray(f["cmd"])[:, 0], np.asarray(f["vel"])[:, 0]
-        t = np.arange(len(cmd)) * self.dt
+        t = (np.arange(len(cmd)) + 1) * self.dt  # row k: after policy step k + 1
         data = (t, cmd[:, 0], vel[:, 0], cmd[:, 1], vel[:, 1],
                 np.asarray(f["done"])[:, 0].astype(float), np.asarray(f["fell"])[:, 0].astype(float))
         series = (uplot.Series(label="t (s)"),
