@@ -296,3 +296,34 @@ def test_the_curriculum_promotes_past_half_a_tile_demotes_under_half_the_command
     env._log_and_update_curriculum(torch.zeros(5, dtype=torch.bool), torch.zeros(5, dtype=torch.bool))
     assert env.terrain_levels.tolist() == [2, 1, 0, 1, 2]
     env.reset()
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# episode statistics, the curriculum restored
+# ---------------------------------------------------------------------------------------------------------------
+def test_reward_means_are_undefined_until_an_episode_ends_then_per_episode():
+    """Until an episode ends there is no mean per episode to report: NaN, not 0 (which a plot reads as a value).
+    Then robots 0 and 1 time out after 6 steps each: rew_alive = 2 x 6 x alive x dt / (2 episodes) / episode_s."""
+    cfg = flat_cfg()
+    env = GenteBiped(cfg, device="cpu")
+    env._log_every = 1
+    for _ in range(5):
+        _, _, done, extras = env.step(zeros(env))
+        assert not done.any() and math.isnan(extras["episode"]["rew_alive"].item())
+        assert extras["episode"]["terrain_level"].item() == 0.0  # defined every time
+    env.episode_length_buf[:2] = env.max_episode_length - 1
+    _, _, done, extras = env.step(zeros(env))
+    assert done[:2].all() and not done[2:].any()
+    per_episode = 6 * cfg.rewards.scales.alive * DT
+    assert extras["episode"]["rew_alive"].item() == pytest.approx(per_episode / env.max_episode_length_s)
+
+
+def test_the_curriculum_restores_after_steps_taken_in_inference_mode(hf_env):
+    """rsl-rl collects its rollouts under torch.inference_mode(); restoring a curriculum afterwards (outside it)
+    resets every robot and so writes the env's buffers: none of them may have become an inference tensor."""
+    env = hf_env
+    with torch.inference_mode():
+        env.step(zeros(env))
+    state = {"terrain_levels": torch.full((env.num_envs,), 1, dtype=torch.long)}
+    assert env.load_curriculum_state(state) == "terrain curriculum restored: mean level 1.00"
+    assert env.terrain_levels.eq(1).all()

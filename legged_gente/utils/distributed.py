@@ -34,7 +34,7 @@ from legged_gente.utils.ppo import compile_update_if_configured, mixed_precision
 TORCHRUN_VARS = ("RANK", "LOCAL_RANK", "WORLD_SIZE")
 
 # NVLink multicast (NVLS / NVLink SHARP) is off unless the user turns it on: NCCL enables it by itself on
-# NVSwitch systems, PPO's all-reduce of ~1.5 MB gains nothing from it, and with it off training does not depend
+# NVSwitch systems, PPO's all-reduce of 1.5-2.4 MB gains nothing from it, and with it off training does not depend
 # on the host's NVSwitch multicast support (which shared hosts may restrict). Setting these variables to other
 # values turns it on, with a warning (docs/multi_gpu.md). Set before NCCL is initialised.
 MULTICAST_OFF = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1"}

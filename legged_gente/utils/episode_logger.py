@@ -63,9 +63,22 @@ class DeferredLogger(Logger):
     def log(self, it: int, *args, **kwargs) -> None:
         self.last_iteration = it
         self.flush()
+        self._drop_undefined_means()
         super().log(it, *args, **kwargs)
         if self.deadline is not None and self._past_deadline():
             raise TimeLimitReached()
+
+    def _drop_undefined_means(self) -> None:
+        """Leave out the episode values that are NaN (the env's mean of a reward term when no episode ended): rsl-rl
+        skips a key an env did not send, where it would log the NaN as a point. One host read per iteration."""
+        scalars = [(extras, key) for extras in self.ep_extras for key, value in extras.items()
+                   if isinstance(value, torch.Tensor) and value.numel() == 1]
+        if not scalars:
+            return
+        undefined = torch.stack([extras[key].reshape(()).float() for extras, key in scalars]).isnan().tolist()
+        for (extras, key), drop in zip(scalars, undefined):
+            if drop:
+                del extras[key]
 
     def _past_deadline(self) -> bool:
         """Whether any rank is past the deadline: every rank must stop at the same iteration, or the ones

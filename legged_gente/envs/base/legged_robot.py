@@ -469,7 +469,9 @@ class LeggedRobot(VecEnv):
 
     def _step_body(self) -> None:
         """Everything a step does on the device (what StepRunner compiles and captures)."""
-        self.actions = torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions)
+        # in place: rebound here, under rsl-rl's inference_mode, it would become an inference tensor that a reset
+        # outside it (a curriculum restored after a rollout) could not write
+        self.actions.copy_(torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions))
         self.sim.ctrl[:] = self.default_dof_pos + self.action_scale * self.actions
         self.sim.step(self.decimation)
         self._post_physics_step()
@@ -607,10 +609,11 @@ class LeggedRobot(VecEnv):
                                           self.env_origins)
 
     def _episode_statistics(self) -> dict[str, torch.Tensor]:
-        """Means over the episodes that ended since the last report (once per rollout, still on device); the
-        diverged resets since the last report."""
-        count = self._stat_count.clamp(min=1.0)
-        rewards = self._stat_reward_sums / count
+        """Means over the episodes that ended since the last report (once per rollout, still on device; NaN when
+        none ended: a mean of no episodes, which the training logger leaves out); the diverged resets since the
+        last report."""
+        rewards = torch.where(self._stat_count > 0, self._stat_reward_sums / self._stat_count.clamp(min=1.0),
+                              torch.nan)
         stats = {f"rew_{name}": rewards[i] for i, (name, _) in enumerate(self.reward_functions)}
         # legged_gym's statistic: the mean level of all robots now (not only of those whose episode ended)
         stats["terrain_level"] = self.terrain_levels.float().mean()
