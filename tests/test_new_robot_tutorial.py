@@ -216,3 +216,37 @@ def test_box_feet_on_a_heightfield_warn(tutorial, tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         build_model(cfg, terrain)
+
+
+def motor_variant(tutorial, tmp_path, attributes: str) -> str:
+    """The tutorial robot without its joints' actuatorfrcrange, driven by one <motor> per joint instead."""
+    text = (tutorial / "my_robot/my_robot.xml").read_text().replace('actuatorfrcrange="-8 8"', "")
+    motors = "".join(f'<motor joint="{leg}_{j}" {attributes}/>' for leg in ("FL", "FR", "RL", "RR")
+                     for j in ("hip", "knee"))
+    path = tmp_path / "robot.xml"
+    path.write_text(text.replace("</mujoco>", f"<actuator>{motors}</actuator>\n</mujoco>"))
+    return str(path)
+
+
+@pytest.mark.parametrize("attributes, limit", [
+    ('gear="2" forcerange="-3 3"', 6.0),  # MuJoCo clamps the actuator's force to 3, then the gear doubles it
+    ('gear="2" forcerange="-3 3" ctrlrange="-1 1"', 2.0),  # the control's range binds first: 1 x 2
+    ('gear="2" forcerange="-3 3" ctrlrange="-5 5"', 6.0),  # the force range binds first: 3 x 2
+    ('gear="-2" forcerange="-3 3"', 6.0),  # a reversed joint: the torque still reaches +-6
+])
+def test_a_motors_torque_limit_is_its_force_range_times_its_gear(tutorial, tmp_path, attributes, limit):
+    """MuJoCo's actuator force is gain x ctrl clamped to forcerange; the joint gets gear x that force. The PD
+    actuator that replaces the motor has gear 1, so its force limit is the joint torque the motor could give."""
+    env = LeggedRobot(tutorial_cfg(motor_variant(tutorial, tmp_path, attributes)))
+    assert env.mjm.actuator_gear[:, 0].tolist() == [1.0] * 8
+    assert env.torque_limits.tolist() == [limit] * 8
+    assert env.mjm.actuator_forcerange.tolist() == [[-limit, limit]] * 8
+
+
+def test_a_default_angle_outside_the_joints_range_is_refused(tutorial):
+    """The tutorial's knees bend one way (range [-2.4, -0.3] rad): a default of +1.2 (a sign error) would be
+    clamped at reset while the PD target stays at 1.2, pressing the knee into its limit for ever."""
+    cfg = tutorial_cfg()
+    cfg.init_state.default_joint_angles = {"hip": 0.6, "knee": 1.2}
+    with pytest.raises(ValueError, match=r"FL_knee=1.2 outside its range \[-2.4, -0.3\].*sign"):
+        LeggedRobot(cfg)

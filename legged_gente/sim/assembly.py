@@ -246,8 +246,11 @@ def _piece_starts(samples: int, cells: int) -> range:
 def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) -> None:
     """PD position actuators on every actuated joint, gains from the config by joint-name pattern.
 
-    Joints that have no actuator in the MJCF get one. Torque limits: the joint's actuatorfrcrange, else the
-    actuator's own forcerange, else (a torque motor, as in MuJoCo Menagerie models) its ctrlrange times gear.
+    Joints that have no actuator in the MJCF get one. Torque limits: the joint's actuatorfrcrange, else the joint
+    torque the MJCF's actuator could give: MuJoCo clamps an actuator's force (gain x ctrl for a torque motor, as in
+    MuJoCo Menagerie models) to its forcerange, then applies its gear (MuJoCo XML reference, actuator/general), so
+    gear x forcerange and, for a motor with a ctrlrange, gear x gain x ctrlrange, whichever is narrower. The PD
+    actuator has gear 1.
     """
     existing = {a.target: (i, a) for i, a in enumerate(spec.actuators)}
     for joint in spec.joints:
@@ -257,10 +260,16 @@ def _configure_actuators(spec: mujoco.MjSpec, robot: mujoco.MjModel, control) ->
         kd = value_for(joint.name, control.damping, "damping (cfg.control.damping)")
         index, actuator = existing.get(joint.name) or (None, spec.add_actuator(
             name=joint.name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT))
-        if index is not None and robot.actuator_biastype[index] == mujoco.mjtBias.mjBIAS_NONE and \
-                robot.actuator_ctrllimited[index] and not robot.actuator_forcelimited[index]:
-            actuator.forcelimited = 1  # a motor's torque range becomes the PD actuator's force limit
-            actuator.forcerange = list(robot.actuator_ctrlrange[index] * robot.actuator_gear[index, 0])
+        if index is not None:
+            gear = float(robot.actuator_gear[index, 0])
+            ranges = []  # joint torques the actuator can give, each [low, high]
+            if robot.actuator_forcelimited[index]:
+                ranges.append(np.sort(robot.actuator_forcerange[index] * gear))
+            if robot.actuator_biastype[index] == mujoco.mjtBias.mjBIAS_NONE and robot.actuator_ctrllimited[index]:
+                ranges.append(np.sort(robot.actuator_ctrlrange[index] * robot.actuator_gainprm[index, 0] * gear))
+            if ranges:
+                actuator.forcelimited = 1
+                actuator.forcerange = [max(r[0] for r in ranges), min(r[1] for r in ranges)]
         actuator.gear = [1.0] + [0.0] * 5  # ctrl is the joint angle target itself
         actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
@@ -287,6 +296,13 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
 
     defaults = np.array([value_for(n, cfg.init_state.default_joint_angles, "default angle") if
                          cfg.init_state.default_joint_angles else 0.0 for n in joint_names])
+    # an unlimited joint (range [0, 0] in MjModel) has no limits
+    limits = np.array([mjm.jnt_range[j] if mjm.jnt_limited[j] else (-np.inf, np.inf) for j in joint_ids])
+    outside = [f"{n}={q:g} outside its range [{lo:g}, {hi:g}]"
+               for n, q, (lo, hi) in zip(joint_names, defaults, limits) if not lo <= q <= hi]
+    if outside:  # a reset would clamp the joint while its PD target stays outside, pressing it into its limit
+        raise ValueError(f"cfg.init_state.default_joint_angles puts {', '.join(outside)}; give an angle inside the "
+                         f"joint's range (check the joint's sign)")
     hips = match_names(asset.hip_joints, joint_names, "joint") if asset.hip_joints else []
     return RobotLayout(
         base_body=base,
@@ -298,8 +314,7 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
         terminate_bodies=body_ids(asset.terminate_after_contacts_on),
         hip_joint_ids=np.array([joint_names.index(h) for h in hips], dtype=np.int64),
         default_joint_pos=defaults,
-        # an unlimited joint (range [0, 0] in MjModel) has no limits
-        joint_limits=np.array([mjm.jnt_range[j] if mjm.jnt_limited[j] else (-np.inf, np.inf) for j in joint_ids]),
+        joint_limits=limits,
         torque_limits=np.array([mjm.actuator_forcerange[a, 1] if mjm.actuator_forcelimited[a] else np.inf
                                 for a in range(mjm.nu)]),
         terrain_geoms=terrain_geom_ids(mjm),
