@@ -106,3 +106,20 @@ def test_a_run_never_writes_into_the_folder_of_another_run(tmp_path, monkeypatch
     assert [p.name for p in first.iterdir()] == ["config.json"] and (first / "config.json").read_text() == '{"seed": 1}'
     second = tmp_path / TASK / "2030-01-02_03-04-05_1"
     assert sorted(p.name for p in second.glob("model_*.pt")) == ["model_0.pt"] and (second / "config.json").exists()
+
+
+def test_samples_no_mini_batch_takes_are_named(capsys):
+    """A rollout of 3 robots x 5 steps = 15 samples in 2 mini-batches of 15 // 2 = 7: the update permutes the first
+    14 only (as rsl-rl's generator does), so 1 sample of every rollout is never learned from. Said once, up front;
+    a batch that divides evenly says nothing."""
+    from legged_gente.envs.task_registry import task_registry, validate_cfgs
+
+    env_cfg, train_cfg = task_registry.get_cfgs(TASK)
+    env_cfg.env.num_envs, train_cfg.runner.num_steps_per_env, train_cfg.algorithm.num_mini_batches = 3, 5, 2
+    with pytest.warns(UserWarning, match=r"1 of the 15 samples .*never used.*num_mini_batches=2"):
+        validate_cfgs(env_cfg, train_cfg)
+    env_cfg.env.num_envs = 4  # 20 samples, 2 mini-batches of 10
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        validate_cfgs(env_cfg, train_cfg)

@@ -7,6 +7,7 @@ import contextlib
 import io
 import json
 import os
+import warnings
 from datetime import datetime
 from pathlib import Path
 
@@ -80,6 +81,11 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
                              f"algorithm.num_mini_batches={train_cfg.algorithm.num_mini_batches} (an empty mini-batch "
                              f"makes the loss NaN); raise --num_envs or runner.num_steps_per_env, or lower "
                              f"algorithm.num_mini_batches")
+        unused = batch % train_cfg.algorithm.num_mini_batches
+        if unused:  # the update permutes the first num_mini_batches * (batch // num_mini_batches), as rsl-rl does
+            warnings.warn(f"{unused} of the {batch} samples of each rollout (env.num_envs * runner.num_steps_per_env) "
+                          f"are never used: algorithm.num_mini_batches={train_cfg.algorithm.num_mini_batches} does not "
+                          f"divide them; choose num_envs or num_steps_per_env so that it does", stacklevel=2)
 
 
 def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
