@@ -219,20 +219,22 @@ def ship_policy(checkpoint: str | Path, task: str, note: str, destination: Path 
     checkpoint = Path(checkpoint)
     loaded = load_checkpoint(checkpoint, map_location="cpu")
     infos = loaded.get("infos") or {}
-    if infos.get("task") not in (None, task):
-        raise CheckpointError(f"checkpoint {checkpoint} is for {infos['task']}, not {task}: ship it as --task "
-                              f"{infos['task']}, or pick a checkpoint of a {task} run")
     config_path = checkpoint.parent / "config.json"
     if not config_path.is_file():
         raise FileNotFoundError(f"{config_path} not found: a shipped policy needs its run's config.json (network "
                                 f"sizes); ship a model_<N>.pt from the run folder gente-train wrote, beside its config.json")
+    config = json.loads(config_path.read_text())
+    # the run's config.json names its task also where the checkpoint does not (saved before the runner recorded it)
+    trained = infos.get("task") or config.get("task")
+    if trained not in (None, task):
+        raise CheckpointError(f"checkpoint {checkpoint} is for {trained}, not {task}: ship it as --task "
+                              f"{trained}, or pick a checkpoint of a {task} run")
     folder = Path(destination) if destination is not None else policies_root() / task
     folder.mkdir(parents=True, exist_ok=True)
     actor = {key: value.detach().cpu().clone() for key, value in loaded["actor_state_dict"].items()}
     torch.save({"actor_state_dict": actor, "iter": loaded.get("iter"),
                 "infos": {"task": task, "num_actions": infos.get("num_actions", _actor_outputs(actor))}},
                folder / "model.pt")
-    config = json.loads(config_path.read_text())
     config.update(note=note, source_checkpoint=f"{checkpoint.parent.name}/{checkpoint.name}")
     (folder / "config.json").write_text(json.dumps(config, indent=1))
     return folder
