@@ -63,8 +63,11 @@ def test_resume_continues_from_checkpoint(trained):
         for name in ("exp_avg", "exp_avg_sq", "step"):
             assert torch.equal(saved[key][name], loaded[key][name]), (key, name)
     assert float(resumed.alg.learning_rate) == float(runner.alg.learning_rate)
+    collection = 4 * 4  # num_steps_per_env x num_envs per iteration
+    assert resumed.logger.tot_timesteps == 2 * collection  # "Total steps" goes on from the two trained iterations
     resumed.learn(1)
     assert resumed.current_learning_iteration == 2
+    assert resumed.logger.tot_timesteps == 3 * collection
     assert (find_checkpoint(tmp_path / "gente_biped_flat")).name == "model_2.pt"
 
 

@@ -178,12 +178,12 @@ class GenteOnPolicyRunner(OnPolicyRunner):
     task_name: str | None = None  # the registered task, recorded in checkpoints (set by the task registry)
 
     def save(self, path: str, infos: dict | None = None) -> None:
-        """rsl-rl's checkpoint plus the env's curriculum state and what the checkpoint is for (task, action
-        count); written to a temporary file and renamed, so an interrupted save never leaves a truncated one."""
+        """rsl-rl's checkpoint plus the env's curriculum state, what the checkpoint is for (task, action count)
+        and the env steps trained so far; written to a temporary file and renamed, so an interrupted save never leaves a truncated one."""
         saved = self.alg.save()
         saved["iter"] = self.current_learning_iteration
         saved["infos"] = {**(infos or {}), "curriculum": self.env.curriculum_state(), "task": self.task_name,
-                          "num_actions": self.env.num_actions}
+                          "num_actions": self.env.num_actions, "total_steps": self.logger.tot_timesteps}
         partial = f"{path}.partial"
         torch.save(saved, partial)
         os.replace(partial, path)
@@ -214,9 +214,11 @@ class GenteOnPolicyRunner(OnPolicyRunner):
                                   f"--load_run, gente-evaluate --checkpoint).")
         if wanted.get("critic"):
             check_state_fits(loaded["critic_state_dict"], self.alg.save()["critic_state_dict"], path, "critic", strict)
+        infos = loaded.get("infos")
         if self.alg.load(loaded, load_cfg, strict):
             self.current_learning_iteration = loaded["iter"]
-        infos = loaded.get("infos")
+            # rsl-rl's logger counts from 0 in every run: a resumed run's "Total steps" go on from the checkpoint's
+            self.logger.tot_timesteps = int((infos or {}).get("total_steps", 0))
         self.curriculum_message = (self.env.load_curriculum_state(infos["curriculum"])
                                    if infos and "curriculum" in infos else "the checkpoint has no curriculum state")
         return infos
