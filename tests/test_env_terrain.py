@@ -353,6 +353,19 @@ def test_the_ground_friction_is_one_setting():
         GenteBiped(cfg, device="cpu")
 
 
+@pytest.mark.parametrize("friction", [-0.5, float("nan"), float("inf")])
+def test_a_plane_ground_friction_that_is_not_a_coefficient_is_refused(friction):
+    """A plane builds no terrain grid, whose own check refuses such a friction: the env refuses it (MuJoCo would
+    compile the ground geom with it silently)."""
+    from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedFlatCfg
+
+    cfg = GenteBipedFlatCfg()
+    cfg.env.num_envs = 2
+    cfg.terrain.static_friction = friction
+    with pytest.raises(ValueError, match=r"static_friction=.*finite coefficient >= 0"):
+        GenteBiped(cfg, device="cpu")
+
+
 def test_without_a_curriculum_robots_spawn_on_every_row():
     """terrain.mode 'random' runs no curriculum (levels never move), so, as in legged_gym with the curriculum off,
     robots are spread over all rows, not kept on rows 0..max_init_terrain_level (0..1 here, of 3)."""

@@ -98,3 +98,12 @@ def test_a_spec_at_a_resolution_that_does_not_divide_the_border_builds(tmp_path)
     apply_terrain_arg(str(path), cfg)
     assert cfg.terrain.border_size == pytest.approx(34 * 0.15)
     assert Terrain(cfg.terrain, 2).height_field.shape == (2 * 34 + 20,) * 2  # border, tile, border cells
+
+
+def test_a_border_that_is_not_finite_is_refused_in_one_line(emitted):
+    """The spec's border is widened to whole cells before the grid (whose own check names it) is built: an
+    infinite border is refused there, naming the setting, not with an OverflowError."""
+    cfg = GenteBipedCfg()
+    cfg.terrain.border_size = float("inf")
+    with pytest.raises(ValueError, match=r"terrain.border_size=inf m must be a finite number of metres"):
+        apply_terrain_arg(str(emitted / "spec.json"), cfg)

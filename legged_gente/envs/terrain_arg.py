@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import inspect
 import json
+import math
 import traceback
 from pathlib import Path
 
@@ -40,6 +41,9 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         terrain.terrain_length, terrain.terrain_width = float(spec.size_x), float(spec.size_y)
         terrain.resolution = float(spec.resolution)
         # the flat border around the tile is laid in the spec's cells: widened (by less than a cell) to whole ones
+        if not math.isfinite(terrain.border_size):
+            raise ValueError(f"terrain.border_size={terrain.border_size} m must be a finite number of metres; set "
+                             f"it (--set terrain.border_size=<m>)")
         terrain.border_size = whole_cells(terrain.border_size, terrain.resolution)
         terrain.num_rows = terrain.num_cols = 1
         return

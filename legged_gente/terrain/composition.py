@@ -187,13 +187,18 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
         regions = named_regions(size_x, size_y)
         calls = [(call["region"], Operation(call["tool"], dict(call["params"]), call.get("mode") or "set"))
                  for call in data["calls"]]
-        seed, heightmap = int(data["seed"]), data.get("heightmap")
+        seed, heightmap = data["seed"], data.get("heightmap")
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"not a terrain spec document ({type(exc).__name__}: {exc}); pass a spec.json written by "
                          f"gente-generate") from None
-    if not (size_x > 0 and size_y > 0 and resolution > 0):
+    if not all(0 < v < math.inf for v in (size_x, size_y, resolution)):
         raise ValueError(f"terrain spec: size_x {size_x:g}, size_y {size_y:g} and resolution {resolution:g} must be "
-                         f"> 0 m")
+                         f"> 0 m and finite")
+    if isinstance(seed, float) and seed.is_integer():
+        seed = int(seed)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:  # int() would truncate 2.7 to 2 silently
+        raise ValueError(f"terrain spec: seed {seed!r} must be a whole number >= 0; set \"seed\" to one (it seeds "
+                         f"every call's random draws)")
     parts = []
     for region, operation in calls:
         if isinstance(region, str):
@@ -304,7 +309,7 @@ def _shape(spec: TileSpec) -> tuple[int, int]:
     if not spec.resolution > 0:
         raise ValueError(f"resolution must be > 0 m, got {spec.resolution}.")
     n = (spec.size_x / spec.resolution, spec.size_y / spec.resolution)
-    if min(n) < 1 or any(abs(v - round(v)) > 1e-6 for v in n):
+    if not all(math.isfinite(v) for v in n) or min(n) < 1 or any(abs(v - round(v)) > 1e-6 for v in n):
         raise ValueError(
             f"tile {spec.size_x} x {spec.size_y} m is not a whole number (>= 1) of {spec.resolution} m cells; "
             f"pick sizes that are multiples of the resolution."

@@ -112,6 +112,12 @@ class Terrain:
             raise ValueError(f"terrain mode {cfg.mode!r} is not one of {MODES}.")
         if cfg.num_rows < 1 or cfg.num_cols < 1:
             raise ValueError(f"num_rows={cfg.num_rows} and num_cols={cfg.num_cols} must both be >= 1.")
+        for name in ("terrain_length", "terrain_width", "border_size"):  # NaN passes every comparison below
+            if not math.isfinite(getattr(cfg, name)):
+                raise ValueError(f"{name}={getattr(cfg, name)} m must be a finite number of metres; set terrain.{name}.")
+        if not (math.isfinite(cfg.static_friction) and cfg.static_friction >= 0):  # MuJoCo takes any value silently
+            raise ValueError(f"terrain.static_friction={cfg.static_friction} must be a finite coefficient >= 0; set "
+                             f"it (1.0 is the default).")
         if cfg.border_size < 0:
             raise ValueError(f"border_size must be >= 0 m, got {cfg.border_size}.")
         if self.mode != "plane" and not (float(cfg.seed) == int(cfg.seed) >= 0):
@@ -348,6 +354,8 @@ class Terrain:
         vertices = np.stack(
             [np.repeat(xs, ny), np.tile(ys, nx), self.height_field.ravel().astype(np.float64)], axis=1
         )
+        if path.suffix.lower() == ".glb":  # glTF 2.0 is +Y up (its spec, "Coordinate System and Units"): a rotation
+            vertices = vertices[:, [0, 2, 1]] * np.array([1.0, 1.0, -1.0])  # (x, y, z) -> (x, z, -y), faces still up
         v00 = (np.arange(nx - 1)[:, None] * ny + np.arange(ny - 1)[None, :]).ravel()
         v10, v01, v11 = v00 + ny, v00 + 1, v00 + ny + 1
         # Counter-clockwise seen from +z, so normals point up.
@@ -377,7 +385,7 @@ class Terrain:
                 col = min(round((self.border + r * tnx) * scale), pixels.shape[1] - 1)
                 pixels[:, col] = (pixels[:, col] * 0.4).astype(np.uint8)
             for c in range(self.num_cols + 1):
-                row = min(round((ny - 1 - self.border - c * tny) * scale), pixels.shape[0] - 1)
+                row = max(min(round((ny - 1 - self.border - c * tny) * scale), pixels.shape[0] - 1), 0)
                 pixels[row, :] = (pixels[row, :] * 0.4).astype(np.uint8)
             image = Image.fromarray(pixels)
         path = Path(path)

@@ -153,6 +153,10 @@ class LeggedRobot(VecEnv):
         for name in SOFT_LIMITS:
             value = getattr(cfg.rewards, name)
             checks.append((0 < value <= 1, f"cfg.rewards.{name}={value}; use a share of the hard limit, in (0, 1]"))
+        friction = cfg.terrain.static_friction  # a heightfield's grid checks it too; a plane builds none
+        checks.append((math.isfinite(friction) and friction >= 0,
+                       f"cfg.terrain.static_friction={friction} must be a finite coefficient >= 0; set it (1.0 is "
+                       f"the default)"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
