@@ -53,9 +53,11 @@ def shipped_benchmarks() -> list[str]:
 
 
 def benchmark_root(root: str | Path) -> Path:
-    """A benchmark folder as given, else a shipped one by name (``gente100``) or by ``benchmarks/<name>``."""
+    """A benchmark folder as given, else a shipped one by name (``gente100``) or by ``benchmarks/<name>``. A relative
+    folder without a manifest.json (or a generated terrain's spec.json) does not hide a shipped benchmark of its name:
+    ``gente-evaluate --out gente100`` makes one."""
     given = Path(root).expanduser()
-    if given.is_dir() or given.is_absolute():
+    if given.is_absolute() or any((given / name).is_file() for name in ("manifest.json", "spec.json")):
         return given
     for shipped in (SHIPPED / given, SHIPPED.parent / given):
         if (shipped / "manifest.json").is_file():
@@ -80,8 +82,7 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     items = []
     try:
         for entry in data["items"]:
-            if entry["kind"] not in KINDS:
-                raise ValueError(f"{manifest}: item {entry['id']!r} has kind {entry['kind']!r}; use one of {KINDS}.")
+            _check_entry(manifest, entry)
             items.append(Item(entry["id"], entry["kind"], root / entry["spec"], entry.get("prompt"),
                               root / entry["image"] if entry.get("image") else None, tuple(entry.get("names", ()))))
     except (KeyError, TypeError) as exc:
@@ -104,6 +105,23 @@ def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]
     if not items:
         raise ValueError(f"{manifest} lists no items.")
     return items
+
+
+def _check_entry(manifest: Path, entry: dict) -> None:
+    """One manifest item's fields, or a one-line error: an id names report rows and ``--items`` (a string), and
+    ``names`` is a list (a lone string would be read as one class per letter)."""
+    if not isinstance(entry["id"], str) or not entry["id"]:
+        raise ValueError(f"{manifest}: item id {entry['id']!r} is not a name; give every item a non-empty string id "
+                         f"(report rows and --items name it).")
+    if entry["kind"] not in KINDS:
+        raise ValueError(f"{manifest}: item {entry['id']!r} has kind {entry['kind']!r}; use one of {KINDS}.")
+    for key in ("prompt", "image"):
+        if entry.get(key) is not None and not isinstance(entry[key], str):
+            raise ValueError(f"{manifest}: item {entry['id']!r} has {key} {entry[key]!r}; give a string.")
+    names = entry.get("names", [])
+    if not isinstance(names, list) or not all(isinstance(name, str) for name in names):
+        raise ValueError(f"{manifest}: item {entry['id']!r} has names {names!r}; give a list of LEGEND class names, "
+                         f'e.g. ["water", "grass"].')
 
 
 def _repeated(ids: list[str]) -> list[str]:

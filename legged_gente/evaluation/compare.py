@@ -29,9 +29,11 @@ def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], fl
         raise FileNotFoundError(f"{path}: no such file; give the report.csv that gente-evaluate --out wrote.")
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
-    if not rows or not {"row", "name", "kind", "categories", metric} <= set(rows[0]):
-        raise ValueError(f"{path} is not a gente-evaluate report.csv with a {metric!r} column (row, name, kind, "
-                         f"categories, {metric}); give the report.csv that gente-evaluate --out wrote.")
+    if not rows or not {"row", "name", "kind", "categories"} <= set(rows[0]):
+        raise ValueError(f"{path} is not a gente-evaluate report.csv (columns row, name, kind, categories, then the "
+                         f"metrics); give the report.csv that gente-evaluate --out wrote.")
+    if metric not in rows[0]:
+        raise ValueError(f"--metric {metric}: {path} has no such column; give one of {', '.join(METRIC_COLUMNS)}.")
     terrains = {}
     for row in rows:
         if row["row"] == "terrain":
@@ -53,6 +55,9 @@ def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") 
                          f"has {sorted(second.keys() - first.keys())} that {a} has not.")
     pairs = {name: (groups, first[name][1], value) for name, (groups, value) in second.items()
              if math.isfinite(first[name][1]) and math.isfinite(value)}
+    if not pairs:
+        raise ValueError(f"no terrain has a {metric} in both {a} and {b} (empty where undefined, e.g. heading_error "
+                         f"without a heading command); compare another --metric.")
     out = {}
     for group in ("all", *KINDS, *CATEGORIES):
         chosen = [(x, y) for groups, x, y in pairs.values() if group == "all" or group in groups]
