@@ -116,6 +116,22 @@ def test_too_many_tool_calls_in_one_answer_are_not_read():
             OpenAIBackend(srv.url, "m", timeout=5.0, max_retries=0).generate(text="x")
 
 
+def test_too_many_tool_calls_are_answered_call_by_call():
+    """The follow-up request keeps the chat's turns as the protocol has them: the assistant's answer, then one tool
+    result per tool_call_id (each saying why it was not read), never two user messages in a row (strict chat
+    templates refuse those); the model's next answer, of 64 calls or fewer, is read."""
+    calls = [_tool_call("flat", {"height": 0.0, "region": "full"}, i) for i in range(65)]
+    retry = [_tool_call("flat", {"height": 0.0, "region": "full"}, 100)]
+    with FakeServer([ok(_completion(calls)), ok(_completion(retry))]) as srv:
+        result = OpenAIBackend(srv.url, "m", timeout=5.0, max_retries=1).generate(text="x")
+    assert [c.tool for c in result.calls] == ["flat"]
+    follow_up = srv.requests[1]["messages"]
+    roles = [m["role"] for m in follow_up]
+    assert roles == ["system", "user", "assistant"] + ["tool"] * 65
+    assert [m["tool_call_id"] for m in follow_up[3:]] == [f"call_{i}" for i in range(65)]
+    assert all(m["content"].startswith("REJECTED: ") and "at most 64" in m["content"] for m in follow_up[3:])
+
+
 def test_unreachable_server():
     with socket.socket() as s:  # a port nobody listens on
         s.bind(("127.0.0.1", 0))

@@ -35,6 +35,9 @@ def generate_spec(
     """
     if toolset != "ours" and backend != "openai":
         raise ValueError(f"toolset {toolset!r} is for the openai backend; the planner calls our tools.")
+    if backend == "planner" and (base_url or model or two_phase or vision_model):
+        raise ValueError("base_url, model, two_phase and vision_model are for the openai backend; the planner sends "
+                         "no request.")
     if not text and image is None:
         raise ValueError("give a text description, an image, or both.")
     if backend not in BACKENDS:

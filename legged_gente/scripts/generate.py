@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -70,7 +71,7 @@ def build_parser() -> Parser:
     p.add_argument(*flag("--two-phase"), action="store_true", help="VLM describes the image, then the LLM calls the tools")
     p.add_argument("--toolset", choices=("ours", "gente"), default="ours",
                    help="openai backend: serve our tools (default) or GenTe's original tool list, translated")
-    p.add_argument(*flag("--api-key-env"), help=f"environment variable holding the API key (openai backend; default {SERVER_DEFAULTS['api_key_env']}; 'none' if unset)")
+    p.add_argument(*flag("--api-key-env"), help=f"environment variable holding the API key (openai backend; default {SERVER_DEFAULTS['api_key_env']}, 'none' if that is unset; a variable named here must be set)")
     p.add_argument("--timeout", type=_positive(MAX_TIMEOUT), help=f"request timeout in seconds (openai backend; default {SERVER_DEFAULTS['timeout']:g})")
     p.add_argument(*flag("--max-retries"), type=int, help=f"correction rounds for invalid tool calls (openai backend; default {SERVER_DEFAULTS['max_retries']}, at most {MAX_RETRIES})")
     p.add_argument("--seed", type=seed, default=0, help="terrain seed (default 0)")
@@ -96,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.backend == "planner" and (args.base_url or args.model or args.vision_model or args.two_phase
                                       or args.toolset != "ours"):
         parser.error("--base-url/--model/--vision-model/--two-phase/--toolset are for --backend openai.")
+    if args.backend == "openai" and args.api_key_env is not None and args.api_key_env not in os.environ:
+        parser.error(f"--api-key-env {args.api_key_env}: the variable is not set; export it with the key, or leave out "
+                     f"--api-key-env for a server without one.")
     for name, default in SERVER_DEFAULTS.items():
         if getattr(args, name) is None:
             setattr(args, name, default)

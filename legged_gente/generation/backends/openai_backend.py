@@ -67,6 +67,9 @@ TOOLSETS = ("ours", "gente")
 """``ours``: the registry's tools; ``gente``: GenTe's original tool list, translated (see gente_compat)."""
 MAX_TOOL_CALLS_PER_ANSWER = 64
 """Most tool calls one answer may carry (a spec holds at most ``validation.MAX_CALLS``)."""
+CUT = ("the server stopped the answer at its token limit (finish_reason 'length'); raise the server's limit on "
+       "generated tokens (or its context length)")
+"""What an answer whose choice ends with finish_reason "length" lacks (its last tool call, or those after it), and the fix."""
 
 DESCRIBE_PROMPT = (
     "Describe the ground in this image as terrain a legged robot would walk on, seen from above: which "
@@ -167,6 +170,8 @@ class OpenAIBackend:
             raise ValueError(f"unknown toolset {toolset!r}; use one of {list(TOOLSETS)}.")
         if toolset == "gente" and registry is not None:
             raise ValueError("the gente toolset translates into the global terrain registry; pass no registry.")
+        if vision_model and not two_phase:
+            raise ValueError("vision_model describes the image in two_phase; pass two_phase=True or leave it out.")
         self.toolset, self.resolution = toolset, resolution
         self.base_url, self.model = base_url, model
         self.endpoint = base_url.rstrip("/") + "/chat/completions"
@@ -175,7 +180,7 @@ class OpenAIBackend:
         self.tool_choice, self.temperature = tool_choice, temperature
         self.size_x, self.size_y = size_x, size_y
         self.registry = ATOMIC_TERRAINS if registry is None else registry
-        self.api_key = os.environ.get(api_key_env, "none")
+        self.api_key_env, self.api_key = api_key_env, os.environ.get(api_key_env, "none")
         if not re.fullmatch(r"[!-~]*", self.api_key):  # printable ASCII without spaces, as an HTTP header carries it
             raise ValueError(f"the API key in the environment variable {api_key_env} holds whitespace, control or "
                              f"non-ASCII characters (a trailing newline?); set {api_key_env} to the key alone.")
@@ -202,9 +207,9 @@ class OpenAIBackend:
                 body += chunk
             return response.status, response.headers, bytes(body)
 
-    def _create(self, **payload: Any) -> ChatCompletionMessage:
-        """One chat-completions request within the deadline: the message of its first choice. Every failure is a
-        GenerationError naming the server."""
+    def _create(self, **payload: Any) -> tuple[ChatCompletionMessage, Any]:
+        """One chat-completions request within the deadline: the message of its first choice and that choice's
+        ``finish_reason`` (as the server sent it, or None). Every failure is a GenerationError naming the server."""
         deadline = time.monotonic() + self.timeout
         box: dict[str, Any] = {}
 
@@ -255,7 +260,12 @@ class OpenAIBackend:
             data = None
         if status != 200:
             detail = data.get("error", {}).get("message") if isinstance(data, dict) and isinstance(data.get("error"), dict) else None
-            raise GenerationError(f"the server at {self.base_url} answered HTTP {status}: {printable(str(detail or text)[:300])}")
+            key_fix = f"set the key in the environment variable {self.api_key_env} (or name another with --api-key-env)."
+            fix = {401: key_fix, 403: key_fix, 404: "check --base-url (the API's root, e.g. http://localhost:8000/v1) "
+                   "and --model."}.get(status)
+            said = printable(str(detail or text)[:300])
+            raise GenerationError(f"the server at {self.base_url} answered HTTP {status}: "
+                                  + (f"{said.rstrip('.')}; {fix}" if fix else said))
         if data is None:
             raise GenerationError(
                 f"the server at {self.base_url} answered HTTP 200 with a body that is not JSON (Content-Type "
@@ -270,7 +280,7 @@ class OpenAIBackend:
         try:
             if not isinstance(choices, list) or not isinstance(choices[0], dict):
                 raise ValueError("'choices' is not a list of objects")
-            return ChatCompletionMessage.model_validate(choices[0].get("message"))
+            return ChatCompletionMessage.model_validate(choices[0].get("message")), choices[0].get("finish_reason")
         except ValueError as exc:  # pydantic's ValidationError is a ValueError
             raise GenerationError(
                 f"the server at {self.base_url} answered JSON that is not a chat completion ({str(exc).splitlines()[0][:120]}; "
@@ -357,7 +367,7 @@ class OpenAIBackend:
         """Phase one of two: the vision model's description of the image as terrain."""
         content: list[dict[str, Any]] = [{"type": "text", "text": DESCRIBE_PROMPT + (f" Context: {text}" if text else "")}]
         content.append({"type": "image_url", "image_url": {"url": image_data_url(image)}})
-        message = self._create(model=self.vision_model, messages=[{"role": "user", "content": content}])
+        message, _ = self._create(model=self.vision_model, messages=[{"role": "user", "content": content}])
         description = (message.content or "").strip()
         if not description:
             raise GenerationError(f"the vision model {self.vision_model!r} returned no description of the image.")
@@ -366,6 +376,8 @@ class OpenAIBackend:
     def generate(self, text: str | None = None, image: str | Path | bytes | None = None) -> GenerationResult:
         if not text and image is None:
             raise ValueError("give a text description, an image, or both.")
+        if self.two_phase and image is None:
+            raise ValueError("two_phase describes the image first; give an image or leave two_phase out.")
         notes: list[str] = []
         early_warnings: list[str] = []
         content: list[dict[str, Any]] = []
@@ -396,20 +408,34 @@ class OpenAIBackend:
         warnings: list[str] = early_warnings
         rejected: list[str] = []
         for round_ in range(1, self.max_retries + 2):
-            msg = self._create(model=self.model, messages=messages, tools=tools, tool_choice=self.tool_choice)
+            msg, finish_reason = self._create(model=self.model, messages=messages, tools=tools, tool_choice=self.tool_choice)
             tool_calls = msg.tool_calls or []
-            if len(tool_calls) > MAX_TOOL_CALLS_PER_ANSWER:
+            if len(tool_calls) > MAX_TOOL_CALLS_PER_ANSWER:  # each call answered: the chat keeps the protocol's turns
                 rejected = [f"round {round_}: the model sent {len(tool_calls)} tool calls in one answer; at most "
                             f"{MAX_TOOL_CALLS_PER_ANSWER} are read"]
-                messages.append({"role": "user", "content": f"Send at most {MAX_TOOL_CALLS_PER_ANSWER} tool calls."})
+                messages.append(msg.model_dump(exclude_none=True))
+                messages += [{"role": "tool", "tool_call_id": tc.id, "content": f"REJECTED: this answer has "
+                              f"{len(tool_calls)} tool calls and at most {MAX_TOOL_CALLS_PER_ANSWER} are read; none "
+                              f"is applied. Send the terrain again in at most {MAX_TOOL_CALLS_PER_ANSWER} calls."}
+                             for tc in tool_calls]
                 continue
             messages.append(msg.model_dump(exclude_none=True))
+            said = (msg.content or msg.refusal or "")[:200]
+            if not tool_calls and finish_reason == "length":
+                rejected = [f"round {round_}: no whole tool call ({said!r}): {CUT}"]
+                messages.append({"role": "user", "content": "Your answer was cut off at the token limit before a "
+                                                            "whole tool call; answer with fewer, shorter tool calls."})
+                continue
             if not tool_calls:
-                rejected = [f"round {round_}: the model answered without calling a tool ({(msg.content or '')[:200]!r})"]
+                rejected = [f"round {round_}: the model answered without calling a tool ({said!r})"]
                 messages.append({"role": "user", "content": "Answer by calling the terrain tools, not in text."})
                 continue
             answers, rejected = self._take_calls(round_, tool_calls, slots, warnings)
             messages += answers
+            if finish_reason == "length" and rejected:  # its last call stops mid-way: named first, as errors list 5
+                rejected.insert(0, CUT)
+            elif finish_reason == "length":  # calls after the last whole one may be missing
+                warnings.append(f"round {round_}: {CUT}")
             if not rejected:
                 return GenerationResult([c for s in slots for c in s.calls], warnings, notes, self.model)
             warnings += [f"round {round_}: rejected: {r}" for r in rejected]
