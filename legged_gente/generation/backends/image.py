@@ -47,6 +47,7 @@ from scipy import ndimage
 from legged_gente.generation.backends import GenerationResult
 from legged_gente.generation.backends.planner import KNEE_HEIGHT, Step
 from legged_gente.generation.tools import named_regions
+from legged_gente.generation.validation import MAX_CALLS as SPEC_MAX_CALLS
 from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
@@ -62,6 +63,10 @@ class Legend:
 
 OBSTACLE_HEIGHT = 0.5
 """Height (m) of a raised block drawn in black on a sketch: too high to step on for a ~1 m biped."""
+BLOCK_FILL = 0.5
+"""A black blob without holes that fills at least this share of its bounding box (a square; a disc, pi / 4, less
+its pixel steps) is one block over that box; any other (a wall, a ring, an L) is covered by rectangles of its own
+pixels, so the ground it encloses or passes by stays open."""
 
 LEGEND: dict[str, Legend] = {
     "water": Legend((0, 0, 255), f"knee-deep water ({KNEE_HEIGHT} m)", (Step("water", {"depth": KNEE_HEIGHT}),)),
@@ -138,6 +143,8 @@ def _load(image: str | Path | bytes | Image.Image) -> Image.Image:
         data = Path(image).read_bytes() if isinstance(image, (str, Path)) else bytes(image)
         img, name = open_image(data, image), str(image) if isinstance(image, (str, Path)) else "the image"
     img = upright(img)
+    if img.width == 0 or img.height == 0:  # resampled, an empty picture is black: a block over the whole tile
+        raise ValueError(f"{name} has no pixels ({img.width} x {img.height}); pass a picture.")
     if img.mode in ("RGBA", "LA", "PA", "RGBa", "La") or "transparency" in img.info:
         clear = np.asarray(img.convert("RGBA"))[..., 3] < 255
         if clear.any():
@@ -219,6 +226,8 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
     coverage = {c: float((block_class == k).mean()) for k, c in enumerate(CLASSES)}
     coverage["obstacle"] = float((classes == CLASSES.index("obstacle")).mean())  # placed exactly, at any size
     present = [c for c in CLASSES if coverage[c] >= MIN_FRACTION or (c == "obstacle" and coverage[c] > 0)]
+    if "obstacle" in present:  # placed exactly, so last: a later "set" (stairs, pavement) would flatten them
+        present = [c for c in present if c != "obstacle"] + ["obstacle"]
     notes.append("surfaces: " + ", ".join(f"{c} {100 * coverage[c]:.0f}%" for c in sorted(present, key=lambda c: -coverage[c])))
     flat_base = coverage["pavement"] + coverage["ice"] > 0.5
     base = Step("flat", {"height": 0.0}) if flat_base else Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0})
@@ -226,8 +235,20 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
     for name in present:
         if name == "obstacle":
             labels, _ = ndimage.label(classes == CLASSES.index("obstacle"))
-            rects = [(s[0].start, s[1].start, s[0].stop, s[1].stop) for s in ndimage.find_objects(labels)]
+            rects = []
+            for k, sl in enumerate(ndimage.find_objects(labels), start=1):
+                blob = labels[sl] == k
+                r, c = sl[0].start, sl[1].start
+                compact = blob.mean() >= BLOCK_FILL and not (ndimage.binary_fill_holes(blob) & ~blob).any()
+                own = [(0, 0, *blob.shape)] if compact else _rectangles(blob)
+                rects += [(r + r0, c + c0, r + r1, c + c1) for r0, c0, r1, c1 in own]
             shape = classes.shape
+        elif name == "stairs":  # a stairs call is a flight centred on its rectangle: one rectangle per column band,
+            # whole along x, so the flight never falls back; blocks drawn on it do not cut it (they are placed over it)
+            mask = block_class == CLASSES.index(name)
+            mask |= ndimage.binary_fill_holes(mask) & (block_class == CLASSES.index("obstacle"))
+            rects = [(r0, c0, r1, c1) for c0, r0, c1, r1 in _rectangles(mask.T)]
+            shape = block_class.shape
         else:
             rects = _rectangles(block_class == CLASSES.index(name))
             shape = block_class.shape
@@ -349,13 +370,14 @@ def _classify_ground(rgb: np.ndarray, h: np.ndarray, s: np.ndarray, v: np.ndarra
     return out
 
 
-def _part_masks(shape: tuple[int, int], horizon: int, ground: np.ndarray) -> dict[str, np.ndarray]:
-    """GenTe's four parts in image space: back = near ground (bottom), front = the band under the horizon."""
+def _part_masks(shape: tuple[int, int], horizon: int, ground: np.ndarray, size_x: float) -> dict[str, np.ndarray]:
+    """GenTe's four parts in image space: back = near ground (bottom), front = the band under the horizon; the
+    tile (``size_x`` m deep) starts at the bottom edge, ``Z_NEAR`` m from the camera."""
     rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
     t = (rows + 0.5 - horizon) / max(shape[0] - horizon, 1)  # 1 at the bottom, 0 at the horizon
     z = Z_NEAR / np.maximum(t, 1e-6)
-    on_tile = ground & (z <= Z_NEAR + 20.0 * 1.25)  # a little beyond the tile: small tiles and haze
-    far = z >= Z_NEAR + 10.0
+    on_tile = ground & (z <= Z_NEAR + size_x * 1.25)  # a little beyond the tile: small tiles and haze
+    far = z >= Z_NEAR + size_x / 2
     left = cols < shape[1] / 2
     return {"back_left": on_tile & ~far & left, "back_right": on_tile & ~far & ~left,
             "front_left": on_tile & far & left, "front_right": on_tile & far & ~left}
@@ -482,8 +504,9 @@ def _upright_water(water: np.ndarray, ground: np.ndarray, horizon: int) -> np.nd
     return out
 
 
-def read_photo(img: Image.Image) -> PhotoReading:
-    """Read a photo in perspective (module docstring); the findings, before any tool call is made."""
+def read_photo(img: Image.Image, size_x: float = 20.0) -> PhotoReading:
+    """Read a photo in perspective (module docstring) for a tile ``size_x`` m deep; the findings, before any tool
+    call is made."""
     rgb = np.asarray(img.resize((PW, PH), Image.Resampling.BOX), np.float32) / 255.0
     h, s, v = _hsv(rgb)
     lum = rgb.mean(-1)
@@ -535,7 +558,7 @@ def read_photo(img: Image.Image) -> PhotoReading:
     surface = np.where(ground, classes, -1)
     if grey:
         surface = np.where(surface >= 0, np.where(surface == SURFACES.index("gravel"), surface, SURFACES.index("grey")), -1)
-    parts = _part_masks((PH, PW), horizon, ground)
+    parts = _part_masks((PH, PW), horizon, ground, size_x)
     # Flow: foam or wave crests on the water (bright streaks), or a water band with land beyond (a river).
     water = surface == SURFACES.index("water")
     on_tile = np.any(list(parts.values()), axis=0)
@@ -607,7 +630,7 @@ def _merge(per_part: dict[str, tuple[str, ...]]) -> list[tuple[str, tuple[str, .
 
 
 def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str], warnings: list[str]) -> list[tuple[Step, dict]]:
-    r = read_photo(img)
+    r = read_photo(img, size_x)
     notes.append(f"read as a photo in perspective: sky above row {r.horizon} of {PH} dropped")
     if r.grey:
         warnings.append("greyscale photo: water, snow, sand, mud and ice cannot be told apart by colour; only "
@@ -671,10 +694,14 @@ def plan_image(
     ``resolution`` (m), a rectangle that holds no cell is skipped with a warning."""
     registry = ATOMIC_TERRAINS if registry is None else registry
     img = _load(image)
+    name = str(image) if isinstance(image, (str, Path)) else "the image"
     warnings: list[str] = []
     notes: list[str] = []
     if is_sketch(img):
         steps = _plan_sketch(img, size_x, size_y, notes)
+    elif img.width * img.height < PW * PH:  # upsampled, it has no sky texture, speckle or edges to read
+        raise ValueError(f"{name} is a {img.width} x {img.height} pixel photo, fewer pixels than the {PW} x {PH} the "
+                         f"photo reader analyses; pass a larger photo (or a sketch map in the legend's colours).")
     else:
         steps = _plan_photo(img, size_x, size_y, notes, warnings)
     geometric = [sr for sr in steps if registry[sr[0].tool].kind == "geometric"]
@@ -688,4 +715,8 @@ def plan_image(
             calls.append(validate_call(step.tool, args, size_x, size_y, registry, resolution))
         except ValidationError as exc:  # e.g. a block thinner than a cell: report, keep the rest
             warnings += [f"skipped: {m}" for m in exc.messages]
+    if len(calls) > SPEC_MAX_CALLS:  # only a sketch can: a photo gives at most MAX_CALLS
+        raise ValueError(f"{name} needs {len(calls)} tool calls, more than a terrain holds ({SPEC_MAX_CALLS}); draw "
+                         f"fewer, simpler shapes (each black blob and each rectangle of a surface is a call) and pass "
+                         f"it again.")
     return GenerationResult(calls, warnings, notes, model=None)
