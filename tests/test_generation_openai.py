@@ -177,6 +177,21 @@ def test_two_phase_describes_then_calls_tools():
     assert result.calls[0].params["depth"] == 0.1 and "shallow pond" in result.notes[0]
 
 
+def test_two_phase_passes_the_users_text_to_the_tool_calling_model_too():
+    """The text given with the image (sizes, a depth, what to stress) reaches both models: the vision model as
+    context for its description, the tool-calling model as the user's own words beside that description."""
+    description = _completion(content="A shallow pond covering the whole area.")
+    reply = _completion([_tool_call("test_wet", {"depth": 0.1, "region": "full"})])
+    with FakeServer([ok(description), ok(reply)]) as srv:
+        _backend(srv, two_phase=True, vision_model="test-vlm").generate(text="the pond is 0.1 m deep",
+                                                                        image=_png_bytes())
+    first, second = srv.requests
+    assert "the pond is 0.1 m deep" in json.dumps(first["messages"])
+    user = [m for m in second["messages"] if m["role"] == "user"]
+    texts = [p["text"] for p in user[0]["content"]]
+    assert any("shallow pond" in t for t in texts) and any("the pond is 0.1 m deep" in t for t in texts)
+
+
 def test_server_error_is_clear():
     with FakeServer([(500, {"error": {"message": "model exploded"}}, 0.0)]) as srv:
         with pytest.raises(GenerationError, match="HTTP 500.*model exploded"):

@@ -389,6 +389,8 @@ class OpenAIBackend:
                 description = description[:MAX_DESCRIPTION_CHARS]
             notes.append(f"image description ({self.vision_model}): {description}")
             content.append({"type": "text", "text": f"Build this terrain: {description}"})
+            if text:  # the user's own words (sizes, depths) reach the model that sets the parameters too
+                content.append({"type": "text", "text": f"The user adds: {text}"})
         else:
             if text:  # GenTe's prompts go as they are, so prompts written for GenTe work unchanged
                 content.append({"type": "text", "text": text if self.toolset == "gente" else f"Build this terrain: {text}"})
