@@ -20,7 +20,7 @@ import numpy as np
 from legged_gente.generation.backends.image import LEGEND
 from legged_gente.generation.backends.planner import Step, recipe_steps
 from legged_gente.generation.spec import TerrainSpec
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT, stacked_height_bounds
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT, Region, stacked_height_bounds
 from legged_gente.terrain.terrain import SPAWN_FOOTPRINT, SPAWN_MAX_RANGE, Terrain
 
 MIN_RELIEF = 0.02
@@ -106,10 +106,12 @@ def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[st
                         f"[{float(lo[i, j]):.3f}, {float(hi[i, j]):.3f}] m.")
 
     ox, oy = (float(v) for v in terrain.terrain_origins[0, 0, :2])
-    half = SPAWN_FOOTPRINT / 2
-    i0, i1 = max(0, round((ox - half) / res)), round((ox + half) / res) + 1
-    j0, j1 = max(0, round((oy - half) / res)), round((oy + half) / res) + 1
-    patch = heights[i0:i1, j0:j1]
+    # The window the spawn search judged (Terrain._spawn_origins): f cells, fewer on a tile narrower than that,
+    # centred on the origin.
+    f = 2 * int(round(SPAWN_FOOTPRINT / (2 * res))) + 1
+    fx, fy = min(f, heights.shape[0]), min(f, heights.shape[1])
+    i0, j0 = round(ox / res - (fx - 1) / 2), round(oy / res - (fy - 1) / 2)
+    patch = heights[i0:i0 + fx, j0:j0 + fy]
     span = float(patch.max() - patch.min())
     if span > SPAWN_MAX_RANGE + 1e-6:
         problems.append(f"untraversable at the spawn: the flattest {SPAWN_FOOTPRINT} m patch near the centre, at "
@@ -123,8 +125,8 @@ def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[st
             continue
         windows = []
         for c in calls:
-            x0, y0, x1, y1 = c.rect(spec.size_x, spec.size_y)
-            windows.append((slice(round(x0 / res), round(x1 / res)), slice(round(y0 / res), round(y1 / res))))
+            i0, j0, i1, j1 = Region(*c.rect(spec.size_x, spec.size_y)).cells(res)  # the cells the builder paints
+            windows.append((slice(i0, i1), slice(j0, j1)))
         if not any(_visible(tool, heights, material, w, GROUND_FRICTION) for w in windows):
             problems.append(f"missing: the item names {tool!r}; the spec calls it but the built tile shows none of it.")
     return CheckResult(problems, required, (ox, oy))

@@ -19,6 +19,7 @@ import keyword
 import os
 import shutil
 import tempfile
+import unicodedata
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,8 @@ HEIGHTMAP_NAME = "heightmap.npy"
 """The emitted copy of a spec's heightmap, beside ``spec.json``."""
 DEFAULT_BASE = "legged_gente.envs.gente_biped.gente_biped_config:GenteBipedCfg.terrain"
 """``module:attribute.path`` of the terrain config class the emitted class subclasses."""
+MODULE_NAMES = ("Path", "SPEC_PATH", "PROVENANCE", "build")
+"""Names :data:`MODULE_TEMPLATE` binds beside the class: a class of one of them would be lost or break ``build()``."""
 
 
 @dataclasses.dataclass
@@ -144,6 +147,12 @@ def emit(
     if not class_name.isidentifier() or keyword.iskeyword(class_name):
         raise ValueError(f"class name {class_name!r} is not a name Python can give a class (an identifier, not a "
                          f"keyword); pass a name like 'ForestTerrainCfg'.")
+    # Python reads identifiers NFKC-normalised ("ﬁ" is "fi") and reserves __dunder__ names (__debug__ cannot be bound)
+    if (unicodedata.normalize("NFKC", class_name) != class_name or class_name in MODULE_NAMES
+            or (class_name.startswith("__") and class_name.endswith("__"))):
+        raise ValueError(f"class name {class_name!r} is not a name the emitted module can give back (one Python "
+                         f"normalises or reserves, or one of the module's own {list(MODULE_NAMES)}); pass a name "
+                         f"like 'ForestTerrainCfg'.")
     if mesh and mesh.lstrip(".").lower() not in MESH_FORMATS:
         raise ValueError(f"mesh format {mesh!r} is none of {list(MESH_FORMATS)}; pass one of those.")
     spec = spec.validated()  # spec.json must load: the emitted module and training read it

@@ -75,7 +75,10 @@ def load_items(root: Path, kind: str) -> list[dict]:
     path = root / ("texts.json" if kind == "text" else "photos/manifest.json")
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found; pass --set with a folder holding texts.json and photos/manifest.json.")
-    items = json.loads(path.read_text(encoding="utf-8"))
+    try:
+        items = json.loads(path.read_text(encoding="utf-8"))
+    except ValueError as exc:  # JSONDecodeError, bad UTF-8
+        raise ValueError(f"{path} is not valid JSON ({exc}); fix the file.") from None
     if not isinstance(items, dict) or not isinstance(items.get("items"), list):
         raise ValueError(f"{path} holds no 'items' list; write {{\"items\": [{{\"labels\": [...], ...}}, ...]}}.")
     items = items["items"]
@@ -86,7 +89,7 @@ def load_items(root: Path, kind: str) -> list[dict]:
         needed = "text" if kind == "text" else "file"
         if not isinstance(item.get(needed), str):
             raise ValueError(f"{path}: item {i} has no '{needed}'; give each item its {needed} as a string.")
-        bad = sorted(set(item["labels"]) - set(FEATURES))
+        bad = sorted({label if isinstance(label, str) else json.dumps(label) for label in item["labels"]} - set(FEATURES))
         if bad:
             raise ValueError(f"{path}: item {i} has unknown label(s) {bad}; labels are {list(FEATURES)}.")
         item.setdefault("split", "tune" if i % 2 == 0 else "held_out")

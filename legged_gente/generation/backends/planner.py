@@ -342,7 +342,9 @@ SLOT_LAYOUTS = {
     4: ("back_right", "back_left", "front_right", "front_left"),
 }
 
-_NEGATION = re.compile(r"\b(no|not|without|never|avoid)\s+(\w+\s+){0,2}$")
+_NEGATORS = "no|not|without|never|avoid"
+"""Words that negate the cue or noun at most two words after them (one list for both)."""
+_NEGATION = re.compile(rf"\b({_NEGATORS})\s+(\w+\s+){{0,2}}$")
 _SENTENCE_END = re.compile(r"[.;!?]")
 _PHRASE_END = re.compile(r"[,.;:!?]")
 
@@ -403,7 +405,7 @@ def _bind(text: str, mod: Mention, cue_mentions: list[Mention]) -> tuple[Cue | N
 def _negations(text: str) -> list[Modifier]:
     found = []
     for word, mod in NEGATED.items():
-        if re.search(rf"\b(?:no|not|without|never)\s+(?:\w+\s+){{0,2}}{word}s?\b", text):
+        if re.search(rf"\b(?:{_NEGATORS})\s+(?:\w+\s+){{0,2}}{word}s?\b", text):
             found.append(mod)
     return found
 
@@ -513,8 +515,10 @@ def plan_text(
                 args["mode"] = step.mode
             try:
                 call = validate_call(step.tool, args, size_x, size_y, registry)
-            except ValidationError as exc:  # a recipe bug: say which cue and step
-                raise ValidationError([f"planner cue '{cue.name}': {m}" for m in exc.messages]) from None
+            except ValidationError as exc:  # every recipe builds on a 20 m tile: a larger one can be too large
+                raise ValidationError([f"planner cue '{cue.name}' does not fit on a {size_x:g} m x {size_y:g} m tile: "
+                                       f"ask for a smaller tile, or write the calls yourself in a spec ({m.rstrip('.')})."
+                                       for m in exc.messages]) from None
             if resolution is not None:
                 try:
                     validate_call(step.tool, args, size_x, size_y, registry, resolution)
