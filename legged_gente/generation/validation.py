@@ -499,6 +499,8 @@ def _describe_spec_error(err: jsonschema.ValidationError) -> str:
     too_long = _too_long(err)
     if too_long:
         return f"spec: field {field!r} {too_long}."
+    if err.validator == "pattern" and "description" in err.schema:  # what it must be, not the regular expression
+        return f"spec: field {field!r}: {_clip_text(repr(err.instance), 80)} is not {err.schema['description']}."
     return f"spec: field {field!r}: {_clip_text(err.message, 160)}."
 
 
