@@ -199,7 +199,7 @@ def _fractal(shape, resolution, rng, wavelength: float, octaves: int, persistenc
     "geometric",
     "Uneven natural ground: fractal Perlin noise (forest floor, meadow, dirt track).",
     {
-        "amplitude": Param(0.1, "largest |height| of the relief", "m", 0.0, 0.5),
+        "amplitude": Param(0.1, "bound on |height| of the relief (its peaks reach about 0.5-0.65 of it)", "m", 0.0, 0.5),
         "wavelength": Param(1.5, "size of the largest bumps", "m", 0.2, 10.0),
         "octaves": Param(4, "number of noise octaves (finer detail with more)", "1", 1, 6, integer=True),
         "persistence": Param(0.5, "amplitude ratio of successive octaves", "1", 0.1, 0.9),
@@ -218,7 +218,7 @@ def natural_ground(shape, resolution, rng, amplitude, wavelength, octaves, persi
     "geometric",
     "Smooth large-scale relief: rolling hills or dunes.",
     {
-        "amplitude": Param(0.5, "largest |height| of the hills", "m", 0.0, 3.0),
+        "amplitude": Param(0.5, "bound on |height| of the hills (their peaks reach about 0.4-0.6 of it)", "m", 0.0, 3.0),
         "wavelength": Param(8.0, "typical distance between hill tops", "m", 2.0, 40.0),
         "octaves": Param(2, "number of noise octaves", "1", 1, 4, integer=True),
         "platform": PLATFORM,
@@ -360,7 +360,8 @@ def discrete_obstacles(shape, resolution, rng, max_height, min_size, max_size, d
         "platform": PLATFORM,
     },
     difficulty=lambda d: {"stone_size": _lerp(1.2, 0.4, d), "stone_distance": _lerp(0.05, 0.4, d)},
-    bounds=lambda p, sx, sy: (-p["depth"], p["height_noise"]),
+    # a stone's top is drawn in [-height_noise, height_noise]: below a floor shallower than that
+    bounds=lambda p, sx, sy: (-max(p["depth"], p["height_noise"]), p["height_noise"]),
 )
 def stepping_stones(shape, resolution, rng, stone_size, stone_distance, depth, height_noise, platform):
     pitch = stone_size + stone_distance
@@ -462,7 +463,7 @@ def pillars(shape, resolution, rng, height, min_radius, max_radius, density, pla
 
 
 ROCK_PARAMS = {
-    "max_height": Param(0.15, "height of the tallest rock", "m", 0.0, 0.5),
+    "max_height": Param(0.15, "largest height of a rock (each is drawn in 0.3-1 of it)", "m", 0.0, 0.5),
     "min_radius": Param(0.1, "smallest rock radius", "m", 0.05, 1.0),
     "max_radius": Param(0.4, "largest rock radius", "m", 0.05, 1.0),
     "density": Param(0.5, "rocks per square metre", "1/m^2", 0.0, 3.0),
@@ -521,6 +522,14 @@ def _river_rules(p) -> None:
     if p["bank_width"] > p["width"] / 2.0:
         raise ValueError(f"river: bank_width={p['bank_width']} m exceeds half the width ({p['width'] / 2.0} m); "
                          f"narrow the banks or widen the river.")
+    # the width is measured across the mean axis: where the course runs at slope k = 2 pi A / L to it, the channel
+    # is width / sqrt(1 + k^2) wide across the course; k > 1 would narrow it by more than 29 %
+    steepest = 2.0 * np.pi * p["meander_amplitude"] / p["meander_wavelength"]
+    if steepest > 1.0 + 1e-9:
+        raise ValueError(f"river: meanders of {p['meander_amplitude']:g} m every {p['meander_wavelength']:g} m run "
+                         f"steeper than 45 degrees to the axis and narrow the channel by over 29 %; keep "
+                         f"meander_amplitude <= meander_wavelength / (2 pi) = "
+                         f"{p['meander_wavelength'] / (2.0 * np.pi):.3f} m.")
 
 
 @atomic_terrain(
@@ -528,7 +537,7 @@ def _river_rules(p) -> None:
     "geometric",
     "A carved river channel with a flat bed and smooth banks; add 'water' on it to fill it.",
     {
-        "width": Param(2.5, "width of the channel from bank top to bank top", "m", 0.5, 8.0),
+        "width": Param(2.5, "width of the channel from bank top to bank top, across its mean axis", "m", 0.5, 8.0),
         "depth": Param(0.4, "depth of the bed below the surrounding ground", "m", 0.0, 2.0),
         "bank_width": Param(0.5, "horizontal width of each sloping bank", "m", 0.0, 3.0),
         "direction": Param(float(np.pi / 2), "direction of the channel axis (0: along x)", "rad", -np.pi, np.pi),

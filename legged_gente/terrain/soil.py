@@ -52,8 +52,15 @@ def bulldozing_coefficients(c: float, phi_deg: float, gamma: float) -> tuple[flo
 
     Bearing-capacity factors in closed form: N_q = exp(pi tan phi) tan^2(45 deg + phi/2) (Prandtl-Reissner),
     N_c = (N_q - 1) cot phi, N_gamma = (N_q - 1) tan(1.4 phi) (Meyerhof 1963). Wong tabulates Terzaghi's
-    factors, which differ by ~10 % at these angles.
+    factors, which differ by ~10 % at these angles. At phi = 0 (a clay, undrained) the limits: N_c = pi + 2
+    (Prandtl) and 2 N_gamma / tan phi = 0. Meyerhof's tan(1.4 phi) diverges at phi = 64.3 deg: phi must be below 64.
     """
+    if not 0.0 <= phi_deg < 64.0:
+        raise ValueError(f"bulldozing_coefficients: phi_deg={phi_deg!r} is outside [0, 64) degrees, where the "
+                         f"bearing-capacity factors hold (Meyerhof's tan(1.4 phi) diverges at 64.3); give the soil's "
+                         f"friction angle in degrees.")
+    if phi_deg == 0.0:
+        return 0.67 * c * (math.pi + 2.0), 0.5 * gamma
     phi = math.radians(phi_deg)
     nq = math.exp(math.pi * math.tan(phi)) * math.tan(math.pi / 4 + phi / 2) ** 2
     nc = (nq - 1.0) / math.tan(phi)
@@ -82,8 +89,6 @@ class SoilPreset:
     def __post_init__(self):
         if self.model not in MODELS:
             raise ValueError(f"SoilPreset.model={self.model!r}: must be one of {MODELS}.")
-        if self.model == "rft" and not self.zeta[0] > 0:
-            raise ValueError(f"SoilPreset.zeta={self.zeta}: an 'rft' soil needs zeta > 0 N/m^3 (Li et al. 2013).")
         for name in PARAM_NAMES:
             value = getattr(self, name)
             if not (isinstance(value, tuple) and len(value) == 2):
@@ -96,6 +101,8 @@ class SoilPreset:
                 raise ValueError(f"SoilPreset.{name} mean must be > 0, got {mean}.")
             if name in ("c", "mu", "bulldoze_c", "bulldoze_g", "zeta") and mean < 0:
                 raise ValueError(f"SoilPreset.{name} mean must be >= 0, got {mean}.")
+        if self.model == "rft" and not self.zeta[0] > 0:  # after the pair checks: zeta is a pair here
+            raise ValueError(f"SoilPreset.zeta={self.zeta}: an 'rft' soil needs zeta > 0 N/m^3 (Li et al. 2013).")
 
 
 def _pct(mean: float, frac: float) -> tuple[float, float]:
