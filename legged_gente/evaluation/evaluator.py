@@ -28,8 +28,8 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
   1, one that walks the commanded speed facing the wrong way less (cos of the angle); undefined (NaN) for a
   stand-still command.
 * ``heading_error`` (deg): heading mode only (else NaN): |commanded heading - base yaw| at the robot's last
-  measured step, for moving commands: how far from its heading a robot ends, which ``progress`` weighs only
-  through the distance lost (not part of ``success``).
+  measured step after ``settle_s`` (NaN if it has none), for moving commands: how far from its heading a robot
+  ends, which ``progress`` weighs only through the distance lost (not part of ``success``).
 * ``standing``: the robot was commanded to stand still (velocity task).
 * ``left_tile``: the robot's base came within ``tile_edge_margin`` (default :data:`TILE_EDGE_MARGIN`) of its
   tile's edge, where its terrain ends (the next tile or the border lies at any height: often a cliff on GenTe's
@@ -44,7 +44,8 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
 * ``collisions``: onsets of contact (|F| > 1 N) on any penalised body (thighs, shanks: the task's
   ``penalize_contacts_on``), counted once per contact episode.
 * ``energy`` (J): sum over policy steps of sum_j |tau_j * qdot_j| * dt (mechanical power of the joints,
-  positive and negative work both counted, sampled at the policy rate); ``energy_per_m`` = energy / distance.
+  positive and negative work both counted, sampled at the policy rate). The report's ``energy_per_m`` is not
+  per robot: a group's total energy over its total distance (:mod:`legged_gente.evaluation.report`).
 """
 
 from __future__ import annotations
@@ -275,7 +276,8 @@ class Evaluation:
             tile_edge_margin: float | None = TILE_EDGE_MARGIN) -> RunResult:
         """Roll ``policy`` (obs TensorDict -> actions) for one episode of every robot; returns per-robot metrics.
         A robot's measured episode ends when its base comes ``tile_edge_margin`` (m) close to its tile's edge,
-        where its terrain ends and the next tile or the border begins (``left_tile``); None measures on past it."""
+        where its terrain ends and the next tile or the border begins (``left_tile``); None measures on past it.
+        Without a ``task``, the mode's default task, its waypoint paths kept within that same margin."""
         from tqdm import tqdm
 
         env = self.env
@@ -286,7 +288,7 @@ class Evaluation:
         if settle_steps(settle_s, self.dt) >= self.num_steps:
             raise ValueError(f"settle_s {settle_s} s leaves nothing of the {self.num_steps * self.dt:g} s episode to "
                              f"measure (steps of {self.dt:g} s); give a value in [0, episode_s - one step).")
-        task = task or self.make_task()
+        task = task or self.make_task(tile_edge_margin=tile_edge_margin)  # waypoint paths within this run's margin
         torch.manual_seed(self.seed)
         if env.forces is not None:
             env.forces.restart_draws()  # every run meets the same soil and water draws

@@ -20,7 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from legged_gente.utils.args import Parser, run_command
+
 DPI = 90
+PROG = "python -m legged_gente.evaluation.figures"
 
 
 def _plt():
@@ -156,6 +159,9 @@ def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], o
                           benchmark: str = "gente100", max_checkpoints: int = 8, robots_per_terrain: int = 16,
                           device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float | None = None) -> Path:
     """Evaluate up to ``max_checkpoints`` evenly spaced checkpoints of a run on ``item_ids``; plot success vs iteration."""
+    if max_checkpoints < 1:
+        raise ValueError(f"max_checkpoints {max_checkpoints}: evaluate at least 1 checkpoint "
+                         f"(--max_checkpoints 1 or more)")
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
     from legged_gente.evaluation.report import TRACKING_THRESHOLD, success
@@ -199,7 +205,9 @@ def _save(fig, out: str | Path) -> Path:
 
 
 def main(argv=None) -> None:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    """Draw the figure a subcommand names; a user's mistake (a missing file, an unknown id, a bad value) is one line,
+    exit status 2, as in the gente-* commands."""
+    p = Parser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="figure", required=True)
     a = sub.add_parser("reward", help="(a) training reward over seeds")
     a.add_argument("sources", nargs="+", help="TensorBoard run folders or CSVs, one per seed")
@@ -227,7 +235,10 @@ def main(argv=None) -> None:
     d.add_argument("--robots_per_terrain", type=int, default=16)
     for s in sub.choices.values():
         s.add_argument("--out", required=True, help="PNG path")
-    args = p.parse_args(argv)
+    run_command(PROG, _draw, p.parse_args(argv))
+
+
+def _draw(args) -> None:
     if args.figure == "reward":
         path = plot_reward_seeds(args.sources, args.out, args.column, args.label)
     elif args.figure == "tracking":

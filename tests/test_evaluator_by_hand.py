@@ -1,0 +1,191 @@
+"""The evaluator's per-step accounting and the evaluation figures, worked out by hand (docs/evaluation.md, "Metrics"
+and "Figures"). The recorder reads a stand-in for the env's state after each step; one test simulates a single
+robot for two steps on the flat benchmark."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import torch
+
+from legged_gente.evaluation import figures
+from legged_gente.evaluation.evaluator import MAX_BASE_SPEED, Recorder, RunResult
+
+
+def _env(n):
+    """The state the recorder reads after a step: n robots facing +x at the origin, at rest, commanded vx 0.5 m/s,
+    one penalised body each."""
+    zeros = torch.zeros(n, dtype=torch.bool)
+    commands = torch.zeros(n, 4)
+    commands[:, 0] = 0.5
+    return SimpleNamespace(
+        num_envs=n, device="cpu", dt=0.02, commands=commands, heading_command=False, standing_still=zeros.clone(),
+        base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3), base_ang_vel=torch.zeros(n, 3),
+        base_quat=torch.tensor([[1.0, 0.0, 0.0, 0.0]] * n), sim=SimpleNamespace(qvel=torch.zeros(n, 6),
+                                                                                 qpos=torch.zeros(n, 7)),
+        diverged_buf=zeros.clone(), time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
+        penalized_bodies=torch.tensor([0]), contact_forces=torch.zeros(n, 1, 3))
+
+
+# ------------------------------------------------------------------------------------------------ recorder
+def test_collisions_count_each_contact_once_from_its_onset_and_only_while_measured():
+    """A penalised body's contact force (N) over six steps. Robot 0: 0.5 (below 1 N: no contact), 2 (onset 1),
+    3 (the same contact), 0, 5 (onset 2), 5: two collisions. Robot 1: 1.0 exactly (not above 1 N), then 2 (onset
+    1); it falls in step 3 with 4 N (the env already reset it: not measured), and its 9 N after that count for
+    nothing: one collision."""
+    env = _env(2)
+    forces = [[0.5, 1.0], [2.0, 2.0], [3.0, 4.0], [0.0, 0.0], [5.0, 9.0], [5.0, 9.0]]
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    for k, (f0, f1) in enumerate(forces, start=1):
+        env.contact_forces[:, 0, 2] = torch.tensor([f0, f1])
+        recorder.record(env, torch.tensor([False, k == 3]))
+    assert recorder.collisions.tolist() == [2.0, 1.0]
+    assert recorder.fell.tolist() == [False, True]
+
+
+def test_a_launched_or_flagged_robot_is_diverged_not_fallen_and_its_step_is_not_measured():
+    """Four robots walk 0.01 m a step along +x at 0.5 m/s for two steps. In step 3: robot 0 walks on; robot 1 is
+    launched at 30 m/s (> MAX_BASE_SPEED = 24.8 m/s, not done: the env does not check it); robot 2's velocity is
+    NaN; robot 3's world the env flagged (diverged_buf, reset as a time-out: done). Robots 1-3 are diverged, none
+    fell, and each keeps the 2 steps and 0.02 m it had: the launched step's 0.6 m is not distance."""
+    env = _env(4)
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    for k in range(1, 4):
+        env.sim.qvel[:, 0] = env.base_lin_vel[:, 0] = 0.5
+        env.base_pos[:, 0] += 0.01
+        done = torch.zeros(4, dtype=torch.bool)
+        if k == 3:
+            env.sim.qvel[1, 0], env.base_pos[1, 0] = 30.0, 0.62
+            env.sim.qvel[2, 0] = math.nan
+            env.diverged_buf = env.time_out_buf = done = torch.tensor([False, False, False, True])
+        recorder.record(env, done)
+    assert 30.0 > MAX_BASE_SPEED
+    assert recorder.diverged.tolist() == [False, True, True, True] and not recorder.fell.any()
+    assert recorder.alive_steps.tolist() == [3.0, 2.0, 2.0, 2.0]
+    assert recorder.distance.tolist() == pytest.approx([0.03, 0.02, 0.02, 0.02], abs=1e-6)
+    assert recorder.active.tolist() == [True, False, False, False]
+
+
+def test_the_heading_error_is_taken_after_the_settle_time_only():
+    """Heading mode, commanded heading 0.5 rad, both robots facing +x (yaw 0): |0.5 - 0| rad = 28.65 deg. settle_s
+    = 0.06 s = 3 steps of 0.02 s. Robot 0 is measured for 5 steps: 28.65 deg. Robot 1 falls in step 3, so its last
+    measured step (2) lies inside the settle time: no heading error (NaN), as it has no tracking error."""
+    env = _env(2)
+    env.heading_command, env.commands[:, 3] = True, 0.5
+    recorder = Recorder(env, settle_s=0.06, trace_robots=torch.tensor([0]))
+    for k in range(1, 6):
+        recorder.record(env, torch.tensor([False, k == 3]))
+    assert float(recorder.heading_error[0]) == pytest.approx(math.degrees(0.5), abs=1e-4)
+    assert math.isnan(recorder.heading_error[1]) and float(recorder.err_steps[1]) == 0.0
+
+
+def test_a_run_without_a_task_turns_its_waypoint_paths_back_by_its_own_tile_edge_margin():
+    """One robot on the flat 20 m tile, its spawn moved to x = 12 m; the run's margin is 3 m, so its terrain ends
+    at x = 17 m. The zigzag needs 4 x 1.8 = 7.2 m: ahead there are 17 - 12 = 5 m, behind 12 - 3 = 9 m, so the
+    path runs along -x: x = 12 - 1.8 k = 10.2, 8.4, 6.6, 4.8 m. Built for the default 0.5 m margin instead (7.5 m
+    ahead), it ran along +x to 19.2 m, past where the run ends the robot's measured episode."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.evaluation.evaluator import Evaluation
+
+    evaluation = Evaluation("gente_biped_flat", load_benchmark("flat"), 1, "cpu", 0.04, mode="waypoints")
+    evaluation.env.env_origins[:, 0] = 12.0
+    result = evaluation.run(lambda obs: torch.zeros(1, evaluation.env.num_actions), settle_s=0.0, progress=False,
+                            tile_edge_margin=3.0)
+    assert result.traces["waypoints"][0, :, 0].tolist() == pytest.approx([10.2, 8.4, 6.6, 4.8], abs=1e-4)
+
+
+# ------------------------------------------------------------------------------------------------ figures
+def _keep_figure(monkeypatch):
+    """Figures drawn by the figures module, kept open instead of written."""
+    kept = []
+    monkeypatch.setattr(figures, "_save", lambda fig, out: kept.append(fig) or out)
+    return kept
+
+
+def test_figure_c_draws_the_tile_in_metres_with_x_to_the_right(tmp_path, monkeypatch):
+    """A 20 m x 10 m tile at 0.1 m (200 x 100 cells) with a 1 m block at x >= 15 m: the picture spans x 0..20 m
+    horizontally and y 0..10 m vertically, and the block shows at x = 17 m, y = 5 m (pixel row 50, column 170),
+    not at the bottom or the left. The path and the waypoints are drawn at their xy."""
+    heights = np.zeros((200, 100), np.float32)
+    heights[150:, :] = 1.0
+    path = np.array([[2.0, 5.0], [3.0, 5.5], [4.0, 6.0]])
+    waypoints = np.array([[3.8, 6.5], [5.6, 3.5]])
+    kept = _keep_figure(monkeypatch)
+    figures.plot_trajectories(heights, 0.1, {1.0: {"pos": path, "waypoints": waypoints}}, tmp_path / "c.png")
+    ax = kept[0].axes[0]
+    image = ax.images[0]
+    assert image.get_extent() == pytest.approx([0.0, 20.0, 0.0, 10.0])
+    shown = np.asarray(image.get_array())
+    assert shown.shape == (100, 200) and shown[50, 170] == 1.0 and shown[50, 30] == 0.0
+    assert np.allclose(ax.lines[0].get_xydata(), path)
+    assert np.allclose(ax.lines[-1].get_xydata(), waypoints)
+
+
+def test_figure_d_plots_each_terrains_success_rate_over_its_moving_robots(tmp_path, monkeypatch):
+    """Three checkpoints (iterations 0, 50, 100), two terrains of four robots. At iteration 0 every robot tracks
+    at 1 m/s error: 0 %. Later, terrain 0: one success, one tracking 0.4 m/s (fails), one told to stand (left
+    out), one diverged (a failure): 1 of 3 = 33.3 %; terrain 1: three successes and a fall: 75 %."""
+    import legged_gente.evaluation.benchmark as benchmark
+    import legged_gente.evaluation.evaluator as evaluator
+
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    for iteration in (100, 0, 50):
+        (run_dir / f"model_{iteration}.pt").write_bytes(b"")
+
+    def metrics(trained):
+        n = 8
+        m = {"fell": np.zeros(n, bool), "diverged": np.zeros(n, bool), "standing": np.zeros(n, bool),
+             "tracking_error": np.full(n, 0.1 if trained else 1.0), "progress": np.full(n, 0.9)}
+        m["tracking_error"][1] = 0.4 if trained else 1.0
+        m["standing"][2], m["diverged"][3], m["fell"][7] = True, True, True
+        return m
+
+    class StubEvaluation:
+        def __init__(self, task, items, robots_per_terrain, device, episode_s, mode):
+            assert robots_per_terrain == 4
+
+        def run(self, policy, progress=False):
+            return RunResult(np.repeat([0, 1], 4), metrics(not policy.endswith("model_0.pt")), {}, "velocity", {})
+
+    monkeypatch.setattr(benchmark, "load_benchmark", lambda name, ids: [SimpleNamespace(id=i) for i in ids])
+    monkeypatch.setattr(evaluator, "Evaluation", StubEvaluation)
+    monkeypatch.setattr(evaluator, "load_policy", lambda evaluation, checkpoint: checkpoint)
+    kept = _keep_figure(monkeypatch)
+    figures.success_over_training("gente_biped", run_dir, ["a", "b"], tmp_path / "d.png", robots_per_terrain=4)
+    ax = kept[0].axes[0]
+    assert ax.get_ylabel() == "success rate (%)" and ax.get_xlabel() == "training iteration"
+    a, b = ax.lines
+    assert a.get_xdata().tolist() == [0, 50, 100] and b.get_xdata().tolist() == [0, 50, 100]
+    assert a.get_ydata().tolist() == pytest.approx([0.0, 100 / 3, 100 / 3])
+    assert b.get_ydata().tolist() == pytest.approx([0.0, 75.0, 75.0])
+
+
+def test_the_figures_command_reports_a_mistake_in_one_line(tmp_path, monkeypatch, capsys):
+    """A missing traces file, a terrain id the traces do not hold, an abbreviated flag and --max_checkpoints 0 are
+    each one line naming the problem, exit status 2, no traceback; none is accepted."""
+    import legged_gente.evaluation.evaluator as evaluator
+
+    traces = tmp_path / "traces.npz"
+    cmd = np.zeros((1, 3, 3), np.float32)
+    np.savez(traces, ids=np.array(["t0"]), dt=np.array(0.02), active=np.ones((1, 3), bool), cmd=cmd, vel=cmd)
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "model_0.pt").write_bytes(b"")
+    monkeypatch.setattr(evaluator, "Evaluation", lambda *a, **k: SimpleNamespace())  # nothing to simulate
+    out = str(tmp_path / "x.png")
+    cases = {
+        "no_such.npz": ["tracking", str(tmp_path / "no_such.npz"), "--out", out],
+        "nope": ["tracking", str(traces), "--ids", "nope", "--out", out],
+        "--col": ["reward", str(tmp_path / "a.csv"), "--col", "terrain_level", "--out", out],
+        "max_checkpoints": ["training", "--run", str(run_dir), "--benchmark", "flat", "--items", "flat",
+                            "--max_checkpoints", "0", "--out", out],
+    }
+    for expected, argv in cases.items():
+        with pytest.raises(SystemExit) as exit_info:
+            figures.main(argv)
+        err = capsys.readouterr().err
+        assert exit_info.value.code == 2, argv
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and expected in err, err
+    assert not (tmp_path / "x.png").exists()
