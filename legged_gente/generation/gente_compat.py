@@ -142,8 +142,9 @@ def _offset(height: float, source: str, issues: Issues) -> list[tuple[str, dict[
 
 
 def _slope(args, sx, sy, issues, name):
-    """GenTe's slopes rise ``slope`` m per m from 0 at the region's edges towards its centre; ours fall from 0 at the
-    platform's edge, so they are lifted by the fall from there to the edges (GenTe's peak: slope * d_max)."""
+    """GenTe's slopes rise ``slope`` m per m from 0 at the region's edges (sloped_terrain: at its corners, a diamond)
+    towards its centre; ours fall from 0 at the platform's edge, so they are lifted to GenTe's peak, slope * d_max
+    (pyramid_sloped_terrain: its edges then meet 0; sloped_terrain: its edges stay at GenTe's mid-edge slope * side/2)."""
     slope = float(args["slope"])
     platform = 0.0
     if name == "pyramid_sloped_terrain":  # GenTe's function default platform_size is 1 m
@@ -162,13 +163,23 @@ def _flat(args, sx, sy, issues):
 
 def _natural(args, sx, sy, issues):
     # GenTe samples Perlin noise at cell / scale: features of ``scale`` cells; heights noise * height_multiplier m.
-    _ignored({k: v for k, v in args.items() if k == "lacunarity" and float(v) != 2.0}, ("lacunarity",),
-             "our natural_ground doubles the frequency per octave (lacunarity 2)", issues)
+    lacunarity = float(args.get("lacunarity", 2.0))
+    octaves = float(args.get("octaves", 6))
+    if lacunarity == 1.0 and octaves != 1.0:
+        # noise.pnoise2 (caseman/noise, _perlin.c) samples octave k at lacunarity**k times the frequency and divides
+        # by the sum of the weights: at lacunarity 1 every octave is the same noise, so GenTe drew one octave
+        _ignored({k: v for k, v in args.items() if k in ("octaves", "persistence")}, ("octaves", "persistence"),
+                 "at lacunarity 1 GenTe's octaves all repeat the first (one octave of noise, imported as octaves=1)",
+                 issues)
+        octaves = 1.0
+    else:
+        _ignored({k: v for k, v in args.items() if k == "lacunarity" and lacunarity != 2.0}, ("lacunarity",),
+                 "our natural_ground doubles the frequency per octave (lacunarity 2)", issues)
     amplitude = _size(float(args.get("height_multiplier", 5.0)), "height_multiplier",
                       "GenTe turns its noise upside down: relief of the same kind", issues)
     params = {"amplitude": _fit("natural_ground", "amplitude", amplitude, "height_multiplier", issues),
               "wavelength": _fit("natural_ground", "wavelength", float(args.get("scale", 10.0)) * GENTE_CELL, "scale*0.1 m", issues),
-              "octaves": _fit("natural_ground", "octaves", float(args.get("octaves", 6)), "octaves", issues),
+              "octaves": _fit("natural_ground", "octaves", octaves, "octaves", issues),
               "persistence": _fit("natural_ground", "persistence", float(args.get("persistence", 0.5)), "persistence", issues),
               "platform": 0.0}
     return [("natural_ground", params)]
@@ -258,7 +269,14 @@ def _stairs(args, sx, sy, issues, name):
               "step_height": _fit(tool, "step_height", abs(step_height), "step_height", issues),
               "direction": direction,
               "platform": 0.0 if tool == "stairs" else _fit(tool, "platform", float(args.get("platform_size", 1.0)), "platform_size", issues)}
-    return [(tool, params)]
+    if tool == "stairs":
+        return [(tool, params)]
+    # GenTe's rings are set one step higher each, inwards from the part's edge, while wider than the platform: its
+    # edge keeps the ground and its centre is rings * step_height up; ours start at 0 on the platform, so they are
+    # lifted by their fall from there to the (nearer) edges.
+    rings = math.ceil(round((min(sx, sy) / 2.0 - params["platform"] / 2.0) / params["step_width"], 9))
+    lift = math.copysign(max(rings, 0) * params["step_height"], step_height)
+    return _offset(lift, f"{name}.step_height ({max(rings, 0)} steps to the centre)", issues) + [(tool, params)]
 
 
 def _stones(args, sx, sy, issues):
@@ -339,7 +357,8 @@ GENTE_TOOLS: dict[str, GenteTool] = {t.name: t for t in [
                "octaves": GenteArg("integer", "noise octaves"), "persistence": GenteArg("number", "amplitude ratio per octave"),
                "lacunarity": GenteArg("number", "frequency ratio per octave"),
                "height_multiplier": GenteArg("number", "height scale of the noise [m]")},
-              ("single",), _natural, "natural_ground(amplitude=height_multiplier, wavelength=0.1*scale, octaves, persistence); lacunarity fixed at 2"),
+              ("single",), _natural, "natural_ground(amplitude=height_multiplier, wavelength=0.1*scale, octaves, persistence); lacunarity fixed at 2 "
+              "(lacunarity 1: octaves=1, as GenTe's octaves then repeat the first)"),
     GenteTool("random_gaussian_terrain", "Gaussian-noise heights.",
               {"terrain": HANDLE, "mean_height": GenteArg("number", "mean height [m]", True),
                "std_dev": GenteArg("number", "standard deviation of the heights", True),
@@ -382,7 +401,7 @@ GENTE_TOOLS: dict[str, GenteTool] = {t.name: t for t in [
     GenteTool("pyramid_stairs_terrain", "Square rings of steps rising to the centre.",
               {"terrain": HANDLE, "step_width": GenteArg("number", "tread depth [m]", True),
                "step_height": GenteArg("number", "rise of one step [m]", True), "platform_size": PLATFORM},
-              MULTI, lambda a, sx, sy, i: _stairs(a, sx, sy, i, "pyramid_stairs_terrain"), "pyramid_stairs(step_width, step_height, down, platform)"),
+              MULTI, lambda a, sx, sy, i: _stairs(a, sx, sy, i, "pyramid_stairs_terrain"), "flat(rings*step_height) + pyramid_stairs(step_width, step_height, down, platform): GenTe's edges at 0"),
     GenteTool("stepping_stones_terrain", "Stones separated by holes.",
               {"terrain": HANDLE, "stone_size": GenteArg("number", "stone side [m]", True),
                "stone_distance": GenteArg("number", "hole width [m]", True),
