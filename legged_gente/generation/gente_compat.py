@@ -589,6 +589,31 @@ class TranscriptImport:
         return [i for t in self.translations for i in t.issues]
 
 
+GENTE_SMOOTHING_SIGMA = 2 * GENTE_CELL
+"""GenTe's dataset script smooths every tile after its calls with ``smooth_transitions(n=20, sigma=2)``: a Gaussian
+of 2 cells (``scipy.ndimage.gaussian_filter1d``, mode "nearest") along x then y."""
+GENTE_SEAM_BAND = 20 * GENTE_CELL
+"""How far either side of a seam between two parts GenTe's multi-part tiles are smoothed (n = 20 cells)."""
+
+
+def gente_smoothing(schema: str) -> list[dict[str, Any]]:
+    """The filters GenTe applies after a transcript's calls (``generate_dataset.py``, ``smooth_transitions``): a
+    single-part tile (``utils/terrain_utils_single.py``) along x then y over the whole tile; a multi-part one
+    (``utils/terrain_utils_parts.py``) along x in the band of ``GENTE_SEAM_BAND`` either side of the x seam, one
+    half along y at a time, then along y in the band either side of the y seam, one half along x at a time."""
+    half, band, sigma = GENTE_TILE / 2, GENTE_SEAM_BAND, GENTE_SMOOTHING_SIGMA
+
+    def rect(x0: float, y0: float, x1: float, y1: float) -> dict[str, float]:
+        return {"x0": x0, "y0": y0, "x1": x1, "y1": y1}
+
+    if schema == "single":
+        return [{"region": "full", "axis": "x", "sigma": sigma}, {"region": "full", "axis": "y", "sigma": sigma}]
+    return [{"region": rect(half - band, 0.0, half + band, half), "axis": "x", "sigma": sigma},
+            {"region": rect(half - band, half, half + band, GENTE_TILE), "axis": "x", "sigma": sigma},
+            {"region": rect(0.0, half - band, half, half + band), "axis": "y", "sigma": sigma},
+            {"region": rect(half, half - band, GENTE_TILE, half + band), "axis": "y", "sigma": sigma}]
+
+
 MAX_TRANSCRIPT_CALLS = 256
 """Tool calls a transcript may hold (a bound on the work a file can ask for)."""
 
@@ -598,7 +623,8 @@ def import_transcript(
 ) -> TranscriptImport:
     """GenTe's ``{"tool_calls": [...]}`` (its scene text is not read) -> a validated :class:`TerrainSpec`.
 
-    The spec is a 20 m x 20 m tile at ``resolution``; its source names GenTe's schema, not the scene text.
+    The spec is a 20 m x 20 m tile at ``resolution``, smoothed after its calls as GenTe smooths its tiles
+    (:func:`gente_smoothing`); its source names GenTe's schema, not the scene text.
     """
     tool_calls = data.get("tool_calls") if isinstance(data, dict) else None
     if not isinstance(tool_calls, list) or not tool_calls:
@@ -615,7 +641,8 @@ def import_transcript(
         translations.append(translate_call(fn.get("name"), fn.get("arguments", ""), schema))
     calls = [c for t in translations for c in t.calls]
     doc = TerrainSpec(calls=calls, name=name, size_x=GENTE_TILE, size_y=GENTE_TILE, resolution=resolution, seed=seed,
-                      source={"gente_schema": schema, "gente_calls": str(len(tool_calls))}, backend="gente_import").to_dict()
+                      source={"gente_schema": schema, "gente_calls": str(len(tool_calls))}, backend="gente_import",
+                      smoothing=gente_smoothing(schema)).to_dict()
     try:
         _, validated = validate_spec_dict(doc)
     except ValidationError as exc:

@@ -81,11 +81,15 @@ class TerrainSpec:
     version: int = SPEC_VERSION
     heightmap: dict[str, Any] | None = None
     """``{"file", "vertical_scale"}``: the ground under the calls (None: flat 0 m)."""
+    smoothing: list[dict[str, Any]] | None = None
+    """``[{"region", "axis", "sigma"}]``: Gaussian filters of the heights after the geometric calls (None: none)."""
     base_dir: Path | None = dataclasses.field(default=None, compare=False, repr=False)
     """Folder a relative heightmap ``file`` is read from (the spec file's; None: the working directory)."""
 
     def to_dict(self) -> dict[str, Any]:
         extra = {} if self.heightmap is None else {"heightmap": dict(self.heightmap)}
+        if self.smoothing:
+            extra["smoothing"] = [dict(f) for f in self.smoothing]
         return extra | {
             "version": self.version,
             "name": self.name,
@@ -106,7 +110,8 @@ class TerrainSpec:
         data, calls = validate_spec_dict(data, registry, base_dir)
         fields = {k: data[k] for k in ("name", "size_x", "size_y", "resolution", "seed", "source", "backend", "model")}
         base = None if base_dir is None else Path(base_dir)
-        return cls(calls=calls, version=data["version"], heightmap=data.get("heightmap"), base_dir=base, **fields)
+        return cls(calls=calls, version=data["version"], heightmap=data.get("heightmap"),
+                   smoothing=data.get("smoothing"), base_dir=base, **fields)
 
     def validated(self, registry: Any = None) -> "TerrainSpec":
         """A re-validated copy (e.g. after editing calls by hand)."""

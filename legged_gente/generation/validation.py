@@ -30,12 +30,14 @@ from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_r
 from legged_gente.terrain import atomic
 from legged_gente.terrain.composition import (
     MAX_ABS_HEIGHT,
+    MAX_SMOOTHING_SIGMA,
     Operation,
     Part,
     SPEC_VERSION,
     Region,
     SEAM_BAND,
     TileSpec,
+    document_region,
     height_advice,
     heightmap_ground,
     stacked_height_bounds,
@@ -443,6 +445,18 @@ SPEC_SCHEMA: dict[str, Any] = {
         "source": {"type": "object", "maxProperties": 16},
         "backend": {"type": "string", "maxLength": 256},
         "model": {"type": ["string", "null"], "maxLength": 256},
+        "smoothing": {
+            "type": "array",
+            "maxItems": 16,
+            "description": "Gaussian filters of the heights after the geometric calls, in order",
+            "items": {
+                "type": "object",
+                "properties": {"region": {}, "axis": {"enum": ["x", "y"]},
+                               "sigma": {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_SMOOTHING_SIGMA}},
+                "required": ["region", "axis", "sigma"],
+                "additionalProperties": False,
+            },
+        },
         "heightmap": {
             "type": "object",
             "description": "ground under the calls: a .npy array (relative to the spec file), one value per cell "
@@ -542,6 +556,14 @@ def validate_spec_dict(
             calls.append(validate_call(c["tool"], args, data["size_x"], data["size_y"], registry, data["resolution"]))
         except ValidationError as exc:
             messages += [f"spec: calls[{i}]: {m}" for m in exc.messages]
+    regions = named_regions(data["size_x"], data["size_y"])
+    for i, f in enumerate(data.get("smoothing", [])):
+        try:
+            region = document_region(f["region"], regions)
+            region.check(data["size_x"], data["size_y"])
+            region.cells(data["resolution"])
+        except ValueError as exc:
+            messages.append(f"spec: smoothing[{i}]: {exc}")
     if messages:
         raise ValidationError(messages)
     try:

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Callable, Literal, Mapping
 
 import numpy as np
+from scipy import ndimage
 
 from .heightmap import load_heightmap
 from .materials import MaterialMap
@@ -121,10 +122,34 @@ class Part:
 
 
 @dataclasses.dataclass
+class Smoothing:
+    """A Gaussian filter of the heights along one axis inside a rectangle, after every geometric part (GenTe
+    smooths its tiles so after its calls): each line of cells along ``axis`` is convolved with a Gaussian of
+    standard deviation ``sigma`` m, the rectangle's edge cells repeated beyond it (``scipy.ndimage.gaussian_filter1d``,
+    mode "nearest"). A convex combination of the heights inside the rectangle: it never leaves their range."""
+
+    region: Region
+    axis: Literal["x", "y"]
+    sigma: float
+
+    def check(self, size_x: float, size_y: float) -> None:
+        self.region.check(size_x, size_y)
+        if self.axis not in ("x", "y"):
+            raise ValueError(f"smoothing: axis {self.axis!r} must be 'x' or 'y'.")
+        if not 0.0 < self.sigma <= MAX_SMOOTHING_SIGMA:
+            raise ValueError(f"smoothing: sigma={self.sigma!r} m must be in (0, {MAX_SMOOTHING_SIGMA}] m.")
+
+
+MAX_SMOOTHING_SIGMA = 2.0
+"""Largest standard deviation (m) of a smoothing filter."""
+
+
+@dataclasses.dataclass
 class TileSpec:
     """A tile of ``size_x`` x ``size_y`` m at ``resolution`` m: parts painted in order, random draws from ``seed``.
 
     ``base``: the ground the parts are painted on (float32 metres, one value per cell), or None for flat 0 m.
+    ``smoothing``: filters applied in order after the geometric parts, before the physical ones paint.
     """
 
     size_x: float
@@ -133,6 +158,7 @@ class TileSpec:
     seed: int
     parts: list[Part]
     base: np.ndarray | None = None
+    smoothing: list[Smoothing] = dataclasses.field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         if self.base is not None:
@@ -149,7 +175,9 @@ class TileSpec:
                 }
                 for p in self.parts
             ],
-        }
+        } | ({"smoothing": [{"region": [float(f.region.x0), float(f.region.y0), float(f.region.x1),
+                                        float(f.region.y1)], "axis": f.axis, "sigma": float(f.sigma)}
+                             for f in self.smoothing]} if self.smoothing else {})
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "TileSpec":
@@ -158,11 +186,15 @@ class TileSpec:
                 Part(Region(*map(float, p["region"])), [Operation(o["terrain"], dict(o.get("params", {})), o.get("mode", "set")) for o in p["ops"]])
                 for p in d["parts"]
             ]
-            return cls(float(d["size_x"]), float(d["size_y"]), float(d["resolution"]), int(d["seed"]), parts)
+            smoothing = [Smoothing(Region(*map(float, f["region"])), f["axis"], float(f["sigma"]))
+                         for f in d.get("smoothing", [])]
+            return cls(float(d["size_x"]), float(d["size_y"]), float(d["resolution"]), int(d["seed"]), parts,
+                       smoothing=smoothing)
         except (KeyError, TypeError) as exc:
             raise ValueError(
                 f"tile spec dict is malformed ({exc!r}); expected keys size_x, size_y, resolution, seed and "
-                f"parts = [{{'region': [x0, y0, x1, y1], 'ops': [{{'terrain', 'params', 'mode'}}]}}]."
+                f"parts = [{{'region': [x0, y0, x1, y1], 'ops': [{{'terrain', 'params', 'mode'}}]}}] (and "
+                f"optionally smoothing = [{{'region', 'axis', 'sigma'}}])."
             ) from None
 
     def build(self, ground_friction: float = 1.0) -> tuple[np.ndarray, MaterialMap]:
@@ -177,7 +209,9 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
 
     An optional ``"heightmap": {"file": "map.npy", "vertical_scale": 0.005}`` makes the array in ``file`` (a path
     relative to ``base_dir``, the spec file's folder) the ground under the calls: one value per ``resolution``
-    cell, times ``vertical_scale`` metres; ``size_x`` and ``size_y`` must be its cells times ``resolution``."""
+    cell, times ``vertical_scale`` metres; ``size_x`` and ``size_y`` must be its cells times ``resolution``.
+    An optional ``"smoothing": [{"region", "axis": "x" | "y", "sigma" (m)}]`` filters the heights after the
+    geometric calls (:class:`Smoothing`)."""
     if isinstance(data, dict) and data.get("version", SPEC_VERSION) != SPEC_VERSION:
         raise ValueError(f"terrain spec format version {data['version']!r}; this code reads version {SPEC_VERSION}: "
                          f"generate the spec again")
@@ -199,22 +233,30 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:  # int() would truncate 2.7 to 2 silently
         raise ValueError(f"terrain spec: seed {seed!r} must be a whole number >= 0; set \"seed\" to one (it seeds "
                          f"every call's random draws)")
-    parts = []
-    for region, operation in calls:
-        if isinstance(region, str):
-            if region not in regions:
-                raise ValueError(f"terrain spec: region {region!r} is none of the named regions "
-                                 f"({', '.join(regions)}); or give a rectangle {{x0, y0, x1, y1}} in metres")
-            rect = regions[region]
-        else:
-            try:
-                rect = tuple(float(region[k]) for k in ("x0", "y0", "x1", "y1"))
-            except (KeyError, TypeError, ValueError) as exc:
-                raise ValueError(f"terrain spec: region {region!r} is neither a named region nor a rectangle "
-                                 f"{{x0, y0, x1, y1}} ({type(exc).__name__}: {exc})") from None
-        parts.append(Part(Region(*rect), [operation]))
+    parts = [Part(document_region(region, regions), [operation]) for region, operation in calls]
+    smoothing = []
+    for entry in data.get("smoothing", []):
+        try:
+            smoothing.append(Smoothing(document_region(entry["region"], regions), entry["axis"], float(entry["sigma"])))
+        except (KeyError, TypeError) as exc:
+            raise ValueError(f"terrain spec: smoothing {entry!r} is not {{\"region\", \"axis\", \"sigma\"}} "
+                             f"({type(exc).__name__}: {exc})") from None
     base = None if heightmap is None else heightmap_ground(heightmap, size_x, size_y, resolution, base_dir)
-    return TileSpec(size_x, size_y, resolution, seed, parts, base)
+    return TileSpec(size_x, size_y, resolution, seed, parts, base, smoothing)
+
+
+def document_region(region: Any, regions: Mapping[str, tuple[float, float, float, float]]) -> Region:
+    """A spec document's region: a named one (``regions``, from :func:`named_regions`) or ``{x0, y0, x1, y1}`` in m."""
+    if isinstance(region, str):
+        if region not in regions:
+            raise ValueError(f"terrain spec: region {region!r} is none of the named regions "
+                             f"({', '.join(regions)}); or give a rectangle {{x0, y0, x1, y1}} in metres")
+        return Region(*regions[region])
+    try:
+        return Region(*(float(region[k]) for k in ("x0", "y0", "x1", "y1")))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"terrain spec: region {region!r} is neither a named region nor a rectangle "
+                         f"{{x0, y0, x1, y1}} ({type(exc).__name__}: {exc})") from None
 
 
 def heightmap_ground(entry: Any, size_x: float, size_y: float, resolution: float,
@@ -242,13 +284,15 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
     ground's range (0 m, or the heightmap's min..max); inside a rectangle a ``set`` operation gives the
     atomic's declared range (``height_bounds`` on the rectangle widened by the band, as the builder generates
     it) and an ``add`` operation shifts the current range by it; in the band the builder blends old and new
-    heights convexly, so the range is the union of both. Parameters must be complete (``check_params``).
+    heights convexly, so the range is the union of both; a smoothing filter mixes the heights inside its rectangle,
+    so there the range is that of all of them. Parameters must be complete (``check_params``).
     """
     registry = ATOMIC_TERRAINS if registry is None else registry
     band = SEAM_BAND
+    smoothed = [(f.region.x0, f.region.y0, f.region.x1, f.region.y1) for f in spec.smoothing]
     rects = [(p.region.x0, p.region.y0, p.region.x1, p.region.y1) for p in spec.parts]
-    cut_x = sorted({0.0, float(spec.size_x)} | {min(max(v, 0.0), spec.size_x) for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)})
-    cut_y = sorted({0.0, float(spec.size_y)} | {min(max(v, 0.0), spec.size_y) for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)})
+    cut_x = sorted({min(max(r[k], 0.0), spec.size_x) for r in smoothed for k in (0, 2)} | {0.0, float(spec.size_x)} | {min(max(v, 0.0), spec.size_x) for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)})
+    cut_y = sorted({min(max(r[k], 0.0), spec.size_y) for r in smoothed for k in (1, 3)} | {0.0, float(spec.size_y)} | {min(max(v, 0.0), spec.size_y) for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)})
     cx = (np.array(cut_x[:-1]) + np.array(cut_x[1:]))[:, None] / 2.0
     cy = (np.array(cut_y[:-1]) + np.array(cut_y[1:]))[None, :] / 2.0
     ground = (0.0, 0.0) if spec.base is None else (float(spec.base.min()), float(spec.base.max()))
@@ -268,6 +312,10 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
             hi = np.where(inside, new_hi, np.where(near, np.maximum(hi, new_hi), hi))
             if first_beyond is None and max(-float(lo.min()), float(hi.max())) > MAX_ABS_HEIGHT:
                 first_beyond = k
+    for x0, y0, x1, y1 in smoothed:  # a filter mixes the heights inside its rectangle: their range bounds it
+        inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+        if inside.any():
+            lo, hi = np.where(inside, lo[inside].min(), lo), np.where(inside, hi[inside].max(), hi)
     return HeightBounds(np.array(cut_x), np.array(cut_y), lo, hi, first_beyond)
 
 
@@ -394,6 +442,11 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
             raise ValueError(f"part {k} ({[o.terrain for o in part.ops]}) makes |height| reach {peak:.2f} m > "
                              f"{MAX_ABS_HEIGHT} m; {advice}.")
 
+    for f in spec.smoothing:
+        f.check(spec.size_x, spec.size_y)
+        i0, j0, i1, j1 = f.region.cells(res)
+        heights[i0:i1, j0:j1] = ndimage.gaussian_filter1d(heights[i0:i1, j0:j1], f.sigma / res,
+                                                          axis=0 if f.axis == "x" else 1, mode="nearest")
     heights = heights.astype(np.float32)
     for i0, j0, i1, j1, op, atomic, params, rng in physical:
         patch = atomic.fn((i1 - i0, j1 - j0), res, rng, heights[i0:i1, j0:j1], **params)

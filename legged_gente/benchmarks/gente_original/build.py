@@ -65,6 +65,7 @@ def build(gente: Path, out: Path = OUT) -> dict:
     manifest_items, report_items = [], []
     tools_used: dict[str, collections.Counter] = {"single": collections.Counter(), "multi": collections.Counter()}
     kinds = collections.Counter()
+    step_shares: dict[str, list[np.ndarray]] = {"gente": [], "import": []}  # per tile: share of cells at each STEPS
     for number, (item_id, schema, kind, folder) in enumerate(transcripts(gente)):
         data = json.loads((folder / "data.json").read_text(encoding="utf-8"))
         result = import_transcript(data, item_id, schema, seed=number)
@@ -83,6 +84,9 @@ def build(gente: Path, out: Path = OUT) -> dict:
             entry["heightmap"] = {"overflowed": hm.overflowed, "wrap_edges": hm.wrap_edges,
                                   "min_m": round(float(hm.heights.min()), 3), "max_m": round(float(hm.heights.max()), 3),
                                   "beyond_bound": bool(np.abs(hm.heights).max() > MAX_ABS_HEIGHT)}
+            if result.spec is not None and not hm.overflowed:
+                step_shares["gente"].append(_step_shares(hm.heights))
+                step_shares["import"].append(_step_shares(result.spec.build()[0]))
         report_items.append(entry)
         if result.spec is not None:
             spec_rel = f"specs/{item_id}.json"
@@ -109,10 +113,24 @@ def build(gente: Path, out: Path = OUT) -> dict:
         "heightmaps": len(heightmaps),
         "heightmaps_overflowed": [e["id"] for e in report_items if e.get("heightmap", {}).get("overflowed")],
         "heightmaps_beyond_bound": sum(h["beyond_bound"] for h in heightmaps),
+        "steps": {"tiles": len(step_shares["gente"]), "heights_m": list(STEPS),
+                  **{k: [round(100 * float(v), 2) for v in np.mean(shares, axis=0)] for k, shares in step_shares.items()}
+                  } if step_shares["gente"] else None,
     }
     (out / "report.json").write_text(json.dumps({"summary": summary, "items": report_items}, indent=1) + "\n")
     (out / "REPORT.md").write_text(_markdown(summary))
     return summary
+
+
+STEPS = (0.05, 0.1, 0.2, 0.3)
+"""Heights (m) of the steps between neighbouring cells that REPORT.md counts, in GenTe's heightmaps and ours."""
+
+
+def _step_shares(heights: np.ndarray) -> np.ndarray:
+    """The share of a tile's cells whose height differs from a neighbour's (+x or +y) by at least each of STEPS."""
+    h = np.asarray(heights, np.float64)
+    step = np.maximum(np.abs(np.diff(h, axis=0))[:, :-1], np.abs(np.diff(h, axis=1))[:-1, :])
+    return np.array([np.mean(step >= s - 1e-9) for s in STEPS])
 
 
 def _commit(gente: Path) -> str:
@@ -150,6 +168,13 @@ def _markdown(s: dict) -> str:
         "no_effect": "a call that draws nothing in GenTe either",
     }
     lines += [f"| {k} | {v} | {meaning.get(k, 'the call was not imported')} |" for k, v in s["issues_by_kind"].items()]
+    if s["steps"]:
+        st = s["steps"]
+        lines += ["", f"Steps between neighbouring cells (0.1 m apart), the share of cells, mean over the {st['tiles']} "
+                      f"tiles whose heightmap did not overflow: GenTe's heightmap (`array.npy`) against this import's "
+                      f"tile (its random draws are its own, so only such statistics compare)", "",
+                  "| step at least | GenTe's heightmaps | this import |", "|---:|---:|---:|"]
+        lines += [f"| {h:g} m | {g:.2f} % | {i:.2f} % |" for h, g, i in zip(st["heights_m"], st["gente"], st["import"])]
     lines += ["", "| schema | GenTe tool | calls |", "|---|---|---:|"]
     lines += [f"| {schema} | {tool} | {n} |" for schema, used in s["gente_tools_used"].items() for tool, n in used.items()]
     return "\n".join(lines) + "\n"
