@@ -39,7 +39,7 @@ def test_terrain_build_prints_its_time(monkeypatch, capsys):
 def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):
     rows = benchmark.run("gente_biped", [3], "cpu", steps=2, iterations=0)
     assert 0.0 < rows[0]["forces_share"] < 1.0
-    assert 0.0 <= rows[0]["forces_slowdown"] < 1.0
+    assert -1.0 < rows[0]["forces_slowdown"] < 1.0  # a difference of two noisy timings: not clamped at 0
     assert 0.0 < rows[0]["reset_forward_share"] < 1.0  # one forward costs less than a step of 4 substeps
 
 

@@ -46,6 +46,8 @@ def main() -> None:
     args = parser.parse_args()
     if args.gpus < 2:
         parser.error(f"--gpus {args.gpus}: the second run trains on 2 or more GPUs; give how many it used")
+    if args.skip < 0:
+        parser.error(f"--skip {args.skip}: give how many first iterations to leave out, 0 or more")
     multi = f"{args.gpus}gpu"
     for path in (args.one_gpu_log, args.multi_gpu_log):
         if not Path(path).is_file():
@@ -61,7 +63,11 @@ def main() -> None:
                              f"another format, or cut short); give a console log of this rsl-rl-lib's runner")
     sps = {name: statistics.mean(r["Steps per second"] for i, r in rows.items() if i >= min(rows) + args.skip)
            for name, rows in runs.items()}
-    common = min(max(rows) for rows in runs.values())
+    both = set(runs["1gpu"]) & set(runs[multi])
+    if not both:
+        spans = ", ".join(f"{name}: {min(rows)}-{max(rows)}" for name, rows in runs.items())
+        raise SystemExit(f"the logs share no iteration ({spans}); give logs of the same iterations")
+    common = max(both)  # the last iteration both logged
     for name, rows in runs.items():
         print(f"{name}: {len(rows)} iterations, mean steps/s {sps[name]:.0f} (iterations after the first "
               f"{args.skip})")
@@ -69,6 +75,7 @@ def main() -> None:
         print(f"      common {learning(rows, common)}")
     print(f"throughput ratio {multi}/1gpu: {sps[multi] / sps['1gpu']:.3f}")
     if args.csv:
+        Path(args.csv).parent.mkdir(parents=True, exist_ok=True)
         with open(args.csv, "w", newline="") as f:
             writer = csv.writer(f)
             writer.writerow(["run", "iteration", "steps_per_second", "mean_reward", "mean_episode_length"])
@@ -96,6 +103,7 @@ def plot(runs: dict, sps: dict, path: str) -> None:
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
 
 

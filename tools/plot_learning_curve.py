@@ -23,11 +23,18 @@ def main(argv=None) -> None:
     parser.add_argument("--mark", type=float, nargs="*", default=[], help="minutes to mark (e.g. resumes)")
     parser.add_argument("--title", default="")
     args = parser.parse_args(argv)
+    if args.max_episode_length <= 0:
+        parser.error(f"--max_episode_length {args.max_episode_length}: give the task's episode length in steps, > 0")
+    if args.levels is not None and args.levels < 1:
+        parser.error(f"--levels {args.levels}: give the number of curriculum levels, 1 or more (or leave it out)")
     if not Path(args.csv).is_file():
         parser.error(f"{args.csv}: no such file; give a training CSV of docs/results (tools/scalars_to_results.py)")
-    with open(args.csv, newline="") as f:
-        reader = csv.DictReader(f)
-        rows = list(reader)
+    try:
+        with open(args.csv, newline="") as f:
+            reader = csv.DictReader(f)
+            rows = list(reader)
+    except UnicodeDecodeError:  # e.g. the PNG, the two arguments swapped
+        parser.error(f"{args.csv}: not a text file; give a training CSV of docs/results (tools/scalars_to_results.py)")
     needed = ["wall_s", "mean_episode_length", "rew_tracking_lin_vel"] + (["terrain_level"] if args.levels else [])
     missing = [c for c in needed if c not in (reader.fieldnames or [])]
     if missing or not rows:
@@ -56,6 +63,7 @@ def main(argv=None) -> None:
     if args.title:
         ax.set_title(args.title, fontsize=9)
     fig.tight_layout()
+    Path(args.png).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.png, dpi=90)
 
 

@@ -41,6 +41,8 @@ def main() -> None:
         except OSError as error:
             raise SystemExit(f"{path}: {error.strerror}; give a scalars CSV of python -m "
                              f"legged_gente.utils.tb_export")
+        except UnicodeDecodeError:  # e.g. the run's TensorBoard event file itself
+            raise SystemExit(f"{path}: not a text file; give a scalars CSV of python -m legged_gente.utils.tb_export")
         missing = [c for c in ("step", "Perf/learning_time") if c not in (reader.fieldnames or [])]
         if not rows or missing:
             raise SystemExit(f"{path}: no training iterations (is it a tb_export CSV of a run?)")
