@@ -88,14 +88,27 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
                           f"divide them; choose num_envs or num_steps_per_env so that it does", stacklevel=2)
 
 
+# The flags that set a config field, which a --set of that field would contradict (the flag is applied last)
+FLAG_FIELDS = {"num_envs": "env.num_envs", "max_iterations": "runner.max_iterations",
+               "experiment_name": "runner.experiment_name", "run_name": "runner.run_name",
+               "load_run": "runner.load_run", "checkpoint": "runner.checkpoint"}
+
+
 def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
-    """Override config instances with the flags that were given (None means 'keep the config's value')."""
-    apply_overrides(getattr(args, "overrides", None) or [], env_cfg, train_cfg)
+    """Override config instances with the flags that were given (None means 'keep the config's value'); a flag
+    and a --set of the field it sets are refused (one of them would be ignored)."""
+    overrides = getattr(args, "overrides", None) or []
+    for flag, field in FLAG_FIELDS.items():
+        value = getattr(args, flag, None)
+        given = [text for text in overrides if text.partition("=")[0].strip() == field]
+        if value is not None and given:
+            raise ValueError(f"--{flag} {value} and --set {given[0]} both set {field}; give one")
+    apply_overrides(overrides, env_cfg, train_cfg)
     if env_cfg is not None:
         if getattr(args, "num_envs", None) is not None:
             env_cfg.env.num_envs = args.num_envs
         if getattr(args, "terrain", None):
-            apply_terrain_arg(args.terrain, env_cfg)
+            apply_terrain_with_overrides(args.terrain, env_cfg, overrides)
     if train_cfg is not None:
         if getattr(args, "seed", None) is not None:
             train_cfg.seed = args.seed
@@ -105,6 +118,33 @@ def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
                 setattr(train_cfg.runner, flag, value)
         if getattr(args, "resume", False):
             train_cfg.runner.resume = True
+
+
+# widened by --terrain <spec.json> to whole cells (by less than a cell): not a contradiction of a --set
+TERRAIN_ROUNDED = ("terrain.border_size",)
+
+
+def apply_terrain_with_overrides(terrain: str, env_cfg, overrides: list[str]) -> None:
+    """``--terrain`` after the --set: a terrain_cfg.py replaces the terrain section, and the --set terrain.* apply
+    to the new one; 'plane' and a spec set fields of it, and a --set of one of those to another value is refused
+    (it would be ignored)."""
+    given = [text for text in overrides if text.partition("=")[0].strip().startswith("terrain.")]
+
+    def value_of(text):
+        owner = env_cfg
+        for part in text.partition("=")[0].strip().split("."):
+            owner = getattr(owner, part)
+        return owner
+
+    section, wanted = env_cfg.terrain, {text: value_of(text) for text in given}
+    apply_terrain_arg(terrain, env_cfg)
+    if env_cfg.terrain is not section:
+        apply_overrides(given, env_cfg, None)
+        return
+    for text, value in wanted.items():
+        field = text.partition("=")[0].strip()
+        if field not in TERRAIN_ROUNDED and value_of(text) != value:
+            raise ValueError(f"--terrain {terrain} sets {field} to {value_of(text)!r}; leave out --set {text}")
 
 
 NETWORK_SECTIONS = ("actor", "critic")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import shlex
 import signal
 import subprocess
@@ -138,6 +139,9 @@ def main(argv=None) -> None:
     if not args.resume and (args.load_run is not None or args.checkpoint is not None):
         parser.error("--load_run/--checkpoint pick the checkpoint to resume from: add --resume (without it "
                      "training starts from scratch)")
+    if args.run_name and ("/" in args.run_name or os.sep in args.run_name):
+        parser.error(f"--run_name {args.run_name!r}: a run is one folder under logs/<experiment>/ (--resume looks "
+                     f"for it there); give a name without '/'")
     if args.pretrained and args.resume:
         parser.error("--pretrained starts a new run from the shipped policy; --resume continues a run of your own: "
                      "pick one")

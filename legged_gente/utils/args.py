@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import ast
 import logging
+import math
 import os
 import sys
 import types
@@ -266,6 +267,9 @@ def _override_value(text: str, current, name: str, owner):
         return None
     if isinstance(current, str) and not isinstance(value, str) and value is not None:
         value = text
+    if _not_finite(value):  # 1e999 reads as inf; a 400-digit integer overflows a float
+        raise ValueError(f"--set {name}={text}: {text} is not a finite number (beyond about 1.8e308); give a finite "
+                         f"value")
     expected = type(current)
     if _is_section(current):
         fields = sorted(n for n in dir(current) if not n.startswith("_"))
@@ -291,6 +295,20 @@ def _override_value(text: str, current, name: str, owner):
                          f"strings, e.g. {name}={list(current)[:2]!r}")
     raise ValueError(f"--set {name}={text}: the field's value is {current!r} of type {expected.__name__}; give "
                      f"{'True or False' if expected is bool else 'a value of that type'}")
+
+
+def _not_finite(value) -> bool:
+    """Whether a literal is or holds (in a list, tuple or dict's values) a number that is no finite float."""
+    if isinstance(value, (list, tuple)):
+        return any(map(_not_finite, value))
+    if isinstance(value, dict):
+        return any(map(_not_finite, value.values()))
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return not math.isfinite(value)
+    except OverflowError:
+        return True
 
 
 def _declared_value(value, current, owner, name: str, text: str):
