@@ -11,28 +11,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from test_tools_by_hand import last_error_line, run_main
+
 from legged_gente.scripts import benchmark
 
 ROOT = Path(__file__).resolve().parents[1]
 # the first bytes of a TensorBoard event file (a record length, its CRC, then the serialized event): not text
 EVENT_FILE = b"\x18\x00\x00\x00\x00\x00\x00\x00\xa3\x7fK\"\t\xc8\xf0\xff"
 
-
-def run_main(tool, monkeypatch, *argv):
-    """``tool.main()`` with ``argv`` as its command line (tools read sys.argv); the exit code (None: returned)."""
-    monkeypatch.setattr(sys, "argv", [tool.__name__, *argv])
-    try:
-        tool.main()
-    except SystemExit as stop:
-        return stop.code
-    return None
-
-
-def usage_error(capsys) -> str:
-    """The one line a usage error printed last on stderr, with no traceback before it."""
-    err = capsys.readouterr().err
-    assert "Traceback" not in err, err
-    return err.strip().splitlines()[-1]
 
 
 # --- legged_gente/scripts/benchmark.py ----------------------------------------------------------------------------
@@ -135,7 +121,7 @@ def test_multi_gpu_negative_skip_is_a_usage_error(load_file, tmp_path, monkeypat
     one = rsl_rl_log(tmp_path / "1.log", range(4), [10, 100, 100, 100], [1, 2, 3, 4])
     two = rsl_rl_log(tmp_path / "2.log", range(4), [10, 200, 200, 200], [1, 2, 3, 4])
     assert run_main(tool, monkeypatch, one, two, "--skip", "-1") == 2
-    assert usage_error(capsys).endswith("--skip -1: give how many first iterations to leave out, 0 or more")
+    assert last_error_line(capsys).endswith("--skip -1: give how many first iterations to leave out, 0 or more")
 
 
 # --- tools/plot_learning_curve.py ---------------------------------------------------------------------------------
@@ -178,7 +164,7 @@ def test_learning_curve_nonsense_scales_are_usage_errors(load_file, tmp_path, ca
     with pytest.raises(SystemExit) as stop:
         tool.main([str(tmp_path / "run.csv"), str(tmp_path / "run.png"), *flags])
     assert stop.value.code == 2
-    assert usage_error(capsys).endswith(message)
+    assert last_error_line(capsys).endswith(message)
     assert not (tmp_path / "run.png").exists()
 
 
@@ -207,7 +193,7 @@ def test_learning_curve_of_a_binary_file_is_a_usage_error(load_file, tmp_path, c
     with pytest.raises(SystemExit) as stop:
         tool.main([str(png), str(tmp_path / "run.csv")])
     assert stop.value.code == 2
-    assert usage_error(capsys).endswith(f"{png}: not a text file; give a training CSV of docs/results "
+    assert last_error_line(capsys).endswith(f"{png}: not a text file; give a training CSV of docs/results "
                                         "(tools/scalars_to_results.py)")
 
 
