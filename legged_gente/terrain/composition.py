@@ -121,6 +121,10 @@ class Part:
     ops: list[Operation]
 
 
+MAX_SMOOTHING_SIGMA = 2.0
+"""Largest standard deviation (m) of a smoothing filter."""
+
+
 @dataclasses.dataclass
 class Smoothing:
     """A Gaussian filter of the heights along one axis inside a rectangle, after every geometric part (GenTe
@@ -138,10 +142,6 @@ class Smoothing:
             raise ValueError(f"smoothing: axis {self.axis!r} must be 'x' or 'y'.")
         if not 0.0 < self.sigma <= MAX_SMOOTHING_SIGMA:
             raise ValueError(f"smoothing: sigma={self.sigma!r} m must be in (0, {MAX_SMOOTHING_SIGMA}] m.")
-
-
-MAX_SMOOTHING_SIGMA = 2.0
-"""Largest standard deviation (m) of a smoothing filter."""
 
 
 @dataclasses.dataclass
@@ -291,8 +291,10 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
     band = SEAM_BAND
     smoothed = [(f.region.x0, f.region.y0, f.region.x1, f.region.y1) for f in spec.smoothing]
     rects = [(p.region.x0, p.region.y0, p.region.x1, p.region.y1) for p in spec.parts]
-    cut_x = sorted({min(max(r[k], 0.0), spec.size_x) for r in smoothed for k in (0, 2)} | {0.0, float(spec.size_x)} | {min(max(v, 0.0), spec.size_x) for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)})
-    cut_y = sorted({min(max(r[k], 0.0), spec.size_y) for r in smoothed for k in (1, 3)} | {0.0, float(spec.size_y)} | {min(max(v, 0.0), spec.size_y) for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)})
+    edges_x = {v for r in rects for v in (r[0] - band, r[0], r[2], r[2] + band)} | {v for r in smoothed for v in (r[0], r[2])}
+    edges_y = {v for r in rects for v in (r[1] - band, r[1], r[3], r[3] + band)} | {v for r in smoothed for v in (r[1], r[3])}
+    cut_x = sorted({0.0, float(spec.size_x)} | {min(max(v, 0.0), spec.size_x) for v in edges_x})
+    cut_y = sorted({0.0, float(spec.size_y)} | {min(max(v, 0.0), spec.size_y) for v in edges_y})
     cx = (np.array(cut_x[:-1]) + np.array(cut_x[1:]))[:, None] / 2.0
     cy = (np.array(cut_y[:-1]) + np.array(cut_y[1:]))[None, :] / 2.0
     ground = (0.0, 0.0) if spec.base is None else (float(spec.base.min()), float(spec.base.max()))
