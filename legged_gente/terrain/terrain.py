@@ -86,6 +86,13 @@ def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
     return np.repeat(np.arange(p.size), counts)
 
 
+def check_ground_friction(mu: float) -> None:
+    """``terrain.static_friction`` is a finite Coulomb coefficient >= 0 (MuJoCo takes any value silently)."""
+    if not (math.isfinite(mu) and mu >= 0):
+        raise ValueError(f"terrain.static_friction={mu} must be a finite coefficient >= 0; set it (1.0 is the "
+                         f"default).")
+
+
 def whole_cells(length: float, resolution: float) -> float:
     """``length`` (m) widened, by less than a cell, to a whole number of ``resolution`` cells: a border the grid
     takes at any resolution."""
@@ -115,9 +122,7 @@ class Terrain:
         for name in ("terrain_length", "terrain_width", "border_size"):  # NaN passes every comparison below
             if not math.isfinite(getattr(cfg, name)):
                 raise ValueError(f"{name}={getattr(cfg, name)} m must be a finite number of metres; set terrain.{name}.")
-        if not (math.isfinite(cfg.static_friction) and cfg.static_friction >= 0):  # MuJoCo takes any value silently
-            raise ValueError(f"terrain.static_friction={cfg.static_friction} must be a finite coefficient >= 0; set "
-                             f"it (1.0 is the default).")
+        check_ground_friction(cfg.static_friction)
         if cfg.border_size < 0:
             raise ValueError(f"border_size must be >= 0 m, got {cfg.border_size}.")
         if self.mode != "plane" and not (float(cfg.seed) == int(cfg.seed) >= 0):

@@ -27,6 +27,7 @@ from legged_gente.envs.base.step_runner import StepRunner
 from legged_gente.envs.base.terms import obs_terms
 from legged_gente.sim.assembly import build_model, owns_sole_contacts
 from legged_gente.sim.backend import Simulation
+from legged_gente.terrain.terrain import check_ground_friction
 from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand_uniform, wrap_to_pi, yaw_of, yaw_quat
 
 CUDA_GRAPH_MODES = ("env_step", "physics", "off")  # the values of cfg.sim.cuda_graph
@@ -153,16 +154,13 @@ class LeggedRobot(VecEnv):
         for name in SOFT_LIMITS:
             value = getattr(cfg.rewards, name)
             checks.append((0 < value <= 1, f"cfg.rewards.{name}={value}; use a share of the hard limit, in (0, 1]"))
-        friction = cfg.terrain.static_friction  # a heightfield's grid checks it too; a plane builds none
-        checks.append((math.isfinite(friction) and friction >= 0,
-                       f"cfg.terrain.static_friction={friction} must be a finite coefficient >= 0; set it (1.0 is "
-                       f"the default)"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
         for ok, message in checks:
             if not ok:
                 raise ValueError(message + ".")
+        check_ground_friction(cfg.terrain.static_friction)  # a plane builds no terrain grid, which checks it too
 
     def _create_terrain(self):
         if self.cfg.terrain.mesh_type == "plane":
