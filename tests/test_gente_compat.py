@@ -320,3 +320,26 @@ def test_a_transcript_of_too_many_calls_is_refused_whole_not_cut():
     result = import_transcript({"tool_calls": [call] * 257}, "long", "multi")
     assert result.spec is None and result.error == "the transcript has 257 tool calls; at most 256 are read"
     assert "at most 256" not in (import_transcript({"tool_calls": [call] * 256}, "long", "multi").error or "")
+
+
+@pytest.mark.parametrize("size", [(20.0, 20.0), (12.0, 8.0)])
+def test_live_gente_toolset_spec_is_smoothed_across_its_seams_as_gente_smooths(tmp_path, size):
+    """GenTe's dataset script smooths every tile after its calls (2 m bands either side of the seams between the
+    four parts, sigma 2 cells of 0.1 m); a live ``--toolset gente`` spec must carry the same filters, the seams at
+    the middle of whatever tile it builds and the bands cut at the tile's edges."""
+    from legged_gente.generation.pipeline import generate_spec
+
+    sx, sy = size
+    reply = _completion([_gcall("flat_ground_terrain", {"height": 0.2, "part": 4}, 0)])
+    with FakeServer([ok(reply)]) as srv:
+        spec, _ = generate_spec(text="x", backend="openai", base_url=srv.url, model="m", toolset="gente",
+                                size_x=sx, size_y=sy)
+    hx, hy, band = sx / 2, sy / 2, 2.0
+    x_lo, x_hi = max(hx - band, 0.0), min(hx + band, sx)
+    y_lo, y_hi = max(hy - band, 0.0), min(hy + band, sy)
+    expected = [({"x0": x_lo, "y0": 0.0, "x1": x_hi, "y1": hy}, "x"), ({"x0": x_lo, "y0": hy, "x1": x_hi, "y1": sy}, "x"),
+                ({"x0": 0.0, "y0": y_lo, "x1": hx, "y1": y_hi}, "y"), ({"x0": hx, "y0": y_lo, "x1": sx, "y1": y_hi}, "y")]
+    assert [(f["region"], f["axis"]) for f in spec.smoothing] == expected
+    assert all(f["sigma"] == pytest.approx(0.2) for f in spec.smoothing)
+    heights, _ = spec.build()
+    assert np.isfinite(heights).all()

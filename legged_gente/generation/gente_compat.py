@@ -596,22 +596,25 @@ GENTE_SEAM_BAND = 20 * GENTE_CELL
 """How far either side of a seam between two parts GenTe's multi-part tiles are smoothed (n = 20 cells)."""
 
 
-def gente_smoothing(schema: str) -> list[dict[str, Any]]:
+def gente_smoothing(schema: str, size_x: float = GENTE_TILE, size_y: float = GENTE_TILE) -> list[dict[str, Any]]:
     """The filters GenTe applies after a transcript's calls (``generate_dataset.py``, ``smooth_transitions``): a
     single-part tile (``utils/terrain_utils_single.py``) along x then y over the whole tile; a multi-part one
     (``utils/terrain_utils_parts.py``) along x in the band of ``GENTE_SEAM_BAND`` either side of the x seam, one
-    half along y at a time, then along y in the band either side of the y seam, one half along x at a time."""
-    half, band, sigma = GENTE_TILE / 2, GENTE_SEAM_BAND, GENTE_SMOOTHING_SIGMA
+    half along y at a time, then along y in the band either side of the y seam, one half along x at a time. The
+    seams are at the middle of a ``size_x`` x ``size_y`` tile (GenTe's is 20 m); a band stops at the tile's edge."""
+    hx, hy, band, sigma = size_x / 2, size_y / 2, GENTE_SEAM_BAND, GENTE_SMOOTHING_SIGMA
+    x0, x1 = max(hx - band, 0.0), min(hx + band, size_x)
+    y0, y1 = max(hy - band, 0.0), min(hy + band, size_y)
 
     def rect(x0: float, y0: float, x1: float, y1: float) -> dict[str, float]:
         return {"x0": x0, "y0": y0, "x1": x1, "y1": y1}
 
     if schema == "single":
         return [{"region": "full", "axis": "x", "sigma": sigma}, {"region": "full", "axis": "y", "sigma": sigma}]
-    return [{"region": rect(half - band, 0.0, half + band, half), "axis": "x", "sigma": sigma},
-            {"region": rect(half - band, half, half + band, GENTE_TILE), "axis": "x", "sigma": sigma},
-            {"region": rect(0.0, half - band, half, half + band), "axis": "y", "sigma": sigma},
-            {"region": rect(half, half - band, GENTE_TILE, half + band), "axis": "y", "sigma": sigma}]
+    return [{"region": rect(x0, 0.0, x1, hy), "axis": "x", "sigma": sigma},
+            {"region": rect(x0, hy, x1, size_y), "axis": "x", "sigma": sigma},
+            {"region": rect(0.0, y0, hx, y1), "axis": "y", "sigma": sigma},
+            {"region": rect(hx, y0, size_x, y1), "axis": "y", "sigma": sigma}]
 
 
 MAX_TRANSCRIPT_CALLS = 256

@@ -79,9 +79,14 @@ def generate_spec(
         source = text_source(text)
     if backend == "openai" and toolset != "ours":
         source["toolset"] = toolset
+    smoothing = None
+    if backend == "openai" and toolset == "gente":
+        from legged_gente.generation.gente_compat import gente_smoothing
+
+        smoothing = gente_smoothing("multi", size_x, size_y)  # GenTe smooths every tile after its calls
     default_name = spec_name(text) if text else (spec_name(Path(image).stem) if isinstance(image, (str, Path)) else "generated_terrain")
     spec = TerrainSpec(
         calls=result.calls, name=name or default_name, size_x=size_x, size_y=size_y, resolution=resolution,
-        seed=seed, source=source, backend=backend, model=model if backend == "openai" else None,
+        seed=seed, source=source, backend=backend, model=model if backend == "openai" else None, smoothing=smoothing,
     )
     return spec.validated(), result
