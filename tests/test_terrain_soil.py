@@ -28,3 +28,12 @@ def test_bekker_preset_is_its_table_row_in_si_units(name):
     assert p.c[0] == pytest.approx(c * 1e3)  # 1 kPa = 1e3 Pa
     assert p.mu[0] == pytest.approx(math.tan(math.radians(phi)))
 
+
+
+# Wong, Theory of Ground Vehicles, sec. 2.4.3 (after Bekker): Janosi-Hanamoto K in inches -> m
+WONG_K_INCHES = {"dry_sand": 1.0, "wet_sand": 0.4, "snow": 2.0}  # loose sand, firm sandy terrain, fresh snow
+
+
+@pytest.mark.parametrize("name", sorted(WONG_K_INCHES))
+def test_shear_deformation_modulus_is_wongs_in_si_units(name):
+    assert SOIL_PRESETS[name].K[0] == pytest.approx(WONG_K_INCHES[name] * 0.0254, rel=0.02)  # 1 in. = 0.0254 m

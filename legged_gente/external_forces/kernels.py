@@ -332,8 +332,12 @@ def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, 
     """Tangential friction of a ground contact in ``cell``: the rigid friction scaled by the cell's map friction;
     on soil, at most what the soil's shear strength gives (Mohr-Coulomb): under a foot ``f`` (>= 0) its mobilised
     traction / F_N (Janosi-Hanamoto); under any other body (a knee, a shank, a fallen trunk), whose contact area is
-    unknown, tan(phi), the strength without its cohesion share (exact on a cohesionless sand, low on a mud)."""
-    mu = fr[0]
+    unknown, tan(phi), the strength without its cohesion share (exact on a cohesionless sand, low on a mud).
+    The torsional friction (condim 4, 6) scales with the sliding one: the spin torque a contact patch holds is
+    Coulomb friction too, proportional to mu (a uniformly pressed disc of radius a: the integral of mu p r dA is
+    (2/3) mu N a)."""
+    mu0 = fr[0]
+    mu = mu0
     if feet.use_friction != 0:
         mu = mu * soilmap.friction[cell[0], cell[1]] / feet.friction_reference
     s = soilmap.soil[cell[0], cell[1]]
@@ -344,6 +348,8 @@ def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, 
                                              feet.slip[w, f], p[w, s, K], feet.friction_cap))
         else:
             mu = wp.min(mu, p[w, s, MU])
+    if mu0 > 0.0:
+        fr[2] = fr[2] * mu / mu0
     fr[0] = mu
     fr[1] = mu
     return fr
