@@ -156,6 +156,10 @@ def main(argv=None) -> None:
     args = parse_args(parser, argv)
     if args.pretrained and (args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --load_run/--checkpoint")
+    resume_set = next((text for text in args.overrides if text.partition("=")[0].strip() == "runner.resume"), None)
+    if resume_set is not None:  # play sets runner.resume itself, after the --set
+        parser.error(f"gente-play always loads a checkpoint (a run's, or the shipped one with --pretrained); leave out "
+                     f"--set {resume_set}")
     run_command("gente-play", play, args)
 
 

@@ -136,7 +136,12 @@ def main(argv=None) -> None:
     args = parse_args(parser, argv)
     if args.max_minutes is not None and not args.max_minutes > 0:
         parser.error(f"--max_minutes must be > 0, got {args.max_minutes}")
-    if not args.resume and (args.load_run is not None or args.checkpoint is not None):
+    # --resume sets runner.resume after the --set (task_registry.apply_args): a --set of it too would be ignored
+    resume_set = next((text for text in args.overrides if text.partition("=")[0].strip() == "runner.resume"), None)
+    resumes = args.resume or (resume_set is not None and resume_set.partition("=")[2].strip() == "True")
+    picked = args.load_run is not None or args.checkpoint is not None or any(
+        text.partition("=")[0].strip() in ("runner.load_run", "runner.checkpoint") for text in args.overrides)
+    if not resumes and picked:
         parser.error("--load_run/--checkpoint pick the checkpoint to resume from: add --resume (without it "
                      "training starts from scratch)")
     if args.run_name and ("/" in args.run_name or os.sep in args.run_name):
@@ -145,6 +150,10 @@ def main(argv=None) -> None:
     if args.pretrained and args.resume:
         parser.error("--pretrained starts a new run from the shipped policy; --resume continues a run of your own: "
                      "pick one")
+    if resume_set is not None and args.resume:
+        parser.error(f"--resume and --set {resume_set} both set runner.resume; give one")
+    if resume_set is not None and args.pretrained:  # a resumed run never loads the shipped policy
+        parser.error(f"--pretrained starts a new run from the shipped policy; leave out --set {resume_set}")
     run_command("gente-train", train, args)
 
 

@@ -185,10 +185,20 @@ class GentePPO(PPO):
         return saved
 
     def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
-        """rsl-rl's load; a run saved during its critic warm-up (with its optimizer state) resumes the warm-up."""
+        """rsl-rl's load; a run saved during its critic warm-up (with its optimizer state) resumes the warm-up.
+        Without a KL target the learning rate is the config's, not the one the checkpoint's optimizer state holds
+        (rsl-rl's load restores that one, so a changed algorithm.learning_rate was ignored on --resume)."""
+        configured = float(self.learning_rate)
         iteration = super().load(loaded_dict, load_cfg, strict)
         if self.device_side_update:
             self._keep_optimizer_settings()
+        if (load_cfg is None or load_cfg.get("optimizer")) and not self._adaptive_learning_rate:
+            for group in self.optimizer.param_groups:
+                if isinstance(group["lr"], torch.Tensor):
+                    group["lr"].fill_(configured)
+                else:
+                    group["lr"] = configured
+            self.learning_rate = configured
         if (load_cfg is None or load_cfg.get("optimizer")) and loaded_dict.get("frozen_actor_updates", 0):
             self.freeze_actor(int(loaded_dict["frozen_actor_updates"]))
         return iteration
