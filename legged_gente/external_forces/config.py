@@ -31,7 +31,8 @@ class ForcesConfig:
                            foot (a box sole, or e.g. the spheres at its corners)
     foot_water_geom_names: list[str] | None  sphere or box geoms of the feet that feel water (buoyancy, drag);
                            None: the foot_geom_names
-    sole_length, sole_width: float | None  a rectangular sole's size (m) along the foot body's x and y axes; None:
+    sole_length, sole_width: float | None  a rectangular sole's size (m) along the foot body's x and y axes (both or
+                           neither); None:
                            the footprint of the first foot's geoms in its body's x-y plane, each as it is turned in
                            the body (a lone sphere, or a lone upright capsule or cylinder: a disc of its radius; else
                            the rectangle around the geoms)

@@ -81,8 +81,17 @@ def closest_point_triangle(p, a, b, c):
     va = d3 * d6 - d5 * d4
     if va <= 0 and d4 - d3 >= 0 and d5 - d6 >= 0:
         return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b)
-    denom = 1.0 / (va + vb + vc)
-    return a + ab * (vb * denom) + ac * (vc * denom)
+    # inside the face: p projected onto its plane (the same point as a + v ab + w ac, but exact where the vertices
+    # lie far from p: a plane's one wide cell, 1e4 m away, lost ~1 mm in float32 and tilted the normal by 8 deg)
+    n = np.cross(ab, ac)
+    return p - n * ((n @ ap) / (n @ n))
+
+
+def face_tolerance(res):
+    """How far (m) the nearest point of a triangle may lie from the centre's projection on its plane and still count
+    as inside the face: float32 rounding of points a cell apart (1e-6 m on a 0.1 m grid; 5 mm on a plane's one
+    2e4 m cell, whose two coplanar triangles meet along the diagonal through the world's origin)."""
+    return 1.0e-6 + 2.5e-7 * res
 
 
 def face_normal(a, b, c):
@@ -116,19 +125,19 @@ def sphere_contact(heights, origin, res, centre, radius, rut=0.0, reach=None, de
     lo = np.floor((q[:2] - np.asarray(origin) - window) / res).astype(int)
     hi = np.floor((q[:2] - np.asarray(origin) + window) / res).astype(int)
     best, normal = np.inf, n_face
+    tol = face_tolerance(res)
     for i in range(max(lo[0], 0), min(hi[0], nx - 2) + 1):
         for j in range(max(lo[1], 0), min(hi[1], ny - 2) + 1):
             for upper in (True, False):
                 a, b, c = triangle_vertices(heights, origin, res, i, j, upper)
                 p = closest_point_triangle(q, a, b, c)
                 d = np.linalg.norm(q - p)
-                if inside:
-                    n = face_normal(a, b, c)
-                    plane = abs(n @ (q - a))
-                    if d <= plane + 1e-6:  # the nearest point lies inside the face: its own normal
-                        d, candidate = plane, n
-                    else:
-                        candidate = (p - q) / d
+                n = face_normal(a, b, c)
+                plane = abs(n @ (q - a))
+                if d <= plane + tol:  # the nearest point lies inside the face: its own normal
+                    d, candidate = plane, n
+                elif inside:
+                    candidate = (p - q) / d
                 else:
                     candidate = (q - p) / d if d > 1e-9 else n_face
                 if d < best:
@@ -179,8 +188,9 @@ def closest_point_triangle_fn(p: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) ->
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
         return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)
-    denom = 1.0 / (va + vb + vc)
-    return a + (vb * denom) * ab + (vc * denom) * ac
+    # inside the face: p projected onto its plane (exact where the vertices lie far from p; see the reference)
+    n = wp.cross(ab, ac)
+    return p - (wp.dot(n, ap) / wp.dot(n, n)) * n
 
 
 @wp.func
@@ -234,6 +244,7 @@ def sphere_contact_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, c
     j1 = wp.min(int(wp.floor((q[1] - origin[1] + window) / res)), ny - 2)
     best = float(1.0e10)
     normal = n_face
+    tol = 1.0e-6 + 2.5e-7 * res  # face_tolerance
     for i in range(i0, i1 + 1):
         for j in range(j0, j1 + 1):
             for upper in range(2):
@@ -241,16 +252,15 @@ def sphere_contact_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, c
                 p = closest_point_triangle_fn(q, t[0], t[1], t[2])
                 d = wp.length(q - p)
                 candidate = n_face
-                if inside:
-                    n = wp.normalize(wp.cross(t[1] - t[0], t[2] - t[0]))
-                    if n[2] < 0.0:
-                        n = -n
-                    plane = wp.abs(wp.dot(n, q - t[0]))
-                    if d <= plane + 1.0e-6:  # the nearest point lies inside the face: its own normal
-                        d = plane
-                        candidate = n
-                    else:
-                        candidate = (p - q) / d
+                n = wp.normalize(wp.cross(t[1] - t[0], t[2] - t[0]))
+                if n[2] < 0.0:
+                    n = -n
+                plane = wp.abs(wp.dot(n, q - t[0]))
+                if d <= plane + tol:  # the nearest point lies inside the face: its own normal
+                    d = plane
+                    candidate = n
+                elif inside:
+                    candidate = (p - q) / d
                 elif d > 1.0e-9:
                     candidate = (q - p) / d
                 if d < best:

@@ -48,18 +48,23 @@ _NON_NEGATIVE = ("drag_coefficient", "added_mass_coefficient", "plate_drag_coeff
 
 
 def _check_values(cfg) -> None:
-    """One ValueError naming the first numeric setting out of its range and the default to use."""
+    """One ValueError naming the first numeric setting out of its range (infinite ones too: an infinite density
+    or noise gives inf / NaN forces, an infinite friction_reference frictionless contacts) and the default to use;
+    likewise a sole size given on one side only (the other would be ignored for the geoms' footprint)."""
     for names, positive in ((_POSITIVE, True), (_NON_NEGATIVE, False)):
         for name in names:
             value = getattr(cfg, name)
             try:
-                ok = float(value) > 0 if positive else float(value) >= 0  # False for NaN
+                ok = math.isfinite(float(value)) and (float(value) > 0 if positive else float(value) >= 0)
             except (TypeError, ValueError):
                 ok = False
             if not ok:
                 where = " (in an env: set cfg.terrain.static_friction)" if name == "friction_reference" else ""
-                raise ValueError(f"forces.{name}={value!r} must be a number {'>' if positive else '>='} 0{where}; "
-                                 f"the default is {getattr(ForcesConfig, name)}.")
+                raise ValueError(f"forces.{name}={value!r} must be a finite number {'>' if positive else '>='} 0"
+                                 f"{where}; the default is {getattr(ForcesConfig, name)}.")
+    if (cfg.sole_length is None) != (cfg.sole_width is None):
+        raise ValueError(f"forces.sole_length={cfg.sole_length!r} and sole_width={cfg.sole_width!r}: give both (a "
+                         f"rectangular sole, m) or neither (the footprint of the foot geoms).")
 
 
 def _check_material(material: MaterialMap, shape: tuple[int, int]) -> None:
@@ -307,6 +312,11 @@ class TerrainForces:
         else:
             self.sole_area = self.sole_length * self.sole_width
             self.bekker_width = min(self.sole_length, self.sole_width)
+        for s, name in enumerate(material.soil_presets):  # p = (kc / b + kphi) z^n must give a sinkage
+            k = table[s, K.KC, 0] / self.bekker_width + table[s, K.KPHI, 0]
+            if table[s, K.MODEL, 0] < 0.5 and not k > 0:
+                raise ValueError(f"soil {name!r}: kc/b + kphi = {k:.4g} N/m^(n+2) <= 0 for this robot's sole (b = "
+                                 f"{self.bekker_width:.4g} m): Bekker's law gives no sinkage; raise kphi or kc.")
         self._setup_sole_contacts(mjm, groups)
         self._filter_key, self._filter_launches = None, []
 
@@ -435,8 +445,8 @@ class TerrainForces:
             round_types = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE),
                            int(mujoco.mjtGeom.mjGEOM_CYLINDER))
             disc = len(g) == 1 and int(mjm.geom_type[g[0]]) in round_types and math.isclose(length, width)
-        if not (length > 0 and width > 0):
-            raise ValueError(f"sole size must be > 0 m, got length={length}, width={width}; set "
+        if not (0 < length < math.inf and 0 < width < math.inf):
+            raise ValueError(f"sole size must be a finite number > 0 m, got length={length}, width={width}; set "
                              f"forces.sole_length / sole_width.")
         return length, width, disc
 
