@@ -62,17 +62,16 @@ def build_arg_parser():
 
 
 def _task_terrain(args, terrain_arg=None):
-    """Builder of the task's terrain, with ``terrain_arg`` (a spec or terrain_cfg.py) applied if given."""
-    from legged_gente.envs.task_registry import task_registry
+    """Builder of the task's terrain, with ``terrain_arg`` (a spec or terrain_cfg.py) applied if given, as
+    ``--terrain`` is: the --set terrain.* on top of a terrain_cfg.py, refused where a spec sets the field."""
+    from legged_gente.envs.task_registry import apply_terrain_with_overrides, task_registry
     from legged_gente.terrain.terrain import Terrain
 
     def build():
         env_cfg, _ = task_registry.get_cfgs(args.task)
         apply_args(args, env_cfg, None)
         if terrain_arg:
-            from legged_gente.envs.terrain_arg import apply_terrain_arg
-
-            apply_terrain_arg(str(terrain_arg), env_cfg)
+            apply_terrain_with_overrides(str(terrain_arg), env_cfg, args.overrides)
         return Terrain(env_cfg.terrain, num_robots=1)
 
     return build
@@ -274,8 +273,15 @@ def check_flags(parser, args, source: Path | None) -> None:
                      f"folder or a rollout .npz")
     if args.play and source is not None:
         parser.error("--play rolls out on the task's terrain: give --terrain, not a source file")
+    if args.terrain and source is not None:
+        parser.error(f"--terrain {args.terrain} and the source {args.source} both give the terrain; give one (a "
+                     f"rollout .npz brings its own)")
+    if args.overrides and source is not None and source.suffix == ".npz":
+        parser.error(f"--set {args.overrides[0]}: the rollout {args.source} is replayed as recorded; leave out --set")
     if args.record and not args.play:
         parser.error("--record writes the rollout of --play: add --play")
+    if args.record and not args.record.endswith(".npz"):  # numpy would add it, and a rollout is opened by it
+        parser.error(f"--record {args.record}: name the rollout file *.npz (gente-view opens rollouts by that suffix)")
     play_only = [name for name, value in (("--policy", args.policy), ("--robots", args.robots),
                                           ("--num_envs", args.num_envs), ("--steps", args.steps)) if value is not None]
     if play_only and not args.play:
@@ -287,7 +293,7 @@ def check_flags(parser, args, source: Path | None) -> None:
         parser.error("--item picks the item of --traces to replay: add --traces")
     if args.step is not None and not (args.play or args.traces or (source is not None and source.suffix == ".npz")):
         parser.error("--step opens a rollout paused: give a rollout .npz, --traces or --play")
-    if args.seconds is not None and args.seconds < 0:
+    if args.seconds is not None and not args.seconds >= 0:  # NaN too
         parser.error(f"--seconds {args.seconds} must be >= 0")
     if args.robots is not None and args.robots < 1:
         parser.error(f"--robots {args.robots} must be >= 1")

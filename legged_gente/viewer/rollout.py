@@ -10,7 +10,8 @@ after policy step k + 1, at t = (k + 1) dt)::
     cmd              (T, R, 3)     float32, commanded vx, vy (m/s, base frame) and yaw rate (rad/s)
     vel              (T, R, 3)     float32, actual vx, vy (m/s, base frame) and yaw rate (rad/s)
     done             (T, R)        bool, the episode ended at this step (the env resets within the step: this
-                                   row's qpos, cmd, vel are the next episode's start, the row before the last)
+                                   row's qpos, cmd, vel are the next episode's start; the row before is the
+                                   ended episode's state one step before its end, the pose that ended it is lost)
     fell             (T, R)        bool, ended by a termination (fall), not by the time-out
     force_labels     (K,)          str, "<kind>:<geom or body>", kind one of FORCE_KINDS
     forces           (T, R, K, 3)  float32, N, world frame (last substep of the policy step; 0 on a done row)
@@ -53,6 +54,10 @@ FORCE_KINDS = ("buoyancy", "drag", "soil")
 FORCE_COLOURS = {"buoyancy": (0, 200, 80), "drag": (255, 140, 0), "soil": (150, 75, 0)}
 _MATERIAL_FIELDS = ("water_surface", "flow_kind", "flow_speed", "flow_direction", "flow_omega", "flow_phase",
                     "soil", "friction")
+_KEYS = ("task", "dt", "qpos", "cmd", "vel", "done", "fell", "force_labels", "forces", "force_points",
+         "terrain_heights", "terrain_origin", "terrain_resolution", "terrain_soil_presets",
+         *(f"terrain_{f}" for f in _MATERIAL_FIELDS))
+"""The arrays of a rollout file besides ``version``."""
 
 
 @dataclasses.dataclass
@@ -81,7 +86,10 @@ class Rollout:
         return self.qpos.shape[1]
 
     def save(self, path: str | Path) -> Path:
+        """Write the rollout; returns the file written (numpy adds ``.npz`` to a name without it)."""
         path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_name(path.name + ".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
         m = self.material
         np.savez_compressed(
@@ -109,11 +117,51 @@ class Rollout:
             if int(f["version"]) != ROLLOUT_VERSION:
                 raise ValueError(f"{path}: rollout version {int(f['version'])}, this viewer reads {ROLLOUT_VERSION}; "
                                  f"record it again.")
+            missing = [k for k in _KEYS if k not in keys]
+            if missing:
+                raise ValueError(f"{path} has no {', '.join(missing)}: it is not a complete rollout file; record it "
+                                 f"again.")
             material = MaterialMap(**{k: f[f"terrain_{k}"] for k in _MATERIAL_FIELDS},
                                    soil_presets=[str(s) for s in f["terrain_soil_presets"]])
-            return cls(str(f["task"]), float(f["dt"]), f["qpos"], f["cmd"], f["vel"], f["done"], f["fell"],
-                       [str(s) for s in f["force_labels"]], f["forces"], f["force_points"], f["terrain_heights"],
-                       tuple(f["terrain_origin"].tolist()), float(f["terrain_resolution"]), material)
+            rollout = cls(str(f["task"]), float(f["dt"]), f["qpos"], f["cmd"], f["vel"], f["done"], f["fell"],
+                          [str(s) for s in f["force_labels"]], f["forces"], f["force_points"], f["terrain_heights"],
+                          tuple(f["terrain_origin"].tolist()), float(f["terrain_resolution"]), material)
+        problem = _problem(rollout)
+        if problem:
+            raise ValueError(f"{path}: {problem}; record it again.")
+        return rollout
+
+
+def _problem(rollout: Rollout) -> str | None:
+    """What makes the arrays no rollout (shapes that disagree, no steps, a time step or cell size that is no
+    positive number, poses that are not finite), or None: the viewer draws every (step, robot) of them."""
+    if rollout.qpos.ndim != 3 or 0 in rollout.qpos.shape:
+        return (f"qpos has shape {rollout.qpos.shape}: a rollout holds (T, R, nq) with at least one step and one "
+                f"robot")
+    tr, k = rollout.qpos.shape[:2], len(rollout.force_labels)
+    for name, tail in (("cmd", (3,)), ("vel", (3,)), ("done", ()), ("fell", ()), ("forces", (k, 3)),
+                       ("force_points", (k, 3))):
+        shape = np.shape(getattr(rollout, name))
+        if shape != tr + tail:
+            return f"{name} has shape {shape}, qpos's (T, R) = {tr} needs {tr + tail}"
+    for label in rollout.force_labels:
+        kind, colon, _ = label.partition(":")
+        if not colon or kind not in FORCE_KINDS:
+            return f"force label {label!r} is not <kind>:<name> with kind one of {FORCE_KINDS}"
+    for name, value, unit in (("dt", rollout.dt, "s"), ("terrain_resolution", rollout.resolution, "m")):
+        if not (np.isfinite(value) and value > 0):
+            return f"{name} = {value} {unit} must be a finite number > 0"
+    if rollout.heights.ndim != 2 or len(rollout.origin) != 2:
+        return (f"terrain_heights has shape {rollout.heights.shape} and terrain_origin {len(rollout.origin)} values: "
+                f"a rollout holds (nx, ny) heights and an (x, y) origin")
+    for name in _MATERIAL_FIELDS:
+        if getattr(rollout.material, name).shape != rollout.heights.shape:
+            return (f"terrain_{name} has shape {getattr(rollout.material, name).shape}, terrain_heights "
+                    f"{rollout.heights.shape}")
+    bad = ~np.isfinite(rollout.qpos).all(axis=(1, 2))
+    if bad.any():
+        return f"qpos is not finite at step {int(np.argmax(bad))}"
+    return None
 
 
 # ------------------------------------------------------------------------------------------------ the robot

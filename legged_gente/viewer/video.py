@@ -107,6 +107,11 @@ class VideoRenderer:
 
     def __init__(self, robot_file: str | Path, terrain, width: int = 640, height: int = 480,
                  distance: float = 3.5, elevation: float = -20.0, azimuth: float = 60.0):
+        # the frames are encoded as H.264 in yuv420p (gente-play --video, tools/make_videos.py), whose colour is
+        # stored per 2 x 2 pixels: libx264 refuses an odd size, after every frame was rendered
+        if not (width >= 2 and height >= 2 and width % 2 == 0 and height % 2 == 0):
+            raise ValueError(f"video size {width} x {height} pixels: width and height must be even and >= 2 (H.264 in "
+                             f"yuv420p encodes 2 x 2 pixel blocks); use e.g. 640 x 480.")
         self.model, self.arrows = render_model(robot_file, terrain)
         self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, width)
         self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, height)
