@@ -479,6 +479,8 @@ def view_error(capsys, monkeypatch, tmp_path, argv) -> str:
     (["--steps", "10"], "gente-view: error: --steps sets how --play rolls out: add --play"),
     (["--robots", "2", "--policy", "zero"], "gente-view: error: --policy, --robots set how --play rolls out: add --play"),
     (["--num_envs", "8"], "gente-view: error: --num_envs sets how --play rolls out: add --play"),
+    (["--load_run", "x"], "gente-view: error: --load_run sets how --play rolls out: add --play"),
+    (["--checkpoint", "5"], "gente-view: error: --checkpoint sets how --play rolls out: add --play"),
     (["--play", "--policy", "zero", "--record", "FILE/r.npz"],
      "gente-view: error: --record FILE/r.npz: FILE is a file; give a folder to write to"),
     (["gente100", "--traces", "nonexist.npz"], "gente-view: error: nonexist.npz: no such file; give"),

@@ -283,7 +283,9 @@ def check_flags(parser, args, source: Path | None) -> None:
     if args.record and not args.record.endswith(".npz"):  # numpy would add it, and a rollout is opened by it
         parser.error(f"--record {args.record}: name the rollout file *.npz (gente-view opens rollouts by that suffix)")
     play_only = [name for name, value in (("--policy", args.policy), ("--robots", args.robots),
-                                          ("--num_envs", args.num_envs), ("--steps", args.steps)) if value is not None]
+                                          ("--num_envs", args.num_envs), ("--steps", args.steps),
+                                          ("--load_run", args.load_run), ("--checkpoint", args.checkpoint))
+                 if value is not None]
     if play_only and not args.play:
         parser.error(f"{', '.join(play_only)} set{'s' if len(play_only) == 1 else ''} how --play rolls out: add --play")
     if args.traces and (source is None or not source.is_dir()):
