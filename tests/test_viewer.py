@@ -6,6 +6,7 @@ import math
 import socket
 import urllib.request
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -98,7 +99,16 @@ def test_scene_heights_tile_and_subsampling(grid):
 def test_robot_geoms_and_kinematics():
     mjm = robot_model("gente_biped")
     shapes = robot_geoms(mjm)
-    assert len(shapes) == sum(1 for g in range(mjm.ngeom) if mjm.geom_bodyid[g] != 0 and mjm.geom_rgba[g, 3] > 0)
+    # MuJoCo's default MjvOption.geomgroup shows groups 0-2: the collision-only group-3 geoms are not drawn
+    assert len(shapes) == sum(1 for g in range(mjm.ngeom) if mjm.geom_bodyid[g] != 0 and mjm.geom_rgba[g, 3] > 0
+                              and mjm.geom_group[g] < 3)
+    opt = mujoco.MjvOption()
+    assert list(opt.geomgroup) == [1, 1, 1, 0, 0, 0]
+    quad = robot_model("gente_quadruped")
+    hidden = [g for g in range(quad.ngeom) if quad.geom_group[g] >= 3 and quad.geom_bodyid[g] != 0]
+    assert len(hidden) >= 4 and len(robot_geoms(quad)) == sum(
+        1 for g in range(quad.ngeom) if quad.geom_bodyid[g] != 0 and quad.geom_rgba[g, 3] > 0) - len(
+        [g for g in hidden if quad.geom_rgba[g, 3] > 0])
     assert all(s.faces.max() < len(s.vertices) for s in shapes)
     kin = Kinematics(mjm)
     qpos = mjm.qpos0.copy()

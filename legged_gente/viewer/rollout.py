@@ -175,14 +175,16 @@ class GeomShape:
 
 def robot_geoms(mjm: mujoco.MjModel) -> list[GeomShape]:
     """Triangle meshes of the robot's visible geoms (boxes, spheres, capsules, cylinders, ellipsoids, meshes)
-    in their bodies' frames; the world body's geoms (terrain, floor) are left out."""
+    in their bodies' frames; the world body's geoms (terrain, floor) are left out, and so are geom groups 3 and
+    above, which MuJoCo's viewer and the videos hide by default (collision-only geoms: the biped's sole spheres,
+    the quadruped's calf capsules drawn over its visual calves)."""
     import trimesh
 
     G = mujoco.mjtGeom
     shapes = []
     for g in range(mjm.ngeom):
         body = int(mjm.geom_bodyid[g])
-        if body == 0 or mjm.geom_rgba[g, 3] == 0:
+        if body == 0 or mjm.geom_rgba[g, 3] == 0 or mjm.geom_group[g] >= 3:
             continue
         t, size = int(mjm.geom_type[g]), mjm.geom_size[g]
         if t == G.mjGEOM_BOX:
