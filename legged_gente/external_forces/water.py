@@ -115,9 +115,45 @@ def inertia_force_fn(rho: float, ca: float, volume: float, du: wp.vec3, axis: wp
 
 
 @wp.func
+def uniform_sum_cdf_fn(w: wp.vec3, u: float) -> float:
+    """CDF at u of a sum of uniforms on [0, w_i] (water_models.uniform_sum_cdf), in float64: the alternating sum of
+    cubes cancels to a small fraction of its terms."""
+    tol = 1.0e-6 * (w[0] + w[1] + w[2])
+    uu = wp.float64(u)
+    prod = wp.float64(1.0)
+    fact = wp.float64(1.0)
+    n = int(0)
+    for i in range(3):
+        if w[i] >= tol:
+            n = n + 1
+            prod = prod * wp.float64(w[i])
+            fact = fact * wp.float64(n)
+        else:
+            uu = uu - wp.float64(0.5 * w[i])
+    acc = wp.float64(0.0)
+    for mask in range(8):
+        s = uu
+        sign = wp.float64(1.0)
+        used = int(1)
+        for i in range(3):
+            if ((mask >> i) & 1) == 1:
+                if w[i] < tol:
+                    used = 0
+                s = s - wp.float64(w[i])
+                sign = -sign
+        if used == 1 and s > wp.float64(0.0):
+            term = wp.float64(1.0)
+            for k in range(n):
+                term = term * s
+            acc = acc + sign * term
+    return wp.clamp(float(acc / (fact * prod)), 0.0, 1.0)
+
+
+@wp.func
 def box_submerged_fraction_fn(half: wp.vec3, rot: wp.mat33, c_z: float, z_w: float) -> float:
-    e_z = wp.abs(rot[2, 0]) * half[0] + wp.abs(rot[2, 1]) * half[1] + wp.abs(rot[2, 2]) * half[2]
-    return wp.clamp((z_w - (c_z - e_z)) / (2.0 * e_z), 0.0, 1.0)
+    """Exact wet fraction of a box at any tilt (water_models.box_submerged_volume over the box's volume)."""
+    w = 2.0 * wp.vec3(wp.abs(rot[2, 0]) * half[0], wp.abs(rot[2, 1]) * half[1], wp.abs(rot[2, 2]) * half[2])
+    return uniform_sum_cdf_fn(w, z_w - (c_z - 0.5 * (w[0] + w[1] + w[2])))
 
 
 @wp.func
@@ -391,7 +427,7 @@ def foot_water_kernel(
         if frac > 0.0:
             vol = 8.0 * size[0] * size[1] * size[2] * frac
             e_z = wp.abs(rot[2, 0]) * size[0] + wp.abs(rot[2, 1]) * size[1] + wp.abs(rot[2, 2]) * size[2]
-            p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # middle of the submerged height
+            p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # a level box: the middle of its submerged height
             v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
             f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), v - u)
             f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)

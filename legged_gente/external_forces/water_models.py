@@ -21,11 +21,12 @@ The capsule's hemispherical caps carry buoyancy only: each gets half the submerg
 at the cylinder's end (exact for a horizontal capsule and for a cap wholly wet or dry; a tilted cap cut by the surface
 is off by at most rho g pi r^3 / 3, on a vertical capsule; the volume is continuous).
 Feet (``foot_*``): a sphere gets buoyancy from its exact spherical-cap volume and sphere drag; a box gets buoyancy
-from its submerged height fraction (exact for a level box) and flat-plate drag on each face pair. Their forces act
-at the middle of the wetted part (a sphere's centre), and the drag takes that point's velocity, so its power is never
-positive however the foot spins. Both get an added mass tensor (``foot_added_mass``: a sphere's half its displaced
-mass, a box's faces as thin plates), scaled by the wet fraction, entering M implicitly as the legs' does, and the
-Froude-Krylov plus added-mass force of an accelerating flow.
+from its exact submerged volume at any tilt (``box_submerged_volume``) and flat-plate drag on each face pair. Their
+forces act on the vertical through the geom's centre (a sphere's centre; a box's wet fraction of half its vertical
+extent above its lowest point, the middle of the wetted part for a level box), and the drag takes that point's
+velocity, so its power is never positive however the foot spins. Both get an added mass tensor (``foot_added_mass``:
+a sphere's half its displaced mass, a box's faces as thin plates), scaled by the wet fraction, entering M implicitly
+as the legs' does, and the Froude-Krylov plus added-mass force of an accelerating flow.
 """
 
 from __future__ import annotations
@@ -141,12 +142,36 @@ def inertia_force(rho, ca, volume, du, axis):
     return rho * volume * du + ca * rho * volume * (du - np.dot(du, axis) * axis)
 
 
+def uniform_sum_cdf(widths, u):
+    """P(U_0 + U_1 + U_2 < u) for independent U_i uniform on [0, w_i] (the CDF of a sum of uniforms):
+    sum over subsets S of (-1)^|S| max(u - sum_S w, 0)^n / (n! prod w), n the number of widths. A width below 1e-6
+    of their sum counts as a point at its middle (u shifted by w / 2: an error below 2e-6), which keeps the division
+    by prod w well conditioned."""
+    w = np.asarray(widths, float)
+    keep = w >= 1.0e-6 * w.sum()
+    u = float(u) - 0.5 * float(w[~keep].sum())
+    w, n = w[keep], int(keep.sum())
+    acc = 0.0
+    for mask in range(1 << n):
+        picked = [i for i in range(n) if mask >> i & 1]
+        acc += (-1.0) ** len(picked) * max(u - float(w[picked].sum()), 0.0) ** n
+    return float(np.clip(acc / (np.prod(w) * np.prod(np.arange(1, n + 1))), 0.0, 1.0))
+
+
 def box_submerged_volume(half, rot, c_z, z_w):
-    """Submerged volume of a box (half sizes ``half``, rotation ``rot``) centred at height c_z (m^3), from the
-    submerged fraction of its vertical extent 2 e_z, e_z = sum_i |rot[2, i]| half_i (exact for a level box)."""
-    e_z = float(np.sum(np.abs(np.asarray(rot)[2]) * half))
-    frac = np.clip((z_w - (c_z - e_z)) / (2.0 * e_z), 0.0, 1.0)
-    return 8.0 * float(np.prod(half)) * frac
+    """Submerged volume of a box (half sizes ``half``, rotation ``rot``) centred at height c_z below a flat surface
+    at z_w (m^3), exact at any tilt (Archimedes).
+
+    A point of the box at local coordinates x_i in [-h_i, h_i] lies at height c_z + sum_i rot[2, i] x_i: for a point
+    drawn uniformly in the box its height above the lowest point is a sum of three uniforms of widths
+    w_i = 2 |rot[2, i]| h_i, so the wet fraction is that sum's CDF at the lowest point's depth
+    z_w - (c_z - e_z), e_z = sum_i w_i / 2 (``uniform_sum_cdf``): linear in the depth for a level box, a corner's
+    cubic for a box tilted about two axes.
+    """
+    half = np.asarray(half, float)
+    widths = 2.0 * np.abs(np.asarray(rot, float)[2]) * half
+    depth = z_w - (c_z - 0.5 * float(widths.sum()))
+    return 8.0 * float(np.prod(half)) * uniform_sum_cdf(widths, depth)
 
 
 def plate_drag(rho, cd, half, rot, depth, v_rel):
