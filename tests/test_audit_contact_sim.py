@@ -202,3 +202,14 @@ def test_a_soil_without_bekker_sinkage_for_this_sole_is_refused():
                 TerrainForces(mjm, m, d, np.zeros((1, 1), np.float32), (0.0, 0.0), 0.1, mat, PlaneCfg(), seed=0)
     finally:
         SOIL_PRESETS.pop("t_negative_k")
+
+
+def test_a_geom_listed_twice_is_refused():
+    """A leg or foot geom named twice would get its forces twice (two strips of the same leg in the water)."""
+    mjm = sole_on_plane()
+    cfg = type("TwiceCfg", (PlaneCfg,), {"foot_geom_names": ["sole", "sole"]})()
+    with wp.ScopedDevice("cpu"):
+        m = mjw.put_model(mjm)
+        d = mjw.make_data(mjm, nworld=1, nconmax=16, njmax=64)
+        with pytest.raises(ValueError, match=r"forces.foot_geom_names lists 'sole' 2 times; list each geom once"):
+            TerrainForces(mjm, m, d, np.zeros((1, 1), np.float32), (0.0, 0.0), 0.1, MaterialMap.rigid((1, 1)), cfg)

@@ -175,3 +175,25 @@ def test_soil_twins_agree_at_the_edges():
     assert got[3, 0] < 1e-30
     assert got[3, 2] == pytest.approx(0.53 * (1.0 - math.exp(-2.0)), rel=1e-5)
     assert got[3, 3] == pytest.approx(0.096 * (1.4e4 * 0.3 + 2.6e5 * 0.09), rel=1e-5)
+
+
+def test_noise_factors_stay_positive_however_wide_their_spread():
+    """The drag/buoyancy factor eps ~ N(1, noise_std) and the flow factor xi ~ N(1, noise_std) scale forces that
+    must keep their sign (a negative eps makes drag push along the motion, a negative xi reverses the flow): with
+    noise_std = 1, P(N(1, 1) < 0.1) = Phi(-0.9) = 0.184, so about 377 of 2048 draws would fall below 10 % of the
+    mean; they are floored there, as the soil draws are, and the rest keep N(1, 1)'s spread."""
+    n = 2048
+    with wp.ScopedDevice(DEV):
+        eps, xi = wp.zeros(n, dtype=float), wp.zeros(n, dtype=float)
+        counter = wp.zeros(1, dtype=int)
+        table = wp.zeros((1, K.NSOILPARAM, 2), dtype=float)
+        params = wp.zeros((n, 1, K.NSOILPARAM), dtype=float)
+        feet = [wp.zeros((n, 1), dtype=float) for _ in range(5)]
+        mask = wp.array(np.ones(n, bool), dtype=bool)
+        wp.launch(K.reset_kernel, dim=n, inputs=[mask, 3, counter, 1.0, table, eps, params, *feet])
+        wp.launch(K.flow_noise_kernel, dim=n, inputs=[3, counter, 1.0, xi])
+    for draws in (eps.numpy(), xi.numpy()):
+        assert draws.min() == pytest.approx(0.1)
+        floored = int(np.sum(draws == np.float32(0.1)))
+        assert 300 < floored < 460  # binomial(2048, 0.184): 377 +- 3.5 sigma
+        assert np.std(draws[draws > 0.1]) > 0.5

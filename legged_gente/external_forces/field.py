@@ -156,6 +156,8 @@ def _welded(mjm, body_a: int, body_b: int) -> bool:
 def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:
     ids = []
     for name in names:
+        if list(names).count(name) > 1:  # its forces would be applied twice
+            raise ValueError(f"forces.{what} lists {name!r} {list(names).count(name)} times; list each geom once.")
         gid = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, name)
         if gid < 0:
             known = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, i) for i in range(mjm.ngeom)]

@@ -228,13 +228,14 @@ def reset_kernel(
     """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset; the
     feet's soil state (slip, rut, load, RFT support: the value of a sole at rest) starts afresh.
 
-    Soil draws are truncated below at 10 % of the mean so kphi, n, K stay positive (documented in docs).
+    Draws are truncated below at 10 % of the mean so eps (a drag that never pushes along the motion, a buoyancy
+    that never pulls down) and kphi, n, K stay positive (documented in docs).
     """
     w = wp.tid()
     if not mask[w]:
         return
     state = wp.rand_init(seed, w + eps.shape[0] * counter[0])
-    eps[w] = 1.0 + noise_std * wp.randn(state)
+    eps[w] = wp.max(1.0 + noise_std * wp.randn(state), 0.1)
     for s in range(soil_table.shape[0]):
         for q in range(NSOILPARAM):
             mean = soil_table[s, q, 0]
@@ -253,10 +254,11 @@ def reset_kernel(
 
 @wp.kernel
 def flow_noise_kernel(seed: int, counter: wp.array[int], noise_std: float, xi: wp.array[float]):
-    """xi ~ N(1, noise_std) per env, redrawn each policy step (the paper's xi(t))."""
+    """xi ~ N(1, noise_std) per env, redrawn each policy step (the paper's xi(t)), at least 0.1 (the flow keeps its
+    direction)."""
     w = wp.tid()
     state = wp.rand_init(seed + 7919, w + xi.shape[0] * counter[0])
-    xi[w] = 1.0 + noise_std * wp.randn(state)
+    xi[w] = wp.max(1.0 + noise_std * wp.randn(state), 0.1)
 
 
 @wp.kernel
