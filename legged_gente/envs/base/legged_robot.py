@@ -32,7 +32,7 @@ from legged_gente.utils.torch_math import quat_rotate, quat_rotate_inverse, rand
 
 CUDA_GRAPH_MODES = ("env_step", "physics", "off")  # the values of cfg.sim.cuda_graph
 COMMAND_RANGES = ("lin_vel_x", "lin_vel_y", "ang_vel_yaw", "heading")  # cfg.commands.ranges, in command order
-SOFT_LIMITS = ("soft_dof_pos_limit", "soft_torque_limit")  # legged_gym's shares of the joint range and force
+SHARE_OF_LIMIT = (lambda v: 0 < v <= 1, "a share of the hard limit, in (0, 1]")  # legged_gym's soft limits
 
 
 def _quat_mul(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
@@ -70,17 +70,27 @@ class FeetAirTime:
 
 
 class LeggedRobot(VecEnv):
+    # the numbers the step reads from tensors that have a range (set_param may change them): path in cfg ->
+    # (test, what to use); checked at construction and by set_param. A subclass adds its own.
+    param_rules = {
+        "commands.heading_stiffness": (lambda v: v >= 0, ">= 0 (1/s, yaw rate per rad of heading error)"),
+        "commands.still_fraction": (lambda v: 0 <= v <= 1, "a fraction, in [0, 1]"),
+        "rewards.tracking_sigma": (lambda v: v > 0, "a kernel width > 0, in (m/s)^2"),  # exp(-err^2 / sigma)
+        "rewards.soft_dof_pos_limit": SHARE_OF_LIMIT,
+        "rewards.soft_torque_limit": SHARE_OF_LIMIT,
+    }
+
     def __init__(self, cfg: LeggedRobotCfg, device: str = "cpu", train_cfg_steps_per_env: int = 24):
         self.cfg = cfg
         self.device = device
         self.num_envs = int(cfg.env.num_envs)
+        self._log_every = train_cfg_steps_per_env
+        self._validate_cfg()  # first: the step length below divides by the config's
         self.dt = cfg.sim.dt * cfg.control.decimation  # s, policy step
         self.max_episode_length_s = cfg.env.episode_length_s
         # policy steps, a partial last one counted whole; the quotient rounded first (0.14 s / 0.02 s is
         # 7.000000000000001 in binary floating point: 7 steps, not 8)
         self.max_episode_length = int(math.ceil(round(self.max_episode_length_s / self.dt, 9)))
-        self._log_every = train_cfg_steps_per_env
-        self._validate_cfg()
 
         self.terrain = self._create_terrain()
         self.mjm, self.layout = build_model(cfg, self.terrain)
@@ -106,6 +116,15 @@ class LeggedRobot(VecEnv):
         checks = [
             (self.num_envs >= 1, f"cfg.env.num_envs={self.num_envs}; use >= 1"),
             (cfg.control.decimation >= 1, f"cfg.control.decimation={cfg.control.decimation}; use >= 1"),
+            (cfg.sim.dt > 0, f"cfg.sim.dt={cfg.sim.dt}; use > 0 (s, the physics substep)"),
+            (cfg.env.episode_length_s > 0, f"cfg.env.episode_length_s={cfg.env.episode_length_s}; use > 0 (s)"),
+            (cfg.sim.max_qvel > 0, f"cfg.sim.max_qvel={cfg.sim.max_qvel}; use > 0 (m/s or rad/s above which a world "
+                                   f"has diverged)"),
+            # compared as cos(tilt): a negative angle would run as its opposite, one past pi as 2 pi minus it
+            (0 < cfg.asset.terminate_tilt <= math.pi,
+             f"cfg.asset.terminate_tilt={cfg.asset.terminate_tilt}; use an angle in (0, pi] rad (pi: never)"),
+            (cfg.terrain.max_init_terrain_level >= 0,
+             f"cfg.terrain.max_init_terrain_level={cfg.terrain.max_init_terrain_level}; use >= 0 (0: the easiest row)"),
             (cfg.sim.cuda_graph in CUDA_GRAPH_MODES,
              f"cfg.sim.cuda_graph={cfg.sim.cuda_graph!r}; use 'env_step' (the whole step in one CUDA graph), "
              f"'physics' (only the substeps) or 'off'"),
@@ -151,9 +170,11 @@ class LeggedRobot(VecEnv):
         for name, seconds in intervals:  # counted in whole policy steps: under half a step would round to none
             checks.append((seconds >= dt / 2, f"cfg.{name}={seconds} s is under half a policy step ({dt:g} s); use "
                                               f"at least {dt:g} s"))
-        for name in SOFT_LIMITS:
-            value = getattr(cfg.rewards, name)
-            checks.append((0 < value <= 1, f"cfg.rewards.{name}={value}; use a share of the hard limit, in (0, 1]"))
+        for path, (test, use) in self.param_rules.items():
+            section, name = path.split(".")
+            value = getattr(getattr(cfg, section), name)
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            checks.append((number and test(value), f"cfg.{path}={value}; use {use}"))
         checks.append((cfg.forces.friction_reference is None,
                        f"cfg.forces.friction_reference={cfg.forces.friction_reference}: in an env it is the ground's "
                        f"friction, cfg.terrain.static_friction ({cfg.terrain.static_friction}); set that instead"))
@@ -272,8 +293,9 @@ class LeggedRobot(VecEnv):
             raise ValueError(f"{path} takes a value of shape {tuple(target.shape)}, got {value!r}.")
         if group == "commands" and name in COMMAND_RANGES and not float(new[0]) <= float(new[1]):
             raise ValueError(f"{path}={list(value)}; use [low, high], low <= high.")
-        if group == "rewards" and name in SOFT_LIMITS and not 0 < float(new) <= 1:
-            raise ValueError(f"{path}={value}; use a share of the hard limit, in (0, 1].")
+        rule = self.param_rules.get(path)
+        if rule is not None and not rule[0](float(new)):
+            raise ValueError(f"{path}={value}; use {rule[1]}.")
         target.copy_(new)
         owner = self.cfg.commands.ranges if len(parts) == 3 else getattr(self.cfg, group)
         setattr(owner, name, value)
@@ -692,6 +714,9 @@ class LeggedRobot(VecEnv):
         if commands.shape != self.commands.shape:
             raise ValueError(f"commands of shape {tuple(commands.shape)}; this env takes (num_envs, 4) = "
                              f"{tuple(self.commands.shape)}: vx, vy, yaw rate, heading")
+        if still is not None and (still.shape != self.standing_still.shape or still.dtype != torch.bool):
+            raise ValueError(f"still of shape {tuple(still.shape)} and dtype {still.dtype}; this env takes (num_envs,) "
+                             f"= {tuple(self.standing_still.shape)} booleans: the robots told to stand still")
         self.commands.copy_(commands)
         self.standing_still.copy_(torch.zeros_like(self.standing_still) if still is None else still)
         self._update_heading_commands()

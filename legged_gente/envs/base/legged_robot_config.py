@@ -92,7 +92,7 @@ class LeggedRobotCfg(BaseConfig):
         terminate_after_contacts_on: list = []  # bodies whose contacts end the episode
         hip_joints: list = []  # joints penalised for deviating from default (biped hip yaw/roll)
         terminate_height = 0.0  # m above the ground under the base; 0 disables
-        terminate_tilt = 1.0  # rad of base tilt that ends the episode
+        terminate_tilt = 1.0  # rad of base tilt that ends the episode, in (0, pi]; pi: never
 
     class domain_rand:
         random_init_yaw = True  # each reset turns init_state.rot by a yaw drawn uniformly in [-pi, pi)

@@ -13,6 +13,10 @@ from legged_gente.sim.assembly import match_names
 
 
 class GenteBiped(LeggedRobot):
+    param_rules = {**LeggedRobot.param_rules,
+                   "rewards.gait_period": (lambda v: v > 0, "a period > 0 s"),  # the gait clock divides by it
+                   "rewards.stance_fraction": (lambda v: 0 <= v <= 1, "a fraction of the period, in [0, 1]")}
+
     def _init_buffers(self) -> None:
         super()._init_buffers()
         # the sole geoms of each foot (cfg.asset.sole_geoms), (num_feet, soles per foot), and their depths
