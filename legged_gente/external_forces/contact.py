@@ -251,21 +251,22 @@ def sphere_contact_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, c
                 t = triangle_fn(heights, origin, res, i, j, upper)
                 p = closest_point_triangle_fn(q, t[0], t[1], t[2])
                 d = wp.length(q - p)
-                candidate = n_face
-                n = wp.normalize(wp.cross(t[1] - t[0], t[2] - t[0]))
-                if n[2] < 0.0:
-                    n = -n
-                plane = wp.abs(wp.dot(n, q - t[0]))
-                if d <= plane + tol:  # the nearest point lies inside the face: its own normal
-                    d = plane
-                    candidate = n
-                elif inside:
-                    candidate = (p - q) / d
-                elif d > 1.0e-9:
-                    candidate = (q - p) / d
-                if d < best:
-                    best = d
-                    normal = candidate
+                if d < best + tol:  # else it cannot be the nearest (its plane lies >= d - tol away): skip its normal
+                    candidate = n_face
+                    n = wp.normalize(wp.cross(t[1] - t[0], t[2] - t[0]))
+                    if n[2] < 0.0:
+                        n = -n
+                    plane = wp.abs(wp.dot(n, q - t[0]))
+                    if d <= plane + tol:  # the nearest point lies inside the face: its own normal
+                        d = plane
+                        candidate = n
+                    elif inside:
+                        candidate = (p - q) / d
+                    elif d > 1.0e-9:
+                        candidate = (q - p) / d
+                    if d < best:
+                        best = d
+                        normal = candidate
     if best > window:
         if not inside:
             return wp.vec4(normal[0], normal[1], normal[2], 1.0e10)
