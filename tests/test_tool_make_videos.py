@@ -28,6 +28,14 @@ def test_a_clip_of_no_length_is_a_usage_error(tmp_path):
     assert done.returncode == 2 and "--seconds must be > 0" in done.stderr
 
 
+def test_an_odd_video_size_is_a_usage_error(tmp_path):
+    """H.264 in yuv420p stores colour per 2 x 2 pixels: an odd width fails in the encoder, after every frame."""
+    done = subprocess.run([sys.executable, str(ROOT / "tools" / "make_videos.py"), str(tmp_path), "--size", "65", "48"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "--size 65 48: width and height must be even and >= 2" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
 def test_clips_film_the_nominal_robot(load_file):
     """The clips kept training's friction draw (0.5-1.25 per robot): each film showed a robot on another friction
     than the one gente-play and the evaluation show."""

@@ -149,6 +149,8 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     if args.seconds is not None and args.seconds <= 0 or args.every < 1:
         parser.error("--seconds must be > 0 and --every >= 1")
+    if any(v < 2 or v % 2 for v in args.size):  # H.264 in yuv420p stores colour per 2 x 2 pixels
+        parser.error(f"--size {args.size[0]} {args.size[1]}: width and height must be even and >= 2 (e.g. 640 480)")
     os.environ.setdefault("MUJOCO_GL", "egl")
     args.out.mkdir(parents=True, exist_ok=True)
     report = []
