@@ -45,7 +45,9 @@ def triangle_vertices(heights, origin, res, i, j, upper):
 
 
 def surface_height(heights, origin, res, x, y):
-    """Height (m) and upward unit normal of the triangulated heightfield at world (x, y) (clamped to the grid)."""
+    """Height (m) and upward unit normal of the triangulated heightfield at world (x, y). Past the grid's edge the
+    edge triangle's plane goes on (MuJoCo's heightfield ends there): ground that is not there, which the env's
+    terrain keeps out of reach with its border (``terrain.border_size``) around the tiles."""
     nx, ny = heights.shape
     u = np.clip((x - origin[0]) / res, 0.0, nx - 1.0)
     v = np.clip((y - origin[1]) / res, 0.0, ny - 1.0)
@@ -205,7 +207,8 @@ def triangle_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, i: int,
 
 @wp.func
 def surface_height_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, x: float, y: float) -> wp.vec4:
-    """(normal x, y, z, height) of the triangulated heightfield at (x, y), clamped to the grid."""
+    """(normal x, y, z, height) of the triangulated heightfield at (x, y); past the grid's edge the edge triangle's
+    plane goes on (see the numpy reference ``surface_height``)."""
     nx = heights.shape[0]
     ny = heights.shape[1]
     u = wp.clamp((x - origin[0]) / res, 0.0, float(nx - 1))
