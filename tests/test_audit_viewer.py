@@ -104,6 +104,17 @@ def test_a_well_formed_rollout_still_loads(tmp_path):
     assert (back.num_steps, back.num_robots, back.forces.shape) == (4, 2, (4, 2, 3, 3))
 
 
+def test_a_rollout_of_version_1_is_refused_in_one_line(tmp_path, capsys, monkeypatch):
+    """Version 1 files put the next episode's start on a done row; version 2 puts the ended episode's last state
+    there. The arrays are the same, so an old file would load and show respawns as the poses episodes ended in."""
+    path = rollout().save(tmp_path / "r.npz")
+    with np.load(path) as f:
+        arrays = {k: f[k] for k in f.files}
+    np.savez(path, **(arrays | {"version": np.array(1)}))
+    line = one_line_error(capsys, monkeypatch, [str(path)])
+    assert line == f"gente-view: error: {path}: rollout version 1, this viewer reads 2; record it again."
+
+
 def test_a_rollout_file_missing_arrays_names_them(tmp_path, capsys, monkeypatch):
     """A file without some of the arrays: 'cmd is not a file in the archive', naming neither the file nor the fix."""
     path = rollout().save(tmp_path / "r.npz")

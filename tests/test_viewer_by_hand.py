@@ -175,8 +175,10 @@ def test_a_tile_alone_is_drawn_whole_up_to_the_budget(resolution, drawn):
 def test_recorded_poses_are_the_env_state_after_each_step():
     """The recorder keeps, after each policy step, the env's qpos; the viewer draws body poses from it with MuJoCo's
     kinematics, and they are the bodies MuJoCo-Warp places from that state. A time-out after 5 steps (episode
-    0.1 s, dt 0.02 s) is marked on row 4, whose qpos is already the reset robot's: the spawn, (0, 0) + the task's
-    initial base position."""
+    0.1 s, dt 0.02 s) is marked on row 4, which holds the ended episode's last state (the env's state before the
+    reset within that step), not the respawn: the robot dropped from 3 cm above its 1.0 m stance has landed by
+    then (a 3 cm fall takes sqrt(2 * 0.03 / 9.81) = 0.078 s), one step's travel from row 3, while the env after
+    the step holds the spawn, (0, 0) + the task's initial base position (z = 1.03 m)."""
     from legged_gente.scripts import view as view_script
     from legged_gente.utils.args import parse_args
 
@@ -185,19 +187,25 @@ def test_recorded_poses_are_the_env_state_after_each_step():
                                                        "--set", "env.episode_length_s=0.1"])
     env, policy, recorder = view_script._make_play(args)
     assert env.dt == pytest.approx(0.02) and env.max_episode_length == 5
-    seen = []
+    seen, ended = [], None
     obs = env.get_observations()
     with torch.inference_mode():
-        for _ in range(7):
+        for step in range(7):
             obs, _, _, _ = env.step(policy(obs))
             recorder.add()
             seen.append(env.sim.qpos[0].clone().numpy())
+            if step == 4:
+                ended = env.terminal_qpos[0].clone().numpy()
     rollout = recorder.rollout()
-    np.testing.assert_array_equal(rollout.qpos[:, 0], np.stack(seen).astype(np.float32))
+    live = [0, 1, 2, 3, 5, 6]
+    np.testing.assert_array_equal(rollout.qpos[live, 0], np.stack(seen)[live].astype(np.float32))
+    np.testing.assert_array_equal(rollout.qpos[4, 0], ended)
     assert rollout.done[:, 0].tolist() == [False] * 4 + [True, False, False]
     assert not rollout.fell.any()  # a time-out, not a fall
     spawn = env.init_base_state[:3].numpy()  # the tile origin of a plane is (0, 0, 0)
-    np.testing.assert_allclose(rollout.qpos[4, 0, :3], spawn, atol=1e-6)
+    np.testing.assert_allclose(seen[4][:3], spawn, atol=1e-6)  # the env after the step: respawned
+    assert rollout.qpos[4, 0, 2] < 1.01 < spawn[2]  # landed: not the spawn
+    assert np.abs(rollout.qpos[4, 0, :3] - rollout.qpos[3, 0, :3]).max() < 0.05  # one step of 0.02 s from row 3
     # bodies: MuJoCo's kinematics of the last row against MuJoCo-Warp's bodies of the same state
     env.sim.forward(torch.ones(env.num_envs, dtype=torch.bool))
     d = Kinematics(env.mjm)(rollout.qpos[-1, 0].astype(np.float64))
@@ -314,8 +322,9 @@ def test_a_video_lasts_its_steps_at_one_frame_per_policy_step(tmp_path):
 
 def test_a_reset_row_draws_no_force_arrows_of_the_ended_episode():
     """Standing in water 0.35 m deep, the biped's shanks are wet (buoyancy > 0 on every row of an episode). Row 4
-    ends the 0.1 s episode (5 steps of 0.02 s): its qpos is the respawned robot while the env's forces are the
-    ended episode's last substep, so that row has no force arrows; the next episode's rows have them again."""
+    ends the 0.1 s episode (5 steps of 0.02 s): its qpos is the ended episode's last state while the env's forces
+    were redrawn and recomputed for the respawned robot by the reset, so that row has no force arrows; the next
+    episode's rows have them again."""
     from legged_gente.scripts import view as view_script
     from legged_gente.utils.args import parse_args
 

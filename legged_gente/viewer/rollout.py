@@ -9,12 +9,15 @@ after policy step k + 1, at t = (k + 1) dt)::
     qpos             (T, R, nq)    float32, MuJoCo qpos of each robot (free joint: world x y z, quaternion w x y z)
     cmd              (T, R, 3)     float32, commanded vx, vy (m/s, base frame) and yaw rate (rad/s)
     vel              (T, R, 3)     float32, actual vx, vy (m/s, base frame) and yaw rate (rad/s)
-    done             (T, R)        bool, the episode ended at this step (the env resets within the step: this
-                                   row's qpos, cmd, vel are the next episode's start; the row before is the
-                                   ended episode's state one step before its end, the pose that ended it is lost)
+    done             (T, R)        bool, the episode ended at this step. This row's qpos and vel are the ended
+                                   episode's last state and cmd the command it ran under (the env keeps them
+                                   before it resets the world within the step: a fall's pose); a diverged
+                                   world's row (env.diverged_buf: a non-finite, absurdly fast or ill-solved
+                                   state) holds its respawn. The next row is one step into the next episode
     fell             (T, R)        bool, ended by a termination (fall), not by the time-out
     force_labels     (K,)          str, "<kind>:<geom or body>", kind one of FORCE_KINDS
-    forces           (T, R, K, 3)  float32, N, world frame (last substep of the policy step; 0 on a done row)
+    forces           (T, R, K, 3)  float32, N, world frame (last substep of the policy step; 0 on a done row: the
+                                   reset recomputed the world's forces for the respawned robot)
     force_points     (T, R, K, 3)  float32, m, where each force acts
     terrain_heights  (nx, ny)      float32, m; terrain_origin (2,) m; terrain_resolution () m
     terrain_<field>  (nx, ny)      the material map (water_surface, flow_kind, flow_speed, flow_direction,
@@ -49,7 +52,9 @@ def open_npz(path: str | Path):
         raise ValueError(f"{path} is not a readable NumPy .npz archive; give a rollout written by gente-view "
                          f"--record or a traces.npz written by gente-evaluate.") from None
 
-ROLLOUT_VERSION = 1
+ROLLOUT_VERSION = 2
+"""2: a done row holds the ended episode's last state (1: the next episode's start, as the env held it after
+the step; the same arrays, so a version 1 file is refused rather than shown as version 2)."""
 FORCE_KINDS = ("buoyancy", "drag", "soil")
 FORCE_COLOURS = {"buoyancy": (0, 200, 80), "drag": (255, 140, 0), "soil": (150, 75, 0)}
 _MATERIAL_FIELDS = ("water_surface", "flow_kind", "flow_speed", "flow_direction", "flow_omega", "flow_phase",
@@ -326,13 +331,24 @@ class Recorder:
     def add(self) -> None:
         import torch
 
+        from legged_gente.utils.torch_math import quat_rotate_inverse
+
         env, r = self.env, self.robots
+        # a done row: the state the ended episode ended in, which the env keeps before its reset within the step;
+        # its velocity as LeggedRobot._update_state's (free joint: world linear, body angular velocity). A diverged
+        # world's ended state is meaningless (non-finite, absurdly fast or ill-solved): its row keeps the respawn
+        ended = (env.reset_buf[r] & ~env.diverged_buf[r])[:, None]
         vel = torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1)
+        end_qpos, end_qvel = env.terminal_qpos[r], env.terminal_qvel[r]
+        end_vel = torch.cat([quat_rotate_inverse(end_qpos[:, 3:7], end_qvel[:, 0:3])[:, :2], end_qvel[:, 5:6]], 1)
+        qpos = torch.where(ended, end_qpos, env.sim.qpos[r])
+        cmd = torch.where(ended, env.terminal_commands[r, :3], env.commands[r, :3])
+        vel = torch.where(ended, end_vel, vel)
         forces, points = robot_forces(env, r, self.kin)
         done = env.reset_buf[r].cpu().numpy()
-        # a reset row holds the respawned robot; the env's forces are still the ended episode's: no arrows
+        # the reset redrew the ended episode's force noise and recomputed its forces at the respawn: no arrows
         forces[done], points[done] = 0.0, 0.0
-        for key, value in (("qpos", env.sim.qpos[r].cpu().numpy()), ("cmd", env.commands[r, :3].cpu().numpy()),
+        for key, value in (("qpos", qpos.cpu().numpy()), ("cmd", cmd.cpu().numpy()),
                            ("vel", vel.cpu().numpy()), ("done", done),
                            ("fell", done & ~env.time_out_buf[r].cpu().numpy()), ("forces", forces),
                            ("force_points", points)):

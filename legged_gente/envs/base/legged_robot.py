@@ -328,6 +328,11 @@ class LeggedRobot(VecEnv):
         self.diverged_buf = torch.zeros(n, dtype=torch.bool, device=dev)
         self.rew_buf = torch.zeros(n, device=dev)
         self.commands = torch.zeros(n, 4, device=dev)  # vx, vy, yaw rate, heading
+        # each world's state at the end of the last step's physics and the commands it ran under, copied before
+        # the step's resets: where the step reset a world, what its ended episode ended in (a fall's pose)
+        self.terminal_qpos = torch.zeros_like(self.sim.qpos)
+        self.terminal_qvel = torch.zeros_like(self.sim.qvel)
+        self.terminal_commands = torch.zeros_like(self.commands)
         self.standing_still = torch.zeros(n, dtype=torch.bool, device=dev)  # a stand-still command: no turning
         self.feet_air_time = FeetAirTime(n, len(lay.foot_bodies), dev)
         self.gravity_vec = torch.tensor([0.0, 0.0, -1.0], device=dev).repeat(n, 1)
@@ -511,6 +516,10 @@ class LeggedRobot(VecEnv):
         self._check_termination(self.diverged_buf)
         self._compute_reward()
         self._log_and_update_curriculum(self.reset_buf, self.diverged_buf)
+        # in place, every world: a captured graph or compiled step replays the copies into these same buffers
+        self.terminal_qpos.copy_(self.sim.qpos)
+        self.terminal_qvel.copy_(self.sim.qvel)
+        self.terminal_commands.copy_(self.commands)
         self._reset_envs(self.reset_buf)
         # new commands for the robots just reset and for those whose resampling time came (episode length 0
         # after a reset, so both are caught by the same test)
