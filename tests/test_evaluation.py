@@ -325,7 +325,8 @@ def _still_env(yaw: list[float], heading: list[float], standing: list[bool], hea
         standing_still=torch.tensor(standing), base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3),
         base_ang_vel=torch.zeros(n, 3), sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)),
         diverged_buf=zeros, time_out_buf=zeros, torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
-        penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3))
+        penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3),
+        terminal_qpos=torch.zeros(n, 7))
     _face(env, yaw)
     return env
 

@@ -135,7 +135,8 @@ def _env(n, yaw=0.0):
         base_ang_vel=torch.zeros(n, 3), base_quat=torch.stack([half.cos(), 0 * half, 0 * half, half.sin()], 1),
         sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)), diverged_buf=zeros.clone(),
         time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
-        penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3))
+        penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3),
+        terminal_qpos=torch.zeros(n, 7))
 
 
 def test_the_tracking_error_leaves_out_exactly_the_settle_steps():

@@ -25,7 +25,7 @@ def _env(n):
         base_quat=torch.tensor([[1.0, 0.0, 0.0, 0.0]] * n), sim=SimpleNamespace(qvel=torch.zeros(n, 6),
                                                                                  qpos=torch.zeros(n, 7)),
         diverged_buf=zeros.clone(), time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
-        penalized_bodies=torch.tensor([0]), contact_forces=torch.zeros(n, 1, 3))
+        penalized_bodies=torch.tensor([0]), contact_forces=torch.zeros(n, 1, 3), terminal_qpos=torch.zeros(n, 7))
 
 
 # ------------------------------------------------------------------------------------------------ recorder
@@ -42,6 +42,30 @@ def test_collisions_count_each_contact_once_from_its_onset_and_only_while_measur
         recorder.record(env, torch.tensor([False, k == 3]))
     assert recorder.collisions.tolist() == [2.0, 1.0]
     assert recorder.fell.tolist() == [False, True]
+
+
+def test_the_trace_of_a_fall_keeps_the_pose_it_fell_to():
+    """Robot 0 walks 0.01 m a step along +x; in step 3 it falls at x = 0.03 m, z = 0.2 m, and the env resets it
+    within the step (qpos back at the spawn, the fall's pose in terminal_qpos): the traced pose and position of
+    that step are the fall's, so gente-view --traces shows the fall; robot 1's world diverged in step 3 and is
+    reset as well: its trace keeps the respawn (its last state may be non-finite)."""
+    env = _env(2)
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0, 1]))
+    for k in range(1, 4):
+        env.base_pos[:, 0] = env.sim.qpos[:, 0] = 0.01 * k
+        done = torch.tensor([k == 3, k == 3])
+        if k == 3:
+            env.terminal_qpos[:] = env.sim.qpos
+            env.terminal_qpos[:, 2] = 0.2
+            env.terminal_qpos[1] = math.nan
+            env.base_pos[:] = env.sim.qpos[:] = 0.0
+            env.diverged_buf[1] = True
+        recorder.record(env, done)
+    qpos, pos = torch.stack(recorder.trace["qpos"]), torch.stack(recorder.trace["pos"])
+    assert qpos[2, 0, 0] == pytest.approx(0.03) and qpos[2, 0, 2] == pytest.approx(0.2)
+    assert pos[2, 0].tolist() == pytest.approx([0.03, 0.0])
+    assert qpos[2, 1].tolist() == [0.0] * 7 and pos[2, 1].tolist() == [0.0, 0.0]
+    assert recorder.fell.tolist() == [True, False] and recorder.diverged.tolist() == [False, True]
 
 
 def test_a_launched_or_flagged_robot_is_diverged_not_fallen_and_its_step_is_not_measured():

@@ -237,6 +237,10 @@ def _trace(steps_active: int, fell: bool | None) -> dict:
 def test_a_replayed_robot_shows_a_fall_only_when_it_fell(fell):
     """A robot's measured episode also ends at its tile's edge (a success may end there): the replay ends it
     there, and marks a fall only for a robot that fell."""
-    rollout = view_script._trace_rollout(_trace(4, fell), "gente_biped", _Terrain())
-    assert rollout.qpos.shape[0] == 4 and rollout.done[-1, 0] and bool(rollout.fell[-1, 0]) is fell
+    trace = _trace(4, fell)
+    trace["qpos"][4, 2] = 0.3  # the step it ended in: the pose it fell to (the evaluator records it)
+    rollout = view_script._trace_rollout(trace, "gente_biped", _Terrain())
+    # a fall is shown to its end: the 4 measured steps and the step that ended it; a robot at its tile's edge stops
+    assert rollout.qpos.shape[0] == (5 if fell else 4) and rollout.done[-1, 0] and bool(rollout.fell[-1, 0]) is fell
+    assert bool(rollout.qpos[-1, 0, 2] == np.float32(0.3)) is fell
     assert not rollout.done[:-1].any() and not rollout.fell[:-1].any()

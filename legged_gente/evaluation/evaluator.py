@@ -175,9 +175,12 @@ class Recorder:
         r = self.trace_robots
         self.trace["cmd"].append(env.commands[r, :3].clone())
         self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
-        self.trace["pos"].append(xy[r].clone())
+        # a world the step reset (not a diverged one): the pose its episode ended in, which gente-view replays
+        ended = (dones & ~env.diverged_buf)[r, None]
+        qpos = torch.where(ended, env.terminal_qpos[r], env.sim.qpos[r])
+        self.trace["pos"].append(torch.where(ended, qpos[:, :2], xy[r]))
         self.trace["active"].append(alive[r].clone())
-        self.trace["qpos"].append(env.sim.qpos[r].clone())  # gente-view replays the robot from it
+        self.trace["qpos"].append(qpos)
 
     def _turn_reference(self, env) -> None:
         """Advance the reference yaw by the yaw rate commanded for the step just taken; in heading mode it stays

@@ -121,10 +121,12 @@ def _trace_rollout(trace: dict, task: str, terrain):
     from legged_gente.viewer.rollout import Rollout
 
     active = trace["active"].astype(bool)
-    steps = max(int(active.sum()), 1)  # the robot's first episode
+    fell_at_all = bool(trace.get("fell", False))
+    # the robot's first episode; a fall to the step that ended it, whose pose the evaluator keeps (the fall's)
+    steps = min(max(int(active.sum()), 1) + int(fell_at_all), len(active))
     ended = np.zeros((steps, 1), bool)
-    ended[-1] = steps < len(active)  # a fall, or its tile's edge (the measured episode ends there too)
-    fell = ended & bool(trace.get("fell", False))
+    ended[-1] = int(active.sum()) < len(active)  # a fall, or its tile's edge (the measured episode ends there too)
+    fell = ended & fell_at_all
     return Rollout(task, trace["dt"], trace["qpos"][:steps, None], trace["cmd"][:steps, None],
                    trace["vel"][:steps, None], ended, fell, [], np.zeros((steps, 1, 0, 3), np.float32),
                    np.zeros((steps, 1, 0, 3), np.float32), terrain.height_field, terrain.origin_xy,
