@@ -51,7 +51,8 @@ def test_a_tilted_robot_is_drawn_where_mujoco_puts_its_geoms():
                           np.zeros((1, 1, 0, 3)), plane.height_field, plane.origin_xy, plane.resolution, plane.material)
         player = viewer.attach_rollout(rollout, mjm, play=False)
         player.draw(0)
-        drawn = [g for g in range(mjm.ngeom) if mjm.geom_bodyid[g] != 0 and mjm.geom_rgba[g, 3] > 0]
+        drawn = [g for g in range(mjm.ngeom)  # collision-only geoms (group 3) are hidden, as MuJoCo's viewer does
+                 if mjm.geom_bodyid[g] != 0 and mjm.geom_rgba[g, 3] > 0 and mjm.geom_group[g] < 3]
         shapes = robot_geoms(mjm)
         assert len(shapes) == len(drawn) > 10
         for g, shape in zip(drawn, shapes):
