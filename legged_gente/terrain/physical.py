@@ -19,6 +19,14 @@ def _lerp(a: float, b: float, d: float) -> float:
     return a + (b - a) * d
 
 
+def _water_rules(p) -> None:
+    # a speed on still water would be dropped silently ("water:speed=0.5" is still water); a current or tide of
+    # speed 0 is allowed: zero means none, as depth 0 is no water
+    if p["flow"] == "still" and p["speed"] > 0.0:
+        raise ValueError(f"water: speed={p['speed']!r} m/s has no effect on still water; set flow=current or "
+                         f"flow=tide to make it flow, or speed=0.")
+
+
 @atomic_terrain(
     "water",
     "physical",
@@ -33,6 +41,7 @@ def _lerp(a: float, b: float, d: float) -> float:
         "phase": Param(0.0, "phase of the tide", "rad", -np.pi, np.pi),
     },
     difficulty=lambda d: {"depth": _lerp(0.05, 0.5, d)},
+    rules=_water_rules,
 )
 def water(shape, resolution, rng, heights, depth, flow, speed, direction, omega, phase):
     surface = np.float32(heights.min() + depth)
