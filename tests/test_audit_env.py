@@ -9,23 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 import torch
+from test_env_inputs import N, cfg_of, env  # noqa: F401 (env is a fixture)
 
 from legged_gente.envs.gente_biped.gente_biped import GenteBiped
-from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg, GenteBipedFlatCfg
-
-N = 2
-
-
-def cfg_of(cfg_class=GenteBipedFlatCfg):
-    cfg = cfg_class()
-    cfg.env.num_envs = N
-    cfg.domain_rand.push_robots = False
-    return cfg
-
-
-@pytest.fixture(scope="module")
-def env():
-    return GenteBiped(cfg_of(), device="cpu")
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
 
 
 class TwoRough(GenteBipedCfg):

@@ -7,31 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_viewer_inputs import no_server, one_line_error
 
 from legged_gente.scripts import view as view_script
 from legged_gente.terrain.materials import MaterialMap
 from legged_gente.viewer.rollout import Rollout
 
 BIPED_NQ = 7 + 10  # free joint (x y z, quaternion w x y z) + the biped's 10 joints
-
-
-class Started(Exception):
-    """The viser server was asked for: the input got past its checks."""
-
-
-def no_server(*args, **kwargs):
-    raise Started
-
-
-def one_line_error(capsys, monkeypatch, argv) -> str:
-    import viser
-
-    monkeypatch.setattr(viser, "ViserServer", no_server)
-    with pytest.raises(SystemExit) as exit_info:
-        view_script.main([*argv, "--headless", "--seconds", "0"])
-    err = capsys.readouterr().err
-    assert exit_info.value.code == 2 and "Traceback" not in err, err
-    return [line for line in err.splitlines() if line.strip()][-1]
 
 
 def rollout(steps: int = 3, robots: int = 1, labels: tuple[str, ...] = ("soil:foot",)) -> Rollout:
