@@ -15,7 +15,7 @@ import torch
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO, rsl_rl_train_cfg
 from legged_gente.envs.terrain_arg import apply_terrain_arg
-from legged_gente.utils.args import apply_overrides
+from legged_gente.utils.args import apply_overrides, override_of
 
 CPU_MANY_ENVS = 64  # more robots than this on the CPU: say that it will be slow, and how to make it fast
 
@@ -100,9 +100,9 @@ def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
     overrides = getattr(args, "overrides", None) or []
     for flag, field in FLAG_FIELDS.items():
         value = getattr(args, flag, None)
-        given = [text for text in overrides if text.partition("=")[0].strip() == field]
+        given = override_of(overrides, field)
         if value is not None and given:
-            raise ValueError(f"--{flag} {value} and --set {given[0]} both set {field}; give one")
+            raise ValueError(f"--{flag} {value} and --set {given} both set {field}; give one")
     apply_overrides(overrides, env_cfg, train_cfg)
     if env_cfg is not None:
         if getattr(args, "num_envs", None) is not None:

@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from legged_gente.utils.args import build_parser, check_log_root, flag, import_mujoco, parse_args, run_command
+from legged_gente.utils.args import (
+    build_parser, check_log_root, flag, import_mujoco, override_of, parse_args, run_command)
 
 import_mujoco("gente-play")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
@@ -156,7 +157,7 @@ def main(argv=None) -> None:
     args = parse_args(parser, argv)
     if args.pretrained and (args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --load_run/--checkpoint")
-    resume_set = next((text for text in args.overrides if text.partition("=")[0].strip() == "runner.resume"), None)
+    resume_set = override_of(args.overrides, "runner.resume")
     if resume_set is not None:  # play sets runner.resume itself, after the --set
         parser.error(f"gente-play always loads a checkpoint (a run's, or the shipped one with --pretrained); leave out "
                      f"--set {resume_set}")

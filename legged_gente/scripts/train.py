@@ -12,7 +12,8 @@ import threading
 import time
 from pathlib import Path
 
-from legged_gente.utils.args import build_parser, check_log_root, flag, import_mujoco, parse_args, run_command
+from legged_gente.utils.args import (
+    build_parser, check_log_root, flag, import_mujoco, override_of, parse_args, run_command)
 
 import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
@@ -137,10 +138,10 @@ def main(argv=None) -> None:
     if args.max_minutes is not None and not args.max_minutes > 0:
         parser.error(f"--max_minutes must be > 0, got {args.max_minutes}")
     # --resume sets runner.resume after the --set (task_registry.apply_args): a --set of it too would be ignored
-    resume_set = next((text for text in args.overrides if text.partition("=")[0].strip() == "runner.resume"), None)
+    resume_set = override_of(args.overrides, "runner.resume")
     resumes = args.resume or (resume_set is not None and resume_set.partition("=")[2].strip() == "True")
-    picked = args.load_run is not None or args.checkpoint is not None or any(
-        text.partition("=")[0].strip() in ("runner.load_run", "runner.checkpoint") for text in args.overrides)
+    picked = (args.load_run is not None or args.checkpoint is not None
+              or override_of(args.overrides, "runner.load_run", "runner.checkpoint") is not None)
     if not resumes and picked:
         parser.error("--load_run/--checkpoint pick the checkpoint to resume from: add --resume (without it "
                      "training starts from scratch)")

@@ -230,6 +230,11 @@ def quiet_third_party(verbose: bool = False) -> None:
         warnings.filterwarnings("ignore", message=message, category=category, module=module)
 
 
+def override_of(overrides: list[str], *fields: str) -> str | None:
+    """The first ``--set`` text (SECTION.FIELD=VALUE) among ``overrides`` that sets one of ``fields``, or None."""
+    return next((text for text in overrides if text.partition("=")[0].strip() in fields), None)
+
+
 def _parse_override(text: str) -> tuple[list[str], str]:
     key, sep, value = text.partition("=")
     path = key.strip().split(".")
