@@ -343,7 +343,8 @@ def two_soles(z_w, axis="0 0 1", gravity=False, **settings):
 def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
     # A level box sole 0.2 x 0.1 x 0.04 m and a sphere sole r = 3 cm, each with its centre at the surface:
     # buoyancy rho g V/2. The box moving down at 0.5 m/s: its bottom face (0.2 x 0.1, all wet) takes plate drag
-    # 0.5 rho 1.17 A v^2 upwards (Hoerner's flat plate); the sphere moving down: 0.5 rho 0.47 (pi r^2 / 2) v^2.
+    # 0.5 rho 1.17 A v^2 upwards (Hoerner's flat plate); the sphere moving down: its wet hemisphere faces the flow
+    # with the whole waterline disk, 0.5 rho 0.47 (pi r^2) v^2.
     z_w, v = 0.5, 0.5
     m, d, f = two_soles(z_w, gravity=True)
     mjw.step(m, d)
@@ -351,7 +352,7 @@ def test_foot_soles_half_submerged_get_archimedes_and_plate_drag():
     np.testing.assert_allclose(f.foot_water_force.numpy()[0, :, 2], [RHO * G * box_v / 2, RHO * G * ball_v / 2],
                                rtol=1e-4)
     expect = [RHO * G * box_v / 2 + 0.5 * RHO * 1.17 * 0.2 * 0.1 * v * v,
-              RHO * G * ball_v / 2 + 0.5 * RHO * 0.47 * math.pi * 0.03**2 / 2 * v * v]
+              RHO * G * ball_v / 2 + 0.5 * RHO * 0.47 * math.pi * 0.03**2 * v * v]
     # vertical_drag=False (the paper's horizontal drag) concerns the legs' model only: the feet keep theirs
     for vertical_drag in (True, False):
         m, d, f = two_soles(z_w, gravity=True, vertical_drag=vertical_drag)
@@ -520,7 +521,7 @@ def test_water_kernels_match_references():
                     vol = WM.sphere_cap_volume(r, z_w - (c[2] - r))
                     frac = vol / (4 / 3 * math.pi * r**3)
                     p = c
-                    fr = WM.sphere_drag(RHO, 0.47, r, frac, jac(p) @ md.qvel - flow_at(c))
+                    fr = WM.sphere_drag(RHO, 0.47, r, z_w - (c[2] - r), jac(p) @ md.qvel - flow_at(c))
                 else:
                     vol = WM.box_submerged_volume(g.size, rot, c[2], z_w)
                     frac = vol / (8 * np.prod(g.size))
@@ -559,7 +560,7 @@ def _eval_water(x: wp.array2d[float], out: wp.array2d[float]):
     d = W.crossflow_drag_fn(1000.0, 1.1, r, 1.0e-3, v, a, 0)
     fi = W.inertia_force_fn(1000.0, 1.0, 1.0e-3, v, a)
     pd = W.plate_drag_fn(1000.0, 1.17, half, rot, x[i, 1] + r, v)
-    sd = W.sphere_drag_fn(1000.0, 0.47, r, 0.5, v)
+    sd = W.sphere_drag_fn(1000.0, 0.47, r, x[i, 1] + r, v)
     for k in range(3):
         out[i, 3 + k] = d[k]
         out[i, 6 + k] = fi[k]
@@ -592,7 +593,7 @@ def test_water_functions_match_references():
                          WM.sphere_cap_volume(r, row[1] + r), WM.crossflow_drag(1000.0, 1.1, r, 1e-3, v, a),
                          WM.inertia_force(1000.0, 1.0, 1e-3, v, a), WM.plate_drag(1000.0, 1.17, row[12:15], rot,
                                                                                   row[1] + r, v),
-                         WM.sphere_drag(1000.0, 0.47, r, 0.5, v)])
+                         WM.sphere_drag(1000.0, 0.47, r, row[1] + r, v)])
     ref = np.asarray(ref)
     scale = np.abs(ref).max(0) + 1e-12
     err = (np.abs(got - ref) / scale).max(0)

@@ -91,13 +91,16 @@ def _check_material(material: MaterialMap, shape: tuple[int, int]) -> None:
             raise ValueError(f"material.{field.name} holds {bad.flat[0]}; {fix}.")
 
 
-def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
-    """1 for each foot water geom, 0 for a sphere that lies wholly inside a leg capsule or cylinder welded to it
-    (the quadruped's foot ball in its calf's end cap): the leg's buoyancy already counts its volume (Archimedes on
-    the union), so the foot keeps only its drag."""
+def _foot_spheres_inside_legs(mjm, foot_geoms, leg_geoms) -> tuple[np.ndarray, np.ndarray]:
+    """Per foot water geom: whether it is a sphere lying wholly inside a leg capsule or cylinder welded to it, and
+    whether wholly inside that leg's straight part. A ball inside a capsule's end cap (the quadruped's foot in its
+    calf) keeps its drag and added mass and loses its buoyancy, which the leg's cap counts (Archimedes on the union);
+    a ball inside the straight part gets no water load at all: the leg's strips already hold its volume's buoyancy,
+    drag and added mass."""
     data = mujoco.MjData(mjm)
     mujoco.mj_kinematics(mjm, data)
-    out = np.ones(len(foot_geoms), np.float32)
+    inside = np.zeros(len(foot_geoms), bool)
+    in_straight = np.zeros(len(foot_geoms), bool)
     for k, g in enumerate(foot_geoms):
         if mjm.geom_type[g] != int(mujoco.mjtGeom.mjGEOM_SPHERE):
             continue
@@ -109,13 +112,13 @@ def _buoyancy_not_in_legs(mjm, foot_geoms, leg_geoms) -> np.ndarray:
             radius, half = mjm.geom_size[s, 0], mjm.geom_size[s, 1]
             t = float(np.dot(data.geom_xpos[g] - data.geom_xpos[s], axis))
             radial = np.linalg.norm(data.geom_xpos[g] - data.geom_xpos[s] - t * axis)
+            straight = abs(t) <= half - r + 1e-9 and radial <= radius - r + 1e-9
+            in_straight[k] |= straight
             if mjm.geom_type[s] == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
-                inside = np.hypot(max(abs(t) - half, 0.0), radial) <= radius - r + 1e-9
+                inside[k] |= np.hypot(max(abs(t) - half, 0.0), radial) <= radius - r + 1e-9
             else:
-                inside = abs(t) <= half - r + 1e-9 and radial <= radius - r + 1e-9
-            if inside:
-                out[k] = 0.0
-    return out
+                inside[k] |= straight
+    return inside, in_straight
 
 
 def geom_body_box(mjm, g: int) -> tuple[np.ndarray, np.ndarray]:
@@ -298,8 +301,10 @@ class TerrainForces:
         self.geom_foot = arr(geom_foot, int)
         self.geom_bodyid = arr(mjm.geom_bodyid.astype(np.int32), int)
         foot_water = self._foot_water_geoms(mjm, groups)
+        inside, in_straight = _foot_spheres_inside_legs(mjm, foot_water, seg)
+        foot_water, inside = foot_water[~in_straight], inside[~in_straight]
         self.foot_water_geom = arr(foot_water, int)
-        self.foot_buoyancy = arr(_buoyancy_not_in_legs(mjm, foot_water, seg), float)
+        self.foot_buoyancy = arr((~inside).astype(np.float32), float)
         self._check_diagonal_mass(mjm, np.concatenate([seg, foot_water]).astype(int))
         sphere = int(mujoco.mjtGeom.mjGEOM_SPHERE)
         foot_added_mass = np.asarray([WM.foot_added_mass("sphere" if mjm.geom_type[g] == sphere else "box",

@@ -176,8 +176,34 @@ def plate_drag_fn(rho: float, cd: float, half: wp.vec3, rot: wp.mat33, depth: fl
 
 
 @wp.func
-def sphere_drag_fn(rho: float, cd: float, r: float, frac: float, v_rel: wp.vec3) -> wp.vec3:
-    return -(0.5 * cd * rho * PI * r * r * frac * wp.length(v_rel)) * v_rel
+def sphere_wet_frontal_area_fn(r: float, depth: float, v: wp.vec3) -> float:
+    """The wet cap projected on the plane normal to v (water_models.sphere_wet_frontal_area)."""
+    if depth <= 0.0:
+        return 0.0
+    if depth >= 2.0 * r:
+        return PI * r * r
+    h = depth - r
+    r_w = wp.sqrt(wp.max(r * r - h * h, 0.0))
+    speed = wp.length(v)
+    s = float(1.0)
+    c = float(0.0)
+    if speed > 0.0:
+        s = wp.sqrt(v[0] * v[0] + v[1] * v[1]) / speed
+        c = wp.abs(v[2]) / speed
+    if s < TINY:
+        if h >= 0.0:
+            return PI * r * r
+        return PI * r_w * r_w
+    area = circle_wet_area_fn(r, h / s)
+    if r_w > 0.0:
+        area = area + c * circle_wet_area_fn(r_w, -h * c / s)
+    return area
+
+
+@wp.func
+def sphere_drag_fn(rho: float, cd: float, r: float, depth: float, v_rel: wp.vec3) -> wp.vec3:
+    """-0.5 rho cd A |v| v, A the wet cap's frontal area facing v (water_models.sphere_drag)."""
+    return -(0.5 * cd * rho * sphere_wet_frontal_area_fn(r, depth, v_rel) * wp.length(v_rel)) * v_rel
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -288,10 +314,15 @@ def segment_water_kernel(
                 apply_force(xfrc, xipos, w, b, fb, q)
                 total = total + fb
 
-    # the wet interval under the higher of the surfaces at the two ends (a leg across a water border)
+    # the wet interval under the highest of the surfaces at the two ends and at the whole cylinder part's Gauss
+    # points (a leg across a water border, or over a stream narrower than itself); each slice then takes the water
+    # at its own Gauss point
     cell_a = water_cell(water, c - half * axis)
     cell_b = water_cell(water, c + half * axis)
     z_ref = wp.max(water.surface[cell_a[0], cell_a[1]], water.surface[cell_b[0], cell_b[1]])
+    for k in range(NGAUSS):
+        cell_k = water_cell(water, c + half * GX[k] * axis)
+        z_ref = wp.max(z_ref, water.surface[cell_k[0], cell_k[1]])
     iv = wet_interval_fn(c[2], a_z, sin_t, r, half, z_ref)
     if iv[1] <= iv[0]:
         seg_force[w, s] = total
@@ -420,7 +451,7 @@ def foot_water_kernel(
         frac = vol / (4.0 / 3.0 * PI * r * r * r)
         if frac > 0.0:
             v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
-            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, frac, v - u)
+            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, z_w - (c[2] - r), v - u)
             f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
     else:
         frac = box_submerged_fraction_fn(size, rot, c[2], z_w)

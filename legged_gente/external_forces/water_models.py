@@ -20,7 +20,8 @@ weight times the half-interval) and its exactly submerged volume V_k (the surfac
 The capsule's hemispherical caps carry buoyancy only: each gets half the submerged volume of the sphere of radius r
 at the cylinder's end (exact for a horizontal capsule and for a cap wholly wet or dry; a tilted cap cut by the surface
 is off by at most rho g pi r^3 / 3, on a vertical capsule; the volume is continuous).
-Feet (``foot_*``): a sphere gets buoyancy from its exact spherical-cap volume and sphere drag; a box gets buoyancy
+Feet (``foot_*``): a sphere gets buoyancy from its exact spherical-cap volume and sphere drag on its wet cap's
+frontal area (``sphere_wet_frontal_area``); a box gets buoyancy
 from its exact submerged volume at any tilt (``box_submerged_volume``) and flat-plate drag on each face pair. Their
 forces act on the vertical through the geom's centre (a sphere's centre; a box's wet fraction of half its vertical
 extent above its lowest point, the middle of the wetted part for a level box), and the drag takes that point's
@@ -101,13 +102,15 @@ def segment_slices(c, axis, r, half, surface_at):
     """Slices of a leg segment: list of (Gauss point p_k, length l_k, submerged volume V_k).
 
     ``surface_at(p)`` returns the water surface height at world point p. The wet interval is found with the
-    higher of the surfaces at the segment's two ends (a leg across a water border); each slice's volume uses the
-    surface at its own Gauss point, so the volume is exact wherever the surface is level over each slice.
+    highest of the surfaces at the segment's two ends and at the Gauss points of its whole cylinder part (a leg
+    across a water border, or over a stream narrower than itself); each slice's volume uses the surface at its own
+    Gauss point (strip theory: a slice is as wet as the water at its point), so the volume is exact wherever the
+    surface is level over each slice.
     """
     c, axis = np.asarray(c, float), np.asarray(axis, float)
     a_z = axis[2]
     sin_t = np.sqrt(max(1.0 - a_z * a_z, 0.0))
-    z_ref = max(surface_at(c - half * axis), surface_at(c + half * axis))
+    z_ref = max(surface_at(c + s * axis) for s in (-half, half, *(half * x for x in GAUSS_X)))
     s0, s1 = wet_interval(c[2], a_z, sin_t, r, half, z_ref)
     if s1 <= s0:
         return []
@@ -234,10 +237,42 @@ def foot_inertia_force(rho, volume, added_mass, du, vp_accel):
     return rho * volume * du + np.asarray(added_mass, float) @ (du - np.asarray(vp_accel, float))
 
 
-def sphere_drag(rho, cd, r, frac, v_rel):
-    """Drag of a sphere (N, vector): -0.5 rho cd (pi r^2 frac) |v| v (Hoerner: cd ~0.47, subcritical)."""
+def sphere_wet_frontal_area(r, depth, v):
+    """Area facing a flow along v of the wet part of a sphere of radius r whose lowest point is ``depth`` below a level
+    surface (m^2): the wet cap projected on the plane normal to v (exact).
+
+    With h = depth - r the surface's height above the centre, r_w = sqrt(r^2 - h^2) the waterline circle's radius and
+    s, c the sine and |cosine| of v's angle from the vertical, a line along v meets the cap iff its chord's lowest
+    point is under the surface. Those lines cover the silhouette disk below the chord h / s from its centre (the
+    points of the silhouette circle that are wet), ``circle_wet_area(r, h / s)``, and beyond that chord the projected
+    waterline disk (an ellipse of semi-axes c r_w, r_w centred -h s from the disk's centre) cut by the same line,
+    ``c circle_wet_area(r_w, -h c / s)``. Horizontal flow: the circular segment ``circle_wet_area(r, h)``; vertical:
+    the waterline disk pi r_w^2 (pi r^2 once wet past the centre).
+    """
+    v = np.asarray(v, float)
+    speed = float(np.linalg.norm(v))
+    if depth <= 0.0:
+        return 0.0
+    if depth >= 2.0 * r:
+        return np.pi * r * r
+    h = depth - r
+    r_w = np.sqrt(max(r * r - h * h, 0.0))
+    s = float(np.hypot(v[0], v[1])) / speed if speed > 0.0 else 1.0
+    c = abs(float(v[2])) / speed if speed > 0.0 else 0.0
+    if s < TINY:
+        return np.pi * r * r if h >= 0.0 else np.pi * r_w * r_w
+    area = float(circle_wet_area(r, h / s))
+    if r_w > 0.0:
+        area += c * float(circle_wet_area(r_w, -h * c / s))
+    return area
+
+
+def sphere_drag(rho, cd, r, depth, v_rel):
+    """Drag of a sphere whose lowest point is ``depth`` under the surface (N, vector): the standard drag equation
+    -0.5 rho cd A |v| v with A the wet part's frontal area (``sphere_wet_frontal_area``) facing v (Hoerner,
+    *Fluid-Dynamic Drag* 1965, ch. 3: cd ~0.47, subcritical; no free-surface correction)."""
     v_rel = np.asarray(v_rel, float)
-    return -0.5 * cd * rho * np.pi * r * r * frac * np.linalg.norm(v_rel) * v_rel
+    return -0.5 * cd * rho * sphere_wet_frontal_area(r, depth, v_rel) * np.linalg.norm(v_rel) * v_rel
 
 
 def segment_loads(c, axis, r, half, caps, surface_at, velocity_at, vp_accel_at, flow_at, flow_accel_at, rho=1000.0,
