@@ -34,7 +34,7 @@ def test_required_tools_come_from_planner_vocabulary():
     assert "soil" in required_tools("sand dunes")
     assert "low_friction" in required_tools("an icy road")
     assert "low_friction" in required_tools("a slippery park")  # a modifier's extra step
-    assert required_tools(names=("water", "grass")) == ["water"]
+    assert required_tools(names=("water", "grass")) == ["basin", "water"]  # sketch water lies in a basin
     with pytest.raises(ValueError, match="LEGEND"):
         required_tools(names=("lava",))
 

@@ -17,7 +17,7 @@ import numpy as np
 from legged_gente.evaluation.benchmark import Item
 
 CATEGORY_OF_TOOL = {
-    "water": "water", "river": "water",
+    "water": "water", "river": "water", "basin": "water",
     "soil": "soil", "low_friction": "soil",  # the ground's material: deformable or slippery
     "pillars": "obstacles", "discrete_obstacles": "obstacles", "rocks": "obstacles", "stepping_stones": "obstacles",
     "gap": "obstacles", "pit": "obstacles",

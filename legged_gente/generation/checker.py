@@ -1,4 +1,5 @@
-"""Rejects benchmark items that are empty, out of bounds, untraversable at the spawn, or miss what they name.
+"""Rejects benchmark items that are empty, out of bounds, untraversable at the spawn, hold water that would run
+off (a water wall), or miss what they name.
 
 What an item *names* comes from the generation planner's own vocabulary, never from a second table:
 a text prompt names the tools the planner's recipes build for it (``recipe_steps``: its cues with their
@@ -29,6 +30,12 @@ BOUNDS_TOLERANCE = 1e-3
 """Slack (m) on the declared height bounds: float32 storage and seam blending round."""
 GROUND_FRICTION = 1.0
 """Friction of plain ground when the checker builds a tile (the terrain config's default static_friction)."""
+WATER_WALL_TOLERANCE = 0.05
+"""Height (m) by which a water surface may stand above the ground of a dry neighbouring cell. A wet cell's
+surface is level; the dry neighbour's ground may lie a little below it where the shore is sampled at 0.1 m cells
+(a shelving shore drops a few cm per cell near the waterline) and where the base relief's bumps (natural ground of
+a few cm) meet the waterline. 5 cm is a third of ankle depth for the ~1 m biped: below it the edge is a sampling
+detail, above it the water stands up against nothing and would run off."""
 
 
 @dataclasses.dataclass
@@ -70,6 +77,18 @@ def _visible(tool: str, heights: np.ndarray, material, window: tuple[slice, slic
     return bool(h.size) and (float(h.max() - h.min()) > MIN_RELIEF or float(np.abs(h).max()) > MIN_RELIEF)
 
 
+def water_walls(heights: np.ndarray, material) -> tuple[int, float, tuple[int, int]]:
+    """Wet cells beside a dry 4-neighbour of the tile whose ground lies more than ``WATER_WALL_TOLERANCE`` below
+    their water surface: (how many, the largest such drop in m, a wet cell (i, j) with it)."""
+    wet, surface = material.has_water(), material.water_surface
+    drop = np.zeros(heights.shape)
+    for a, b in ((np.s_[:-1, :], np.s_[1:, :]), (np.s_[1:, :], np.s_[:-1, :]),
+                 (np.s_[:, :-1], np.s_[:, 1:]), (np.s_[:, 1:], np.s_[:, :-1])):
+        drop[a] = np.maximum(drop[a], np.where(wet[a] & ~wet[b], surface[a] - heights[b], 0.0))
+    i, j = np.unravel_index(int(drop.argmax()), drop.shape)
+    return int((drop > WATER_WALL_TOLERANCE).sum()), float(drop[i, j]), (int(i), int(j))
+
+
 def build_single_tile(spec_path: Path, spec: TerrainSpec) -> Terrain:
     """The spec as a one-tile, borderless ``Terrain`` (its spawn search is the one training uses)."""
     cfg = types.SimpleNamespace(
@@ -82,7 +101,7 @@ def build_single_tile(spec_path: Path, spec: TerrainSpec) -> Terrain:
 
 
 def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[str, ...] = ()) -> CheckResult:
-    """Check one spec file against the four rules; ``prompt``/``names`` say what the item names."""
+    """Check one spec file against the five rules; ``prompt``/``names`` say what the item names."""
     spec_path = Path(spec_path)
     spec = TerrainSpec.load(spec_path)
     terrain = build_single_tile(spec_path, spec)
@@ -104,6 +123,13 @@ def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[st
         problems.append(f"out of bounds: {int(outside.sum())} cells lie outside the heights their calls can make, e.g. "
                         f"{float(heights[i, j]):.3f} m at ({i * res:.1f}, {j * res:.1f}) m, where the calls allow "
                         f"[{float(lo[i, j]):.3f}, {float(hi[i, j]):.3f}] m.")
+
+    count, worst, (i, j) = water_walls(heights, material)
+    if count:
+        problems.append(f"water wall: {count} wet cells stand beside dry ground up to {worst:.3f} m below their water "
+                        f"surface (> {WATER_WALL_TOLERANCE} m), e.g. at ({i * res:.1f}, {j * res:.1f}) m: the water "
+                        f"would run off; put it in a depression at least as deep (a river, pit or basin under the "
+                        f"water's region).")
 
     ox, oy = (float(v) for v in terrain.terrain_origins[0, 0, :2])
     # The window the spawn search judged (Terrain._spawn_origins): f cells, fewer on a tile narrower than that,

@@ -410,6 +410,29 @@ def pit(shape, resolution, rng, depth, width):
     return np.where(d < width / 2.0 - EDGE, -depth, 0.0).astype(F32)
 
 
+@atomic_terrain(
+    "basin",
+    "geometric",
+    "A depression that holds water: the ground falls from the rectangle's edges to depth below them over "
+    "shore_width (a smooth shelving shore) to a flat bottom; add 'water' on the same region to fill it.",
+    {
+        "depth": Param(0.4, "depth of the flat bottom below the rectangle's edges", "m", 0.0, 2.0),
+        "shore_width": Param(1.5, "horizontal width of the shore from the edge to the bottom (narrowed to half "
+                                  "the rectangle's shorter side on a narrower one)", "m", 0.1, 10.0),
+    },
+    difficulty=lambda d: {"depth": _lerp(0.1, 0.6, d)},
+    bounds=lambda p, sx, sy: (-p["depth"], 0.0),
+)
+def basin(shape, resolution, rng, depth, shore_width):
+    x, y = _axes(shape, resolution)
+    half_x, half_y = (shape[0] - 1) / 2.0 * resolution, (shape[1] - 1) / 2.0 * resolution
+    to_edge = np.minimum(half_x - np.abs(x), half_y - np.abs(y))  # 0 on the edge cells
+    # a shore wider than half the shorter side would leave the bottom short of depth: narrow it to fit
+    shore = max(min(shore_width, half_x, half_y), EDGE)
+    # smoothstep 3t^2 - 2t^3: level with the edge at t = 0 and with the bottom at t = 1 (C1 at both)
+    return (-depth * _smoothstep(to_edge / shore)).astype(F32)
+
+
 PILLAR_PARAMS = {
     "height": Param(2.0, "height of the pillars", "m", 0.3, 6.0),
     "min_radius": Param(0.1, "smallest pillar radius", "m", 0.03, 1.0),

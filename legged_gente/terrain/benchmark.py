@@ -16,14 +16,15 @@ from .terrain import Terrain, parse_tile_type
 BENCHMARK_TYPES = [
     "flat", "pyramid_slope", "pyramid_slope:direction=down", "random_uniform", "natural_ground", "hills",
     "waves", "stairs", "stairs:direction=down", "pyramid_stairs", "pyramid_stairs:direction=down",
-    "discrete_obstacles", "stepping_stones", "gap", "pit", "pillars", "rocks", "river+water",
+    "discrete_obstacles", "stepping_stones", "gap", "pit", "pillars", "rocks", "river+water", "basin+water",
     "hills+soil:preset=dry_sand", "low_friction",
 ]
-"""Twenty columns: every geometric atomic, both directions where they have one, water, sand and ice."""
+"""Twenty-one columns: every geometric atomic, both directions where they have one, water in a river and in a
+basin, sand and ice."""
 
 
 def benchmark_grid(
-    num_rows: int = 10, num_cols: int = 20, tile_size: float = 8.0, resolution: float = 0.1, repeats: int = 3
+    num_rows: int = 10, num_cols: int = len(BENCHMARK_TYPES), tile_size: float = 8.0, resolution: float = 0.1, repeats: int = 3
 ) -> dict[str, Any]:
     """Build the curriculum grid ``repeats`` times; return the best and mean build seconds and the grid facts."""
     covered = {name for entry in BENCHMARK_TYPES for name, _ in parse_tile_type(entry)}
@@ -66,7 +67,7 @@ def describe(result: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, default=10)
-    parser.add_argument("--cols", type=int, default=20)
+    parser.add_argument("--cols", type=int, default=len(BENCHMARK_TYPES))
     parser.add_argument("--tile-size", type=float, default=8.0)
     parser.add_argument("--resolution", type=float, default=0.1)
     parser.add_argument("--repeats", type=int, default=3)

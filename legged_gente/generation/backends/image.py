@@ -45,7 +45,7 @@ from PIL import Image, ImageOps
 from scipy import ndimage
 
 from legged_gente.generation.backends import GenerationResult
-from legged_gente.generation.backends.planner import KNEE_HEIGHT, Step
+from legged_gente.generation.backends.planner import FREEBOARD, KNEE_HEIGHT, WATER_MARGIN, Step, keep_off_seams
 from legged_gente.generation.tools import named_regions
 from legged_gente.generation.validation import MAX_CALLS as SPEC_MAX_CALLS
 from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
@@ -68,8 +68,15 @@ BLOCK_FILL = 0.5
 its pixel steps) is one block over that box; any other (a wall, a ring, an L) is covered by rectangles of its own
 pixels, so the ground it encloses or passes by stays open."""
 
+WATER_SHORE = 1.5
+"""Width (m) of the shelving shore of a basin under image water: 0.4 m down over 1.5 m, at most 22 degrees
+(smoothstep's steepest slope is 1.5 depth / width), so a robot can wade in."""
+
 LEGEND: dict[str, Legend] = {
-    "water": Legend((0, 0, 255), f"knee-deep water ({KNEE_HEIGHT} m)", (Step("water", {"depth": KNEE_HEIGHT}),)),
+    "water": Legend((0, 0, 255), f"knee-deep water ({KNEE_HEIGHT} m) in a basin", (
+        Step("basin", {"depth": KNEE_HEIGHT + FREEBOARD, "shore_width": WATER_SHORE}, mode="add"),
+        Step("water", {"depth": KNEE_HEIGHT}),
+    )),
     "sand": Legend((255, 255, 0), "dry sand", (Step("soil", {"preset": "dry_sand"}),)),
     "forest": Legend((0, 128, 0), "forest floor with trees", (
         Step("natural_ground", {"amplitude": 0.08, "wavelength": 2.0, "platform": 0.0}, mode="add"),
@@ -102,8 +109,8 @@ FLAT_RANGE = 12.0
 GRID = 96  # sketch analysis resolution (pixels per side)
 SKETCH_BLOCK = 4  # pixels per block of a sketch: 24 blocks per side (0.8 m on a 20 m tile)
 MIN_FRACTION = 0.02  # a sketch class covering less of the image is ignored
-MAX_CALLS = 20
-"""Most calls a photo gives (GenTe asks for 3-20)."""
+MAX_CALLS = 21
+"""Most calls a photo gives (GenTe asks for 3-20; water is two: its basin and itself)."""
 
 
 def open_image(data: bytes, source: object = None) -> Image.Image:
@@ -248,6 +255,10 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
             mask = block_class == CLASSES.index(name)
             mask |= ndimage.binary_fill_holes(mask) & (block_class == CLASSES.index("obstacle"))
             rects = [(r0, c0, r1, c1) for c0, r0, c1, r1 in _rectangles(mask.T)]
+            shape = block_class.shape
+        elif name == "water":  # one rectangle over each water blob's box: one basin, so no dry ridge splits it
+            labels, _ = ndimage.label(block_class == CLASSES.index(name))
+            rects = [(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop) for sl in ndimage.find_objects(labels)]
             shape = block_class.shape
         else:
             rects = _rectangles(block_class == CLASSES.index(name))
@@ -607,11 +618,28 @@ def read_photo(img: Image.Image, size_x: float = 20.0) -> PhotoReading:
 
 
 def _water_steps(flow: str) -> tuple[Step, ...]:
+    """Knee-deep water, still or flowing, in the basin of the sketch's water (``LEGEND``) set in place of the
+    part's relief: water over stairs or a hill read ahead would run off down them."""
+    held, still = LEGEND["water"].steps
+    held = dataclasses.replace(held, mode="set")
     if flow == "current":
-        return (Step("water", {"depth": KNEE_HEIGHT, "flow": "current", "speed": 0.8, "direction": np.pi / 2}),)
+        return held, Step("water", {**still.params, "flow": "current", "speed": 0.8, "direction": np.pi / 2})
     if flow == "tide":
-        return (Step("water", {"depth": KNEE_HEIGHT, "flow": "tide", "speed": 0.4, "omega": 0.5, "direction": 0.0}),)
-    return (Step("water", {"depth": KNEE_HEIGHT}),)
+        return held, Step("water", {**still.params, "flow": "tide", "speed": 0.4, "omega": 0.5, "direction": 0.0})
+    return held, still
+
+
+def _water_region(region: str | dict, size_x: float, size_y: float) -> dict[str, float]:
+    """A photo's water region kept ``WATER_MARGIN`` off its edges inside the tile (the planner's rule): the parts
+    beside it blend over them, and the spawn square at the tile's centre stays level. A band too thin to lose that
+    (narrower than 2 * WATER_MARGIN once kept off) keeps its extent across: the water lies on the part's own ground."""
+    rect = named_regions(size_x, size_y)[region] if isinstance(region, str) else tuple(region.values())
+    x0, y0, x1, y1 = keep_off_seams(rect, rect, size_x, size_y, water=False)
+    if x1 - x0 < 2 * WATER_MARGIN:
+        x0, x1 = rect[0], rect[2]
+    if y1 - y0 < 2 * WATER_MARGIN:
+        y0, y1 = rect[1], rect[3]
+    return {"x0": x0, "y0": y0, "x1": x1, "y1": y1}
 
 
 def _merge(per_part: dict[str, tuple[str, ...]]) -> list[tuple[str, tuple[str, ...]]]:
@@ -638,8 +666,9 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
     per_part: dict[str, tuple[str, ...]] = {}
     for name, frac in r.parts.items():
         ranked = sorted(frac, key=lambda k: -frac[k])
-        # The dominant surface and at most one more: with the base, slope, stairs, a water band, 2 tall and 4
-        # rock calls this bounds a photo to 1 + 1 + 1 + 1 + 4 * 2 + 2 + 4 = 18 <= MAX_CALLS calls.
+        # The dominant surface and at most one more (water: a basin and the water): with the base, slope, stairs,
+        # 2 tall and 4 rock calls this bounds a photo to 1 + 1 + 1 + 4 * 3 + 2 + 4 = 21 <= MAX_CALLS calls; a water
+        # band takes the parts' water, so with it 1 + 1 + 1 + 2 + 4 * 2 + 2 + 4 = 19.
         kept = [k for k in ranked if frac[k] >= MIN_SHARE.get(k, DEFAULT_SHARE) or (k == ranked[0] and frac[k] > 0)]
         chosen = tuple(sorted(kept[:2]))
         per_part[name] = chosen
@@ -661,12 +690,14 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
         if far - near >= 0.5:
             per_part = {k: tuple(sf for sf in v if sf != "water") for k, v in per_part.items()}
             region = "full" if (near, far) == (0.0, size_x) else {"x0": near, "y0": 0.0, "x1": far, "y1": size_y}
-            out += [(step, {"region": region}) for step in _water_steps(r.flow)]
+            out += [(step, {"region": _water_region(region, size_x, size_y)}) for step in _water_steps(r.flow)]
             notes.append(f"water across the view from {near:g} m to {far:g} m ahead ({r.flow})")
     for region, surfaces in _merge(per_part):
         for sf in surfaces:
-            steps = _water_steps(r.flow) if sf == "water" else SURFACE_STEPS[sf]
-            out += [(step, {"region": region}) for step in steps]
+            if sf == "water":
+                out += [(step, {"region": _water_region(region, size_x, size_y)}) for step in _water_steps(r.flow)]
+            else:
+                out += [(step, {"region": region}) for step in SURFACE_STEPS[sf]]
     regions = named_regions(size_x, size_y)
     for side, kind in r.tall.items():
         x0, y0, x1, y1 = regions["front_" + side]

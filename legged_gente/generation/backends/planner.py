@@ -14,6 +14,10 @@ water becomes ice; dry: no water). Negated words are honoured: "no river" drops 
 recipes can only use real tools and parameters, and a modifier that would push a value out of range is
 clamped with a warning.
 
+Water stands in ground that holds it: a channel's water covers its whole slot (only the channel below the surface
+is wet), open water lies in a ``basin``, and after the modifiers every depression holding a water step of the cue is
+deepened to the water's depth plus :data:`FREEBOARD`.
+
 Scale: depths like "knee-deep" refer to a robot of about 1 m height (knee at about 0.3 m), the biped this
 project ships; change :data:`KNEE_HEIGHT` for other robots.
 """
@@ -28,10 +32,22 @@ from typing import Any, Mapping
 from legged_gente.generation.backends import GenerationResult
 from legged_gente.generation.tools import named_regions
 from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
+from legged_gente.terrain.composition import SEAM_BAND
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 KNEE_HEIGHT = 0.3
 """Knee height (m) of the ~1 m biped this project ships; "knee-deep" water is this deep."""
+FREEBOARD = 0.1
+"""Height (m) by which the ground holding a recipe's water (its river, pit, basin or sunken floor) rises above the
+water's surface after the modifiers: the water's depth plus this is the depression's least depth, so the
+ground's few centimetres of relief (natural ground) never lift the waterline over the rim."""
+WATER_MARGIN = SEAM_BAND + 0.2
+"""Distance (m) by which water and the depression holding it keep off a slot edge inside the tile: a neighbouring
+cue's part blends into this slot over ``SEAM_BAND``, so a rim there could be pulled down below the waterline
+(stairs falling away, a quay); two more 0.1 m cells keep the rim whole."""
+DEPRESSIONS = ("river", "pit", "basin")
+"""Geometric terrains that hold water: their ``depth`` below the ground (a ``flat`` below 0 m on part of a slot,
+a quay's floor, holds it too)."""
 
 Frac = tuple[float, float, float, float]
 FULL: Frac = (0.0, 0.0, 1.0, 1.0)
@@ -96,19 +112,23 @@ CUES: tuple[Cue, ...] = (
         Step("natural_ground", {"amplitude": 0.04, "wavelength": 4.0, "platform": 0.0}),
         Step("soil", {"preset": "dry_sand"}, (0.0, 0.0, 0.6, 1.0)),
         Step("soil", {"preset": "wet_sand"}, WATER_FRONT),
+        Step("basin", {"depth": 0.3, "shore_width": 1.5}, WATER_FRONT, mode="add"),
         Step("water", {"depth": 0.2, "flow": "tide", "speed": 0.3, "omega": 0.5, "direction": 0.0}, WATER_FRONT),
     )),
     Cue("sea", ("sea", "ocean", "coast", "coastline", "seaside", "seashore"), (
         Step("natural_ground", {"amplitude": 0.05, "wavelength": 4.0, "platform": 0.0}),
+        Step("basin", {"depth": 0.5, "shore_width": 2.0}, WATER_FRONT, mode="add"),
         Step("water", {"depth": 0.4, "flow": "tide", "speed": 0.4, "omega": 0.5, "direction": 0.0}, WATER_FRONT),
     )),
     Cue("tidal flat", ("tidal flat", "tidal flats", "mudflat", "mud flat", "mud flats"), (
         Step("natural_ground", {"amplitude": 0.03, "wavelength": 4.0, "platform": 0.0}),
         Step("soil", {"preset": "wet_sand"}),
+        Step("basin", {"depth": 0.2, "shore_width": 1.0}, (0.5, 0.0, 1.0, 1.0), mode="add"),
         Step("water", {"depth": 0.1, "flow": "tide", "speed": 0.3, "omega": 0.5, "direction": 0.0}, (0.5, 0.0, 1.0, 1.0)),
     )),
     Cue("shore", ("shore", "shoreline", "lakeshore", "waterfront", "waterside"), (
         Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
+        Step("basin", {"depth": 0.25, "shore_width": 1.5}, WATER_FRONT, mode="add"),
         Step("water", {"depth": 0.15}, WATER_FRONT),
     )),
     Cue("bank", ("bank", "riverbank", "embankment"), (
@@ -117,22 +137,22 @@ CUES: tuple[Cue, ...] = (
     Cue("river", ("river", "riverbed", "river bed"), (
         Step("natural_ground", {"amplitude": 0.04, "wavelength": 3.0, "platform": 0.0}),
         Step("river", {"width": 4.0, "depth": 0.5, "bank_width": 0.8, "direction": ACROSS, "meander_amplitude": 0.5}, mode="add"),
-        Step("water", {"depth": 0.35, "flow": "current", "speed": 0.6, "direction": ACROSS}, (0.3, 0.0, 0.7, 1.0)),
+        Step("water", {"depth": 0.35, "flow": "current", "speed": 0.6, "direction": ACROSS}),
     )),
     Cue("rapids", ("rapids", "torrent", "whitewater", "white water"), (
         Step("natural_ground", {"amplitude": 0.05, "wavelength": 2.0, "platform": 0.0}),
         Step("river", {"width": 5.0, "depth": 0.6, "bank_width": 0.8, "direction": ACROSS}, mode="add"),
-        Step("water", {"depth": 0.4, "flow": "current", "speed": 1.5, "direction": ACROSS}, (0.25, 0.0, 0.75, 1.0)),
+        Step("water", {"depth": 0.4, "flow": "current", "speed": 1.5, "direction": ACROSS}),
     )),
     Cue("waterfall", ("waterfall", "waterfalls", "cascade"), (
         Step("natural_ground", {"amplitude": 0.05, "wavelength": 2.0, "platform": 0.0}),
         Step("river", {"width": 2.0, "depth": 0.4, "bank_width": 0.4, "direction": 0.0}, mode="add"),
-        Step("water", {"depth": 0.3, "flow": "current", "speed": 1.2, "direction": 0.0}, (0.0, 0.4, 1.0, 0.6)),
+        Step("water", {"depth": 0.3, "flow": "current", "speed": 1.2, "direction": 0.0}),
     )),
     Cue("stream", ("stream", "creek", "brook"), (
         Step("natural_ground", {"amplitude": 0.04, "wavelength": 2.0, "platform": 0.0}),
         Step("river", {"width": 1.5, "depth": 0.2, "bank_width": 0.3, "direction": ACROSS, "meander_amplitude": 0.3}, mode="add"),
-        Step("water", {"depth": 0.12, "flow": "current", "speed": 0.4, "direction": ACROSS}, (0.4, 0.0, 0.6, 1.0)),
+        Step("water", {"depth": 0.12, "flow": "current", "speed": 0.4, "direction": ACROSS}),
     )),
     Cue("lake", ("lake", "pond", "pool", "lagoon", "reservoir"), weak=("water",), steps=(
         Step("natural_ground", {"amplitude": 0.03, "wavelength": 3.0, "platform": 0.0}),
@@ -146,12 +166,16 @@ CUES: tuple[Cue, ...] = (
     )),
     Cue("puddles", ("puddle", "puddles"), (
         Step("natural_ground", {"amplitude": 0.03, "wavelength": 2.0, "platform": 0.0}),
+        Step("basin", {"depth": 0.15, "shore_width": 0.5}, (0.2, 0.1, 0.4, 0.4), mode="add"),
+        Step("basin", {"depth": 0.15, "shore_width": 0.5}, (0.6, 0.5, 0.8, 0.8), mode="add"),
         Step("water", {"depth": 0.05}, (0.2, 0.1, 0.4, 0.4)),
         Step("water", {"depth": 0.05}, (0.6, 0.5, 0.8, 0.8)),
     )),
     Cue("swamp", ("swamp", "marsh", "bog", "wetland", "wetlands"), (
         Step("natural_ground", {"amplitude": 0.06, "wavelength": 2.5, "platform": 0.0}),
         Step("soil", {"preset": "mud"}),
+        Step("basin", {"depth": 0.25, "shore_width": 1.0}, (0.1, 0.1, 0.45, 0.9), mode="add"),
+        Step("basin", {"depth": 0.25, "shore_width": 1.0}, (0.55, 0.1, 0.9, 0.9), mode="add"),
         Step("water", {"depth": 0.15}, (0.1, 0.1, 0.45, 0.9)),
         Step("water", {"depth": 0.15}, (0.55, 0.1, 0.9, 0.9)),
     )),
@@ -306,7 +330,8 @@ MODIFIERS: tuple[Modifier, ...] = (
     Modifier("smooth", ("smooth",), scale=_per_tool(_ROUGHNESS, 0.4)),
     Modifier("rocky", ("rocky", "stony"), extra=(Step("rocks", {"max_height": 0.15, "density": 0.6}, mode="add"),)),
     Modifier("slippery", ("slippery", "slick", "wet"), extra=(Step("low_friction", {"preset": "wet_tiles"}),)),
-    Modifier("flooded", ("flooded", "flooding", "submerged"), extra=(Step("water", {"depth": 0.2}),)),
+    Modifier("flooded", ("flooded", "flooding", "submerged"),
+             extra=(Step("basin", {"depth": 0.3, "shore_width": 1.5}, mode="add"), Step("water", {"depth": 0.2}))),
     Modifier("frozen", ("frozen", "icy", "iced over", "ice-covered"), drop=(("water", None),),
              extra=(Step("low_friction", {"preset": "ice"}),)),
     Modifier("dry", ("dry", "dried", "dried-up", "dried up"), drop=(("water", None),)),
@@ -436,6 +461,47 @@ def _apply(step: Step, modifiers: list[Modifier], terrain: AtomicTerrain, warnin
     return params
 
 
+def _inside(inner: Frac, outer: Frac) -> bool:
+    return outer[0] <= inner[0] and outer[1] <= inner[1] and inner[2] <= outer[2] and inner[3] <= outer[3]
+
+
+def _hold_water(steps: list[Step], params: list[dict[str, Any]]) -> set[int]:
+    """Deepen every depression that holds a water step of the cue (its rectangle inside the depression's) to the
+    water's depth plus ``FREEBOARD``, in ``params`` (the steps' parameters after the modifiers); the indices of the
+    water steps and their depressions."""
+    held: set[int] = set()
+    for w, water in enumerate(steps):
+        if water.tool != "water":
+            continue
+        need = round(float(params[w]["depth"]) + FREEBOARD, 4)
+        for d, step in enumerate(steps):
+            if not _inside(water.where, step.where):
+                continue
+            if step.tool in DEPRESSIONS:
+                params[d]["depth"] = max(float(params[d].get("depth", ATOMIC_TERRAINS[step.tool].params["depth"].default)), need)
+                held |= {w, d}
+            elif step.tool == "flat" and step.where != FULL and float(params[d].get("height", 0.0)) < 0.0:
+                params[d]["height"] = min(float(params[d]["height"]), -need)
+                held |= {w, d}
+    return held
+
+
+def keep_off_seams(rect, slot, size_x: float, size_y: float, water: bool):
+    """``rect`` of a depression moved in by ``WATER_MARGIN`` on each side that lies on an edge of its slot inside
+    the tile; the rect of its water so moved and then widened by ``SEAM_BAND`` on every side inside the tile, over
+    the band where the depression blends into the ground around it (a channel's end, a quay floor's edge): the
+    water's surface there is the depression's, and no lowered cell of the band is left dry below it."""
+    x0, y0, x1, y1 = rect
+    slot = tuple(round(v, 2) for v in slot)
+    x0 += WATER_MARGIN if x0 == slot[0] and x0 > 0.0 else 0.0
+    y0 += WATER_MARGIN if y0 == slot[1] and y0 > 0.0 else 0.0
+    x1 -= WATER_MARGIN if x1 == slot[2] and x1 < size_x else 0.0
+    y1 -= WATER_MARGIN if y1 == slot[3] and y1 < size_y else 0.0
+    if water:
+        x0, y0, x1, y1 = max(x0 - SEAM_BAND, 0.0), max(y0 - SEAM_BAND, 0.0), min(x1 + SEAM_BAND, size_x), min(y1 + SEAM_BAND, size_y)
+    return tuple(round(v, 2) for v in (x0, y0, x1, y1))
+
+
 def _steps(cue: Cue, modifiers: list[Modifier]) -> list[Step]:
     """The cue's recipe after the modifiers' drops, then their extra steps."""
     drops = tuple(d for m in modifiers for d in m.drop)
@@ -503,12 +569,14 @@ def plan_text(
         notes.append(f"{cue.name} on {slot_name}" + (f" ({', '.join(m.name for m in used)})" if used else "")
                      + (f": {cue.note}" if cue.note else ""))
         steps = _steps(cue, used)
-        geometric = [s for s in steps if registry[s.tool].kind == "geometric"]
-        physical = [s for s in steps if registry[s.tool].kind == "physical"]
-        for step in geometric + physical:
-            terrain = registry[step.tool]
-            args = _apply(step, used, terrain, warnings)
+        params = [_apply(step, used, registry[step.tool], warnings) for step in steps]
+        held = _hold_water(steps, params)
+        # geometry first, then materials, each in recipe order
+        for k in sorted(range(len(steps)), key=lambda k: registry[steps[k].tool].kind != "geometric"):
+            step, args, terrain = steps[k], params[k], registry[steps[k].tool]
             rect = _frac_rect(slot, step.where)
+            if k in held:
+                rect = keep_off_seams(rect, slot, size_x, size_y, step.tool == "water")
             name = next((n for n, r in regions.items() if r == rect), None)
             args["region"] = name or dict(zip(("x0", "y0", "x1", "y1"), rect))
             if terrain.kind == "geometric":
