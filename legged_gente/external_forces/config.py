@@ -54,6 +54,12 @@ class ForcesConfig:
                           (only the feet touch the terrain), and MuJoCo's soft contact would push it out at up
                           to depth / (2 dmax timeconst): 26 m/s from 1 m inside a pillar. Capped, at most
                           0.03 / (2 * 0.95 * 0.02 s) = 0.8 m/s
+    terrain_contact_max_depth: float  deepest penetration (m) any other terrain contact (MuJoCo's heightfield
+                          collision: legs, body, box soles) gives the solver. A limb that enters a tall column (a
+                          tree, a pillar: a few cells of the heightfield) from its side is collided with the
+                          column's top prism face, metres above it (a biped shank 2.45 m "deep" in a 3 m tree was
+                          seen leaving at 11-28 m/s); the column's side contacts, a few cm deep, push it out.
+                          Capped as the soles, at most 0.03 / (2 * 0.95 * 0.02 s) = 0.8 m/s
     bulldozing_speed_reg: float  speed (m/s) below which the bulldozing (and RFT) force fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
@@ -87,6 +93,7 @@ class ForcesConfig:
     min_friction = 0.01
     sole_contact = True
     sole_contact_max_depth = 0.03
+    terrain_contact_max_depth = 0.03
     bulldozing_speed_reg = 0.05
     sinkage_rate = 0.5
     max_rut_depth = 0.01

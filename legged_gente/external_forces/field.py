@@ -42,7 +42,7 @@ _ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]
 # numeric settings and the bound each must meet: below it a substep divides by zero, gives NaN forces (a foot at rest
 # on soil with bulldozing_speed_reg 0) or forces that add energy (negative drag coefficients or density)
 _POSITIVE = ("water_density", "friction_reference", "soil_friction_cap", "sole_contact_max_depth",
-             "bulldozing_speed_reg", "sinkage_load_tau")
+             "terrain_contact_max_depth", "bulldozing_speed_reg", "sinkage_load_tau")
 _NON_NEGATIVE = ("drag_coefficient", "added_mass_coefficient", "plate_drag_coefficient", "sphere_drag_coefficient",
                  "noise_std", "contact_threshold", "liftoff_time", "min_friction", "sinkage_rate", "max_rut_depth")
 
@@ -459,15 +459,16 @@ class TerrainForces:
 
     # ------------------------------------------------------------------ callbacks
     def install(self):
-        """Set the mujoco_warp callbacks (contact filter for soil/friction, passive for the forces)."""
+        """Set the mujoco_warp callbacks (contact filter for the terrain contacts' depth cap, soil and friction;
+        passive for the forces)."""
         cfg = self.cfg
-        if cfg.soil or cfg.friction_from_map or self.npt:
-            self.m.callback.contactfilter = self.contact_filter
+        self.m.callback.contactfilter = self.contact_filter
         if cfg.wading or cfg.soil:
             self.m.callback.passive = self.passive
 
     def contact_filter(self, m, d):
-        """Ground friction and soil ruts on MuJoCo's contacts, then the analytic sole contacts. The launches are
+        """The depth cap, ground friction and soil ruts on MuJoCo's terrain contacts, then the analytic sole
+        contacts. The launches are
         recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU packing the
         sole kernel's ~60 arguments every substep would cost more than the heightfield collision it replaces."""
         for launch in self._recorded_filter(m, d):
@@ -506,7 +507,8 @@ class TerrainForces:
         c = d.contact
         launches.append(wp.launch(
             K.contact_filter_kernel, dim=d.naconmax, device=dev,
-            inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.soilmap, feet, float(cfg.max_rut_depth), c.pos,
+            inputs=[d.nacon, self.geom_foot, self.geom_bodyid, self.soilmap, feet, float(cfg.max_rut_depth),
+                    float(cfg.terrain_contact_max_depth), c.pos,
                     c.geom, c.worldid, c.dist, c.friction, c.dim, self.foot_touch, self.foot_cand], record_cmd=True,
         ))
         if self.npt:

@@ -365,6 +365,7 @@ def contact_filter_kernel(
     soilmap: SoilMap,
     feet: FootSoil,
     max_rut: float,
+    max_depth: float,
     # contacts (modified)
     contact_pos: wp.array[wp.vec3],
     contact_geom: wp.array[wp.vec2i],
@@ -376,8 +377,10 @@ def contact_filter_kernel(
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
 ):
-    """MuJoCo's ground contacts take the cell's friction (soil: its traction limit); a MuJoCo-collided foot on
-    soil sits in a rut of depth z (the analytic sole contacts of ``contact.py`` show theirs themselves).
+    """MuJoCo's ground contacts are at most max_depth deep (``ForcesConfig.terrain_contact_max_depth``: a limb
+    inside a tall heightfield column is given the column's top, metres above it) and take the cell's friction
+    (soil: its traction limit); a MuJoCo-collided foot on soil sits in a rut of depth z (the analytic sole contacts
+    of ``contact.py`` show theirs themselves).
 
     The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration
     (contact dist += z, at most max_rut): the solver holds the foot that much deeper with the contact's
@@ -405,6 +408,7 @@ def contact_filter_kernel(
         other = g[0]
     if ground < 0 or other < 0:
         return
+    contact_dist[i] = wp.max(contact_dist[i], -max_depth)
     w = contact_worldid[i]
     cell = cell_of(contact_pos[i], soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
     f = geom_foot[other]
