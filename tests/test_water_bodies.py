@@ -184,3 +184,22 @@ def test_sketch_water_is_one_body_per_blob_and_has_no_wall(tmp_path, name, draw,
     heights, material = spec.build()
     assert _wet_bodies(material) == bodies, name
     assert worst_wall(heights, material) <= WATER_WALL_TOLERANCE, name
+
+
+def test_a_model_that_paints_a_pond_on_flat_ground_is_warned():
+    """The checker's rule on what a model writes: water on ground that does not hold it is a warning of
+    gente-generate (0.3 m of water on flat ground stands 0.3 m above the dry ground beside it), and none once a
+    basin at least as deep lies under the water."""
+    from test_generation_openai import FakeServer, _completion, _tool_call, ok
+
+
+    pond = {"x0": 5.0, "y0": 5.0, "x1": 15.0, "y1": 15.0}
+    on_flat = _completion([_tool_call("water", {"depth": 0.3, "region": pond})])
+    in_basin = _completion([_tool_call("basin", {"depth": 0.4, "shore_width": 1.5, "region": pond}, 0),
+                            _tool_call("water", {"depth": 0.3, "region": pond}, 1)])
+    with FakeServer([ok(on_flat), ok(in_basin)]) as srv:
+        _, flat = generate_spec("a pond", backend="openai", base_url=srv.url, model="m")
+        _, held = generate_spec("a pond", backend="openai", base_url=srv.url, model="m")
+    walls = [w for w in flat.warnings if w.startswith("water wall:")]
+    assert len(walls) == 1 and "up to 0.300 m below their water surface" in walls[0]
+    assert not [w for w in held.warnings if w.startswith("water wall:")]

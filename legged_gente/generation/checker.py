@@ -89,6 +89,16 @@ def water_walls(heights: np.ndarray, material) -> tuple[int, float, tuple[int, i
     return int((drop > WATER_WALL_TOLERANCE).sum()), float(drop[i, j]), (int(i), int(j))
 
 
+def water_wall_problem(heights: np.ndarray, material, resolution: float) -> str | None:
+    """The water wall rule's message for a built tile, or None when its water stands in ground that holds it."""
+    count, worst, (i, j) = water_walls(heights, material)
+    if not count:
+        return None
+    return (f"water wall: {count} wet cells stand beside dry ground up to {worst:.3f} m below their water surface "
+            f"(> {WATER_WALL_TOLERANCE} m), e.g. at ({i * resolution:.1f}, {j * resolution:.1f}) m: the water would "
+            f"run off; put it in a depression at least as deep (a river, pit or basin under the water's region).")
+
+
 def build_single_tile(spec_path: Path, spec: TerrainSpec) -> Terrain:
     """The spec as a one-tile, borderless ``Terrain`` (its spawn search is the one training uses)."""
     cfg = types.SimpleNamespace(
@@ -124,12 +134,9 @@ def check_spec(spec_path: str | Path, prompt: str | None = None, names: tuple[st
                         f"{float(heights[i, j]):.3f} m at ({i * res:.1f}, {j * res:.1f}) m, where the calls allow "
                         f"[{float(lo[i, j]):.3f}, {float(hi[i, j]):.3f}] m.")
 
-    count, worst, (i, j) = water_walls(heights, material)
-    if count:
-        problems.append(f"water wall: {count} wet cells stand beside dry ground up to {worst:.3f} m below their water "
-                        f"surface (> {WATER_WALL_TOLERANCE} m), e.g. at ({i * res:.1f}, {j * res:.1f}) m: the water "
-                        f"would run off; put it in a depression at least as deep (a river, pit or basin under the "
-                        f"water's region).")
+    wall = water_wall_problem(heights, material, res)
+    if wall:
+        problems.append(wall)
 
     ox, oy = (float(v) for v in terrain.terrain_origins[0, 0, :2])
     # The window the spawn search judged (Terrain._spawn_origins): f cells, fewer on a tile narrower than that,

@@ -88,5 +88,10 @@ def generate_spec(
     spec = TerrainSpec(
         calls=result.calls, name=name or default_name, size_x=size_x, size_y=size_y, resolution=resolution,
         seed=seed, source=source, backend=backend, model=model if backend == "openai" else None, smoothing=smoothing,
-    )
-    return spec.validated(), result
+    ).validated()
+    from legged_gente.generation.checker import water_wall_problem  # a model easily paints a pond on flat ground
+
+    wall = water_wall_problem(*spec.build(), spec.resolution)
+    if wall:
+        result.warnings.append(wall)
+    return spec, result

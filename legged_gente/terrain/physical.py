@@ -30,7 +30,9 @@ def _water_rules(p) -> None:
 @atomic_terrain(
     "water",
     "physical",
-    "Wading water filling the region up to a depth above its lowest ground, still or flowing (current, tide).",
+    "Wading water filling the region up to a depth above its lowest ground, still or flowing (current, tide). "
+    "It changes no height: lay it on a depression at least as deep (river, pit, basin), or it stands as a wall "
+    "where the region ends.",
     {
         "depth": Param(0.3, "height of the water surface above the lowest ground of the region", "m", 0.0, 2.0),
         "flow": Param("still", "still water, a steady current, or a tide oscillating along direction",
