@@ -283,7 +283,8 @@ CUES: tuple[Cue, ...] = (
     )),
     Cue("fountain", ("fountain",), (
         Step("flat", {"height": 0.5}, (0.3, 0.3, 0.7, 0.7)),
-        Step("flat", {"height": 0.1}, (0.35, 0.35, 0.65, 0.65)),
+        # the bowl is a basin cut into the rim (held water: its floor 0.4 m down, deeper for deeper water)
+        Step("basin", {"depth": 0.4, "shore_width": 0.1}, (0.35, 0.35, 0.65, 0.65), mode="add"),
         Step("flat", {"height": 1.2}, (0.47, 0.47, 0.55, 0.55)),
         Step("water", {"depth": 0.3}, (0.35, 0.35, 0.65, 0.65)),
     ), note="a basin with a 0.5 m rim, water inside and a central column"),
@@ -487,16 +488,16 @@ def _hold_water(steps: list[Step], params: list[dict[str, Any]]) -> set[int]:
 
 
 def keep_off_seams(rect, slot, size_x: float, size_y: float, water: bool):
-    """``rect`` of a depression moved in by ``WATER_MARGIN`` on each side that lies on an edge of its slot inside
-    the tile; the rect of its water so moved and then widened by ``SEAM_BAND`` on every side inside the tile, over
-    the band where the depression blends into the ground around it (a channel's end, a quay floor's edge): the
-    water's surface there is the depression's, and no lowered cell of the band is left dry below it."""
+    """``rect`` of a depression kept ``WATER_MARGIN`` off each edge of its slot inside the tile (a side on or nearer
+    to that edge is moved in); the rect of its water so moved and then widened by ``SEAM_BAND`` on every side inside
+    the tile, over the band where the depression blends into the ground around it (a channel's end, a quay floor's
+    edge): the water's surface there is the depression's, and no lowered cell of the band is left dry below it."""
     x0, y0, x1, y1 = rect
     slot = tuple(round(v, 2) for v in slot)
-    x0 += WATER_MARGIN if x0 == slot[0] and x0 > 0.0 else 0.0
-    y0 += WATER_MARGIN if y0 == slot[1] and y0 > 0.0 else 0.0
-    x1 -= WATER_MARGIN if x1 == slot[2] and x1 < size_x else 0.0
-    y1 -= WATER_MARGIN if y1 == slot[3] and y1 < size_y else 0.0
+    x0 = max(x0, slot[0] + WATER_MARGIN) if slot[0] > 0.0 else x0
+    y0 = max(y0, slot[1] + WATER_MARGIN) if slot[1] > 0.0 else y0
+    x1 = min(x1, slot[2] - WATER_MARGIN) if slot[2] < size_x else x1
+    y1 = min(y1, slot[3] - WATER_MARGIN) if slot[3] < size_y else y1
     if water:
         x0, y0, x1, y1 = max(x0 - SEAM_BAND, 0.0), max(y0 - SEAM_BAND, 0.0), min(x1 + SEAM_BAND, size_x), min(y1 + SEAM_BAND, size_y)
     return tuple(round(v, 2) for v in (x0, y0, x1, y1))
@@ -577,6 +578,11 @@ def plan_text(
             rect = _frac_rect(slot, step.where)
             if k in held:
                 rect = keep_off_seams(rect, slot, size_x, size_y, step.tool == "water")
+                if rect[2] <= rect[0] or rect[3] <= rect[1]:
+                    raise ValidationError([f"planner cue '{cue.name}' does not fit on a {size_x:g} m x {size_y:g} m "
+                                           f"tile: its water keeps {WATER_MARGIN:g} m off its part's edges and no room "
+                                           f"is left; ask for a larger tile or fewer cues, or write the calls yourself "
+                                           f"in a spec."])
             name = next((n for n, r in regions.items() if r == rect), None)
             args["region"] = name or dict(zip(("x0", "y0", "x1", "y1"), rect))
             if terrain.kind == "geometric":
