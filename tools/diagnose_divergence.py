@@ -16,9 +16,11 @@ and compiled torch logic, to tell a graph or compiler effect from the physics.
 
 ``--contacts`` prints each diverged robot's terrain contacts (the geom, its penetration, height and normal) as the
 step before left them and, for a launched robot (its world is not reset), as its step left them: that is how a
-biped shank given a tree's top face 2.45 m above it was found (docs/forces.md). ``--launch_speed`` counts a base
-faster than it as launched (default the evaluator's ``MAX_BASE_SPEED``): lower, it finds the launches that stay
-under the evaluator's threshold, which the same cause makes far more often.
+biped shank given a tree's top face 2.45 m above it was found (docs/forces.md). The penetration is the one the
+solver saw, after the force fields' contact filter, so since that find at most ``forces.terrain_contact_max_depth``
+(``sole_contact_max_depth`` for an analytic sole): a contact at the cap whose height lies far from its geom is such
+a face. ``--launch_speed`` counts a base faster than it as launched (default the evaluator's ``MAX_BASE_SPEED``):
+lower, it finds the launches that stay under the evaluator's threshold, which the same cause makes far more often.
 """
 
 from __future__ import annotations
@@ -58,7 +60,8 @@ def terrain_contacts(sim) -> dict:
 
 
 def describe_contacts(contacts: dict, world: int, mjm) -> list[str]:
-    """One line per terrain contact of ``world``: the robot geom, its penetration, height and normal."""
+    """One line per terrain contact of ``world``: the robot geom, its penetration as the solver saw it (the contact
+    filter's cap and rut applied), the contact point's height and the normal from the terrain to the geom."""
     mine = contacts["world"] == world
     lines = []
     for g, d, p, n in zip(contacts["geom"][mine].tolist(), contacts["dist"][mine].tolist(),

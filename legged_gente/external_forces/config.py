@@ -59,7 +59,10 @@ class ForcesConfig:
                           tree, a pillar: a few cells of the heightfield) from its side is collided with the
                           column's top prism face, metres above it (a biped shank 2.45 m "deep" in a 3 m tree was
                           seen leaving at 11-28 m/s); the column's side contacts, a few cm deep, push it out.
-                          Capped as the soles, at most 0.03 / (2 * 0.95 * 0.02 s) = 0.8 m/s
+                          Capped as the soles, at most 0.03 / (2 * 0.95 * 0.02 s) = 0.8 m/s. With soil it must
+                          exceed max_rut_depth (the rut is shown after the cap: a foot in it would get no
+                          contact). Applied by the force fields' contact filter: an env without force fields
+                          (forces off, or no water, soil, map friction or analytic soles) has no cap
     bulldozing_speed_reg: float  speed (m/s) below which the bulldozing (and RFT) force fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage

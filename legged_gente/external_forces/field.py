@@ -62,6 +62,13 @@ def _check_values(cfg) -> None:
                 where = " (in an env: set cfg.terrain.static_friction)" if name == "friction_reference" else ""
                 raise ValueError(f"forces.{name}={value!r} must be a finite number {'>' if positive else '>='} 0"
                                  f"{where}; the default is {getattr(ForcesConfig, name)}.")
+    if cfg.soil and not cfg.terrain_contact_max_depth > cfg.max_rut_depth:
+        # the contact filter caps a foot's penetration, then shows its rut (kernels.contact_filter_kernel): a cap
+        # within the rut leaves a foot in it no contact, and it sinks through the soil
+        raise ValueError(f"forces.terrain_contact_max_depth={cfg.terrain_contact_max_depth!r} must exceed "
+                         f"max_rut_depth={cfg.max_rut_depth!r}, or a foot in its rut gets no contact and sinks "
+                         f"through the soil; the defaults are {ForcesConfig.terrain_contact_max_depth} and "
+                         f"{ForcesConfig.max_rut_depth}.")
     if (cfg.sole_length is None) != (cfg.sole_width is None):
         raise ValueError(f"forces.sole_length={cfg.sole_length!r} and sole_width={cfg.sole_width!r}: give both (a "
                          f"rectangular sole, m) or neither (the footprint of the foot geoms).")
@@ -146,14 +153,15 @@ def _body_box(mjm, geoms) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _welded(mjm, body_a: int, body_b: int) -> bool:
-    """Whether two bodies move as one: the same body, or one a jointless descendant of the other."""
-    for child, parent in ((body_a, body_b), (body_b, body_a)):
-        b = child
-        while b != parent and b > 0 and mjm.body_jntnum[b] == 0:
+    """Whether two bodies move as one: they hang from the same body through jointless bodies only (the same body,
+    one a jointless descendant of the other, or jointless children of a common parent)."""
+
+    def weld_root(b: int) -> int:
+        while b > 0 and mjm.body_jntnum[b] == 0:
             b = int(mjm.body_parentid[b])
-        if b == parent:
-            return True
-    return False
+        return b
+
+    return weld_root(body_a) == weld_root(body_b)
 
 
 def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:

@@ -245,9 +245,9 @@ def sphere_wet_frontal_area(r, depth, v):
     s, c the sine and |cosine| of v's angle from the vertical, a line along v meets the cap iff its chord's lowest
     point is under the surface. Those lines cover the silhouette disk below the chord h / s from its centre (the
     points of the silhouette circle that are wet), ``circle_wet_area(r, h / s)``, and beyond that chord the projected
-    waterline disk (an ellipse of semi-axes c r_w, r_w centred -h s from the disk's centre) cut by the same line,
-    ``c circle_wet_area(r_w, -h c / s)``. Horizontal flow: the circular segment ``circle_wet_area(r, h)``; vertical:
-    the waterline disk pi r_w^2 (pi r^2 once wet past the centre).
+    waterline disk (an ellipse of semi-axes c r_w, r_w centred h s from the disk's centre, on the chord's side) cut
+    by the same line, ``c circle_wet_area(r_w, -h c / s)``. Horizontal flow: the circular segment
+    ``circle_wet_area(r, h)``; vertical: the waterline disk pi r_w^2 (pi r^2 once wet past the centre).
     """
     v = np.asarray(v, float)
     speed = float(np.linalg.norm(v))
