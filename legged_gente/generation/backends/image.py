@@ -223,7 +223,7 @@ def _to_metres(rect, shape, size_x: float, size_y: float) -> dict[str, float]:
     return {k: round(float(v), 2) for k, v in zip(("x0", "y0", "x1", "y1"), (x0, y0, x1, y1))}
 
 
-def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str]) -> list[tuple[Step, dict]]:
+def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str], warnings: list[str]) -> list[tuple[Step, dict]]:
     """Steps and regions of a sketch map: legend classes pooled into blocks, covered by rectangles."""
     classes, _ = _legend_distance(np.asarray(img.resize((GRID, GRID), Image.Resampling.NEAREST), np.float32))
     notes.append("read as a colour-coded sketch map")
@@ -250,16 +250,25 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
                 own = [(0, 0, *blob.shape)] if compact else _rectangles(blob)
                 rects += [(r + r0, c + c0, r + r1, c + c1) for r0, c0, r1, c1 in own]
             shape = classes.shape
-        elif name == "stairs":  # a stairs call is a flight centred on its rectangle: one rectangle per column band,
-            # whole along x, so the flight never falls back; blocks drawn on it do not cut it (they are placed over it)
-            mask = block_class == CLASSES.index(name)
-            mask |= ndimage.binary_fill_holes(mask) & (block_class == CLASSES.index("obstacle"))
-            rects = [(r0, c0, r1, c1) for c0, r0, c1, r1 in _rectangles(mask.T)]
+        elif name == "stairs":
+            rects = _stairs_rectangles(block_class)
             shape = block_class.shape
         elif name == "water":  # one rectangle over each water blob's box: one basin, so no dry ridge splits it
             labels, _ = ndimage.label(block_class == CLASSES.index(name))
-            rects = [(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop) for sl in ndimage.find_objects(labels)]
-            shape = block_class.shape
+            boxes = [(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop) for sl in ndimage.find_objects(labels)]
+            stairs = ([_to_metres(r, block_class.shape, size_x, size_y) for r in _stairs_rectangles(block_class)]
+                      if "stairs" in present else [])  # stairs under MIN_FRACTION are not built
+            for box in boxes:
+                region = _to_metres(box, block_class.shape, size_x, size_y)
+                for flight in stairs:
+                    region = region and _keep_off(region, flight)
+                if region is None:
+                    warnings.append(f"water blob at {_to_metres(box, block_class.shape, size_x, size_y)} left out: "
+                                    f"it keeps {WATER_MARGIN:g} m off the stairs beside it and no room is left; draw "
+                                    f"it wider or farther from the stairs.")
+                    continue
+                out += [(step, {"region": region}) for step in LEGEND[name].steps]
+            continue
         else:
             rects = _rectangles(block_class == CLASSES.index(name))
             shape = block_class.shape
@@ -267,6 +276,29 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
             region = _to_metres(rect, shape, size_x, size_y)
             out += [(step, {"region": region}) for step in LEGEND[name].steps]
     return out
+
+
+def _stairs_rectangles(block_class: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """Block rectangles of a sketch's stairs. A stairs call is a flight centred on its rectangle: one rectangle per
+    column band, whole along x, so the flight never falls back; blocks drawn on it do not cut it (they are placed
+    over it)."""
+    mask = block_class == CLASSES.index("stairs")
+    mask |= ndimage.binary_fill_holes(mask) & (block_class == CLASSES.index("obstacle"))
+    return [(r0, c0, r1, c1) for c0, r0, c1, r1 in _rectangles(mask.T)]
+
+
+def _keep_off(water: dict[str, float], flight: dict[str, float]) -> dict[str, float] | None:
+    """The largest part of a water blob's rectangle that keeps ``WATER_MARGIN`` off a stairs rectangle (the
+    planner's rule): a flight starts about half its rise below the ground and is blended into the ground around it
+    over the seam band, which would pull a basin rim there below the waterline. None when no part is left.
+    Raised blocks need no margin: their seam band only lifts the rim."""
+    x0, y0, x1, y1 = (flight[k] - WATER_MARGIN if k in ("x0", "y0") else flight[k] + WATER_MARGIN
+                      for k in ("x0", "y0", "x1", "y1"))
+    if water["x1"] <= x0 or water["x0"] >= x1 or water["y1"] <= y0 or water["y0"] >= y1:
+        return water
+    parts = [{**water, "x1": x0}, {**water, "x0": x1}, {**water, "y1": y0}, {**water, "y0": y1}]
+    parts = [{k: round(v, 2) for k, v in p.items()} for p in parts if p["x1"] > p["x0"] and p["y1"] > p["y0"]]
+    return max(parts, key=lambda p: (p["x1"] - p["x0"]) * (p["y1"] - p["y0"]), default=None)
 
 
 # ------------------------------------------------------------------------------------------------ photos
@@ -729,7 +761,7 @@ def plan_image(
     warnings: list[str] = []
     notes: list[str] = []
     if is_sketch(img):
-        steps = _plan_sketch(img, size_x, size_y, notes)
+        steps = _plan_sketch(img, size_x, size_y, notes, warnings)
     elif img.width * img.height < PW * PH:  # upsampled, it has no sky texture, speckle or edges to read
         raise ValueError(f"{name} is a {img.width} x {img.height} pixel photo, fewer pixels than the {PW} x {PH} the "
                          f"photo reader analyses; pass a larger photo (or a sketch map in the legend's colours).")
