@@ -476,9 +476,9 @@ class TerrainForces:
 
     def contact_filter(self, m, d):
         """The depth cap, ground friction and soil ruts on MuJoCo's terrain contacts, then the analytic sole
-        contacts. The launches are
-        recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU packing the
-        sole kernel's ~60 arguments every substep would cost more than the heightfield collision it replaces."""
+        contacts. The launches are recorded once per (m, d) and replayed: their arguments are persistent arrays, and
+        on the CPU packing the sole kernel's ~60 arguments every substep would cost more than the heightfield
+        collision it replaces."""
         for launch in self._recorded_filter(m, d):
             launch.launch()
 
