@@ -5,22 +5,12 @@ A *water wall* is a wet cell beside a dry cell of the tile whose ground lies mor
 water surface (docs/evaluation.md, rule 5).
 """
 
-import numpy as np
 import pytest
+from test_water_bodies import worst_wall
 
 from legged_gente.generation.backends.planner import plan_text
 from legged_gente.generation.pipeline import generate_spec
 from legged_gente.generation.validation import ValidationError
-
-
-def worst_wall(heights, material) -> float:
-    """Largest height (m) by which a wet cell's surface stands above the ground of a dry 4-neighbour in the tile."""
-    wet, surface = material.has_water(), material.water_surface
-    worst = 0.0
-    for a, b in ((np.s_[:-1, :], np.s_[1:, :]), (np.s_[1:, :], np.s_[:-1, :]),
-                 (np.s_[:, :-1], np.s_[:, 1:]), (np.s_[:, 1:], np.s_[:, :-1])):
-        worst = max(worst, float(np.where(wet[a] & ~wet[b], surface[a] - heights[b], 0.0).max()))
-    return worst
 
 
 @pytest.mark.parametrize("text, depth", [("a fountain", 0.3), ("a deep fountain", 0.6)])
