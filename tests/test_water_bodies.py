@@ -147,14 +147,29 @@ def test_planner_water_stands_in_ground_that_holds_it(text):
     assert worst_wall(heights, material) <= WATER_WALL_TOLERANCE, text
 
 
+@pytest.mark.parametrize("resolution", [0.05, 0.1, 0.2])
+@pytest.mark.parametrize("text", ["a flooded plaza next to stairs", "a sandy beach next to stairs"])
+def test_water_beside_a_neighbouring_part_keeps_out_of_its_blend_band(text, resolution):
+    """The water reaches SEAM_BAND (0.3 m) past its basin, and the stairs on the front half blend 0.3 m into the
+    back half: with the basin only 0.5 m off the seam, the water's last 0.1 m lay in the stairs' band, whose low
+    end pulled the ground 0.34 m below the water's surface at 0.05 m cells. Kept 0.8 m off, the water ends 0.2 m
+    before the band at every resolution."""
+    spec, result = generate_spec(text, resolution=resolution)
+    heights, material = spec.build()
+    assert worst_wall(heights, material) <= WATER_WALL_TOLERANCE
+    assert not [w for w in result.warnings if w.startswith("water wall")], result.warnings
+    (x0, y0, x1, y1), = [c.rect(20.0, 20.0) for c in spec.calls if c.tool == "water"]
+    assert x1 <= 10.0 - 0.3 - 0.2 + 1e-9
+
+
 def test_open_water_is_paired_with_a_basin_under_it():
-    """The beach's water front on the back half (x 0-10 m) of a 20 m tile: the basin keeps 0.5 m (WATER_MARGIN)
+    """The beach's water front on the back half (x 0-10 m) of a 20 m tile: the basin keeps 0.8 m (WATER_MARGIN)
     off the slot's front edge at x = 10 m, inside the tile; the water covers it and the 0.3 m (SEAM_BAND) it blends
     over; the basin is at least the water's depth plus FREEBOARD deep."""
     spec, _, _ = _built("a sandy beach and a meadow")
     (water,), (basin_call,) = ([c for c in spec.calls if c.tool == t] for t in ("water", "basin"))
-    assert basin_call.rect(20, 20) == pytest.approx((6.0, 0.0, 9.5, 20.0))
-    assert water.rect(20, 20) == pytest.approx((5.7, 0.0, 9.8, 20.0))
+    assert basin_call.rect(20, 20) == pytest.approx((6.0, 0.0, 9.2, 20.0))
+    assert water.rect(20, 20) == pytest.approx((5.7, 0.0, 9.5, 20.0))
     assert basin_call.params["depth"] >= water.params["depth"] + FREEBOARD - 1e-9
 
 

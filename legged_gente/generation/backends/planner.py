@@ -41,10 +41,11 @@ FREEBOARD = 0.1
 """Height (m) by which the ground holding a recipe's water (its river, pit, basin or sunken floor) rises above the
 water's surface after the modifiers: the water's depth plus this is the depression's least depth, so the
 ground's few centimetres of relief (natural ground) never lift the waterline over the rim."""
-WATER_MARGIN = SEAM_BAND + 0.2
-"""Distance (m) by which water and the depression holding it keep off a slot edge inside the tile: a neighbouring
-cue's part blends into this slot over ``SEAM_BAND``, so a rim there could be pulled down below the waterline
-(stairs falling away, a quay); two more 0.1 m cells keep the rim whole."""
+WATER_MARGIN = 2.0 * SEAM_BAND + 0.2
+"""Distance (m) by which the depression holding water keeps off a slot edge inside the tile. Its water reaches
+``SEAM_BAND`` past it (over the band where the depression blends into the ground), and a neighbouring cue's part
+blends into this slot over another ``SEAM_BAND``, which can pull a rim there down below the waterline (stairs
+falling away, a quay); two more 0.1 m cells between the two bands keep the rim whole."""
 DEPRESSIONS = ("river", "pit", "basin")
 """Geometric terrains that hold water: their ``depth`` below the ground (a ``flat`` below 0 m on part of a slot,
 a quay's floor, holds it too)."""
@@ -283,10 +284,11 @@ CUES: tuple[Cue, ...] = (
     )),
     Cue("fountain", ("fountain",), (
         Step("flat", {"height": 0.5}, (0.3, 0.3, 0.7, 0.7)),
-        # the bowl is a basin cut into the rim (held water: its floor 0.4 m down, deeper for deeper water)
-        Step("basin", {"depth": 0.4, "shore_width": 0.1}, (0.35, 0.35, 0.65, 0.65), mode="add"),
+        # the bowl is a basin cut into the rim (held water: its floor 0.4 m down, deeper for deeper water); its water
+        # reaches SEAM_BAND past it, so the bowl keeps 0.1 of the part (0.5 m on a 5 m part) inside the rim's edge
+        Step("basin", {"depth": 0.4, "shore_width": 0.1}, (0.4, 0.4, 0.6, 0.6), mode="add"),
         Step("flat", {"height": 1.2}, (0.47, 0.47, 0.55, 0.55)),
-        Step("water", {"depth": 0.3}, (0.35, 0.35, 0.65, 0.65)),
+        Step("water", {"depth": 0.3}, (0.4, 0.4, 0.6, 0.6)),
     ), note="a basin with a 0.5 m rim, water inside and a central column"),
     Cue("furniture", ("bench", "car", "barrel", "bin", "trash can", "kiosk", "bus stop", "picnic table", "table",
                       "block", "concrete block", "crate", "container", "parked car"), (
