@@ -521,11 +521,36 @@ def rocks(shape, resolution, rng, max_height, min_radius, max_radius, density, p
 
 
 # ----------------------------------------------------------------------------------------------------- river
-def _channel_distance(x, y, direction, offset, meander_amplitude, meander_wavelength):
-    """Distance (m) across the channel from points (x, y), measured from the region's centre, to its meandering axis."""
+def _channel_frame(x, y, direction):
+    """Coordinates (m) along the channel's mean axis and across it of points (x, y) from the region's centre."""
     along = x * np.cos(direction) + y * np.sin(direction)
     across = -x * np.sin(direction) + y * np.cos(direction)
+    return along, across
+
+
+def _channel_distance(x, y, direction, offset, meander_amplitude, meander_wavelength):
+    """Distance (m) across the mean axis from points (x, y), measured from the region's centre, to the meandering
+    course: across = offset + meander_amplitude * sin(2 pi along / meander_wavelength)."""
+    along, across = _channel_frame(x, y, direction)
     return np.abs(across - offset - meander_amplitude * np.sin(2.0 * np.pi * along / meander_wavelength))
+
+
+def river_course(x, y, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Distance (m) across the mean axis to the course, direction (rad, from +x towards +y) of the course's
+    tangent, and the flow's speed-up there, at points (x, y) measured from the region's centre of a river of
+    parameters ``p``.
+
+    The course across = offset + A sin(2 pi along / L) runs at slope k = 2 pi A / L cos(2 pi along / L) to the axis
+    (its derivative); each point takes the tangent at its own along-axis coordinate, as the channel is carved
+    across the axis from the course at that coordinate. Across the course the channel is width / sqrt(1 + k^2)
+    wide, so the same discharge flows sqrt(1 + k^2) times faster there than where the course runs along the axis
+    (continuity, Q = v * A for the section normal to the flow).
+    """
+    a, wavelength = p["meander_amplitude"], p["meander_wavelength"]
+    distance = _channel_distance(x, y, p["direction"], p["offset"], a, wavelength)
+    along, _ = _channel_frame(x, y, p["direction"])
+    slope = 2.0 * np.pi * a / wavelength * np.cos(2.0 * np.pi * along / wavelength)
+    return distance, p["direction"] + np.arctan(slope), np.sqrt(1.0 + slope * slope)
 
 
 def river_outside(p, size_x: float, size_y: float) -> str | None:

@@ -8,7 +8,8 @@ the tile's current heights: ``set`` replaces them with the atomic's heights, ``a
 a smoothstep of the distance). Features farther than ``SEAM_BAND`` from a seam are kept exactly.
 
 Physical operations (water, soil, low friction) are applied after all heights are final, in part order, to
-their part's rectangle: water depth is measured from the lowest final ground of the rectangle.
+their part's rectangle: water depth is measured from the lowest final ground of the rectangle. A current or tide
+in the channel of a ``river`` flows along the river's meandering course (:func:`_follow_channels`).
 Every random draw comes from ``SeedSequence(seed, spawn_key=(part, op))``: a tile is a pure function of its
 spec, and changing one part does not reshuffle the others.
 """
@@ -23,8 +24,9 @@ from typing import Any, Callable, Literal, Mapping
 import numpy as np
 from scipy import ndimage
 
+from .atomic import river_course
 from .heightmap import load_heightmap
-from .materials import MaterialMap
+from .materials import FLOW_CURRENT, FLOW_TIDE, NO_WATER, MaterialMap, MaterialPatch
 from .registry import ATOMIC_TERRAINS, AtomicTerrain
 
 SPEC_VERSION = 1
@@ -399,6 +401,11 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
     heights = np.zeros((nx, ny), np.float64) if spec.base is None else spec.base.astype(np.float64)
     material = MaterialMap.rigid((nx, ny), friction=ground_friction)
     pad = int(math.ceil(SEAM_BAND / res))
+    # per cell, the distance across to the nearest river course whose channel the final ground holds (inf: none),
+    # that course's tangent (rad) and the flow's speed-up there: a current or tide painted there follows it
+    course_distance = np.full((nx, ny), np.inf)
+    course_angle = np.zeros((nx, ny))
+    course_speedup = np.ones((nx, ny))
     physical: list[tuple[int, int, int, int, Operation, AtomicTerrain, dict[str, Any], np.random.Generator]] = []
 
     for k, part in enumerate(spec.parts):
@@ -415,6 +422,7 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
                 geometric.append((op, atomic, params, rng))
         if not geometric:
             continue
+        _mark_channels(course_distance, course_angle, course_speedup, geometric, (i0, j0, i1, j1), res)
         # Working copy over the padded rectangle; cells beyond the tile repeat the tile's edge.
         ii = np.clip(np.arange(i0 - pad, i1 + pad), 0, nx - 1)
         jj = np.clip(np.arange(j0 - pad, j1 + pad), 0, ny - 1)
@@ -453,4 +461,52 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
     for i0, j0, i1, j1, op, atomic, params, rng in physical:
         patch = atomic.fn((i1 - i0, j1 - j0), res, rng, heights[i0:i1, j0:j1], **params)
         material.paint(patch, i0, j0)
+        if patch.water_surface is not None and patch.flow_kind in (FLOW_CURRENT, FLOW_TIDE):
+            _follow_channels(material, patch, i0, j0, course_distance, course_angle, course_speedup)
     return heights, material
+
+
+def _mark_channels(distance: np.ndarray, angle: np.ndarray, speedup: np.ndarray, geometric: list,
+                   cells: tuple[int, int, int, int], res: float) -> None:
+    """Record in ``distance`` / ``angle`` / ``speedup`` (tile arrays, see :func:`build_tile`) the river channels a
+    part leaves in its rectangle of ``cells`` (i0, j0, i1, j1); where channels overlap, the nearest course's.
+
+    A ``set`` operation replaces the ground, so it erases the channels laid before it (by earlier parts in the
+    rectangle, by earlier operations of the part); ``add`` keeps them. A river's frame is centred on the part's
+    rectangle, as its padded working copy is. The seam band, where the part only blends in, takes no channel.
+    """
+    i0, j0, i1, j1 = cells
+    rivers: list[dict[str, Any]] = []
+    for op, _, params, _ in geometric:
+        carves = op.terrain == "river" and params["depth"] > 0.0
+        rivers = ([] if op.mode == "set" else rivers) + ([params] if carves else [])
+    win = (slice(i0, i1), slice(j0, j1))
+    if any(op.mode == "set" for op, *_ in geometric):
+        distance[win] = np.inf
+    x = (np.arange(i0, i1) - (i0 + i1 - 1) / 2.0)[:, None] * res
+    y = (np.arange(j0, j1) - (j0 + j1 - 1) / 2.0)[None, :] * res
+    for params in rivers:
+        d, a, faster = river_course(x, y, params)
+        nearer = (d < params["width"] / 2.0) & (d < distance[win])
+        distance[win][nearer] = d[nearer]
+        angle[win][nearer] = a[nearer]
+        speedup[win][nearer] = np.broadcast_to(faster, d.shape)[nearer]
+
+
+def _follow_channels(material: MaterialMap, patch: MaterialPatch, i0: int, j0: int, distance: np.ndarray,
+                     angle: np.ndarray, speedup: np.ndarray) -> None:
+    """Turn the flow that ``patch`` (at cell i0, j0) painted in a river's channel along the course's tangent,
+    the tangent's sense that points the same way as the water's own direction (cos of their difference >= 0).
+
+    The banks guide the water along the channel. The water's speed is that where the course runs along the axis;
+    where it runs at slope k to it, the channel's section normal to the flow is sqrt(1 + k^2) times narrower and the
+    flow that much faster (continuity). A tide's direction is its axis of oscillation and turns alike. Cells outside
+    every channel keep the water's direction and speed.
+    """
+    win = (slice(i0, i0 + patch.shape[0]), slice(j0, j0 + patch.shape[1]))
+    turn = (patch.water_surface > NO_WATER / 2) & np.isfinite(distance[win])
+    tangent = angle[win][turn]
+    own = material.flow_direction[win][turn]
+    course = np.where(np.cos(tangent - own) >= 0.0, tangent, tangent + np.pi)
+    material.flow_direction[win][turn] = np.arctan2(np.sin(course), np.cos(course))
+    material.flow_speed[win][turn] *= speedup[win][turn]
