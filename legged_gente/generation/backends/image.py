@@ -71,6 +71,9 @@ pixels, so the ground it encloses or passes by stays open."""
 WATER_SHORE = 1.5
 """Width (m) of the shelving shore of a basin under image water: 0.4 m down over 1.5 m, at most 22 degrees
 (smoothstep's steepest slope is 1.5 depth / width), so a robot can wade in."""
+DRY_INSIDE_MIN = 2.0 * WATER_SHORE
+"""Side (m) of the smallest dry rectangle inside a sketch water blob's bounding box that is rebuilt as ground: the
+land an L or a ring of water encloses. Narrower dry parts (a disc's corners) lie on the basin's shore anyway."""
 
 LEGEND: dict[str, Legend] = {
     "water": Legend((0, 0, 255), f"knee-deep water ({KNEE_HEIGHT} m) in a basin", (
@@ -256,9 +259,10 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
         elif name == "water":  # one rectangle over each water blob's box: one basin, so no dry ridge splits it
             labels, _ = ndimage.label(block_class == CLASSES.index(name))
             boxes = [(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop) for sl in ndimage.find_objects(labels)]
+            blobs = [labels[r0:r1, c0:c1] == k for k, (r0, c0, r1, c1) in enumerate(boxes, start=1)]
             stairs = ([_to_metres(r, block_class.shape, size_x, size_y) for r in _stairs_rectangles(block_class)]
                       if "stairs" in present else [])  # stairs under MIN_FRACTION are not built
-            for box in boxes:
+            for box, blob in zip(boxes, blobs):
                 region = _to_metres(box, block_class.shape, size_x, size_y)
                 for flight in stairs:
                     region = region and _keep_off(region, flight)
@@ -268,6 +272,7 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
                                     f"it wider or farther from the stairs.")
                     continue
                 out += [(step, {"region": region}) for step in LEGEND[name].steps]
+                out += [(base, {"region": land}) for land in _dry_inside(blob, box, block_class.shape, size_x, size_y)]
             continue
         else:
             rects = _rectangles(block_class == CLASSES.index(name))
@@ -276,6 +281,17 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
             region = _to_metres(rect, shape, size_x, size_y)
             out += [(step, {"region": region}) for step in LEGEND[name].steps]
     return out
+
+
+def _dry_inside(blob: np.ndarray, box, shape, size_x: float, size_y: float) -> list[dict[str, float]]:
+    """Rectangles (m) of the land a water ``blob`` (its blocks over ``box``, of the sketch's ``shape`` of blocks)
+    leaves inside its box that hold a square of ``DRY_INSIDE_MIN``: the basin under the box would flood them, so the
+    sketch's ground is built again there (its rim drops to the basin's floor over the seam band: a bank)."""
+    r0, c0, _, _ = box
+    rows = int(np.ceil(DRY_INSIDE_MIN * shape[0] / size_x - 1e-9))
+    cols = int(np.ceil(DRY_INSIDE_MIN * shape[1] / size_y - 1e-9))
+    return [_to_metres((r0 + a, c0 + b, r0 + c, c0 + d), shape, size_x, size_y)
+            for a, b, c, d in _rectangles(~blob) if c - a >= rows and d - b >= cols]
 
 
 def _stairs_rectangles(block_class: np.ndarray) -> list[tuple[int, int, int, int]]:
