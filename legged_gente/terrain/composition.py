@@ -402,8 +402,10 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
     material = MaterialMap.rigid((nx, ny), friction=ground_friction)
     pad = int(math.ceil(SEAM_BAND / res))
     # per cell, the distance across to the nearest river course whose channel the final ground holds (inf: none),
-    # that course's tangent (rad) and the flow's speed-up there: a current or tide painted there follows it
+    # that river's axis and its course's tangent (rad) and the flow's speed-up there: a current or tide painted
+    # there follows it
     course_distance = np.full((nx, ny), np.inf)
+    course_axis = np.zeros((nx, ny))
     course_angle = np.zeros((nx, ny))
     course_speedup = np.ones((nx, ny))
     physical: list[tuple[int, int, int, int, Operation, AtomicTerrain, dict[str, Any], np.random.Generator]] = []
@@ -422,7 +424,7 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
                 geometric.append((op, atomic, params, rng))
         if not geometric:
             continue
-        _mark_channels(course_distance, course_angle, course_speedup, geometric, (i0, j0, i1, j1), res)
+        _mark_channels(course_distance, course_axis, course_angle, course_speedup, geometric, (i0, j0, i1, j1), res)
         # Working copy over the padded rectangle; cells beyond the tile repeat the tile's edge.
         ii = np.clip(np.arange(i0 - pad, i1 + pad), 0, nx - 1)
         jj = np.clip(np.arange(j0 - pad, j1 + pad), 0, ny - 1)
@@ -462,14 +464,15 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
         patch = atomic.fn((i1 - i0, j1 - j0), res, rng, heights[i0:i1, j0:j1], **params)
         material.paint(patch, i0, j0)
         if patch.water_surface is not None and patch.flow_kind in (FLOW_CURRENT, FLOW_TIDE):
-            _follow_channels(material, patch, i0, j0, course_distance, course_angle, course_speedup)
+            _follow_channels(material, patch, i0, j0, course_distance, course_axis, course_angle, course_speedup)
     return heights, material
 
 
-def _mark_channels(distance: np.ndarray, angle: np.ndarray, speedup: np.ndarray, geometric: list,
+def _mark_channels(distance: np.ndarray, axis: np.ndarray, angle: np.ndarray, speedup: np.ndarray, geometric: list,
                    cells: tuple[int, int, int, int], res: float) -> None:
-    """Record in ``distance`` / ``angle`` / ``speedup`` (tile arrays, see :func:`build_tile`) the river channels a
-    part leaves in its rectangle of ``cells`` (i0, j0, i1, j1); where channels overlap, the nearest course's.
+    """Record in ``distance`` / ``axis`` / ``angle`` / ``speedup`` (tile arrays, see :func:`build_tile`) the river
+    channels a part leaves in its rectangle of ``cells`` (i0, j0, i1, j1); where channels overlap, the nearest
+    course's.
 
     A ``set`` operation replaces the ground, so it erases the channels laid before it (by earlier parts in the
     rectangle, by earlier operations of the part); ``add`` keeps them. A river's frame is centred on the part's
@@ -489,14 +492,17 @@ def _mark_channels(distance: np.ndarray, angle: np.ndarray, speedup: np.ndarray,
         d, a, faster = river_course(x, y, params)
         nearer = (d < params["width"] / 2.0) & (d < distance[win])
         distance[win][nearer] = d[nearer]
+        axis[win][nearer] = params["direction"]
         angle[win][nearer] = a[nearer]
         speedup[win][nearer] = np.broadcast_to(faster, d.shape)[nearer]
 
 
 def _follow_channels(material: MaterialMap, patch: MaterialPatch, i0: int, j0: int, distance: np.ndarray,
-                     angle: np.ndarray, speedup: np.ndarray) -> None:
-    """Turn the flow that ``patch`` (at cell i0, j0) painted in a river's channel along the course's tangent,
-    the tangent's sense that points the same way as the water's own direction (cos of their difference >= 0).
+                     axis: np.ndarray, angle: np.ndarray, speedup: np.ndarray) -> None:
+    """Turn the flow that ``patch`` (at cell i0, j0) painted in a river's channel along the course's tangent, in
+    the sense down the river's axis that points the same way as the water's own direction (cos of the difference
+    between the axis and the water's direction >= 0): one channel carries its water one way, also where a bend
+    turns the tangent more than 90 degrees from a direction given far off the axis.
 
     The banks guide the water along the channel. The water's speed is that where the course runs along the axis;
     where it runs at slope k to it, the channel's section normal to the flow is sqrt(1 + k^2) times narrower and the
@@ -507,6 +513,6 @@ def _follow_channels(material: MaterialMap, patch: MaterialPatch, i0: int, j0: i
     turn = (patch.water_surface > NO_WATER / 2) & np.isfinite(distance[win])
     tangent = angle[win][turn]
     own = material.flow_direction[win][turn]
-    course = np.where(np.cos(tangent - own) >= 0.0, tangent, tangent + np.pi)
+    course = np.where(np.cos(axis[win][turn] - own) >= 0.0, tangent, tangent + np.pi)
     material.flow_direction[win][turn] = np.arctan2(np.sin(course), np.cos(course))
     material.flow_speed[win][turn] *= speedup[win][turn]

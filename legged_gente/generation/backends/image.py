@@ -285,13 +285,36 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
 
 def _dry_inside(blob: np.ndarray, box, shape, size_x: float, size_y: float) -> list[dict[str, float]]:
     """Rectangles (m) of the land a water ``blob`` (its blocks over ``box``, of the sketch's ``shape`` of blocks)
-    leaves inside its box that hold a square of ``DRY_INSIDE_MIN``: the basin under the box would flood them, so the
+    leaves inside its box, each holding a square of ``DRY_INSIDE_MIN``: the basin under the box would flood them, so the
     sketch's ground is built again there (its rim drops to the basin's floor over the seam band: a bank)."""
     r0, c0, _, _ = box
     rows = int(np.ceil(DRY_INSIDE_MIN * shape[0] / size_x - 1e-9))
     cols = int(np.ceil(DRY_INSIDE_MIN * shape[1] / size_y - 1e-9))
     return [_to_metres((r0 + a, c0 + b, r0 + c, c0 + d), shape, size_x, size_y)
-            for a, b, c, d in _rectangles(~blob) if c - a >= rows and d - b >= cols]
+            for a, b, c, d in _largest_rectangles(~blob, rows, cols)]
+
+
+def _largest_rectangles(mask: np.ndarray, rows: int, cols: int) -> list[tuple[int, int, int, int]]:
+    """Disjoint rectangles (r0, c0, r1, c1), exclusive ends, of true cells of ``mask``, each at least ``rows`` x
+    ``cols``: the largest first, then the largest of the cells left, until none that large is left. Land with stepped
+    edges (beside a diagonal band) holds such rectangles though its row runs, merged down, are one row high."""
+    free = mask.copy()
+    out: list[tuple[int, int, int, int]] = []
+    nr, nc = mask.shape
+    r0, r1 = (a.ravel() for a in np.meshgrid(np.arange(nr + 1), np.arange(nr + 1), indexing="ij"))
+    c0, c1 = (a.ravel() for a in np.meshgrid(np.arange(nc + 1), np.arange(nc + 1), indexing="ij"))
+    keep_r, keep_c = r1 - r0 >= rows, c1 - c0 >= cols
+    r0, r1, c0, c1 = r0[keep_r][:, None], r1[keep_r][:, None], c0[keep_c][None, :], c1[keep_c][None, :]
+    area = (r1 - r0) * (c1 - c0)
+    while True:
+        total = np.pad(free.astype(np.int64), ((1, 0), (1, 0))).cumsum(0).cumsum(1)
+        filled = total[r1, c1] - total[r0, c1] - total[r1, c0] + total[r0, c0] == area
+        if not filled.any():
+            return sorted(out)
+        k = np.unravel_index(np.argmax(np.where(filled, area, -1)), area.shape)
+        rect = (int(r0[k[0], 0]), int(c0[0, k[1]]), int(r1[k[0], 0]), int(c1[0, k[1]]))
+        out.append(rect)
+        free[rect[0]:rect[2], rect[1]:rect[3]] = False
 
 
 def _stairs_rectangles(block_class: np.ndarray) -> list[tuple[int, int, int, int]]:
