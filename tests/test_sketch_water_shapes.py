@@ -64,3 +64,37 @@ def test_a_round_pond_keeps_one_basin_over_its_box():
     assert [c.tool for c in spec.calls].count("flat") + [c.tool for c in spec.calls].count("natural_ground") == 1
     assert material.has_water()[_cell(10.0, 10.0)]
     assert worst_wall(heights, material) <= WATER_WALL_TOLERANCE
+
+
+def test_a_pond_inside_an_l_lakes_box_is_one_body_with_it():
+    # an L (a band down the right edge from row 8, cols 72-95, and one along the back, rows 72-95) and a pond at rows
+    # 8-30, cols 20-40, inside the L's box and scanned first. As two bodies the L's box rebuilt the pond's ground as
+    # land after the pond's basin was cut, and the pond's water stood 0.3 m above it. Blobs whose boxes overlap are
+    # one body: one basin and one water over the union of their boxes, the land around the pond rebuilt.
+    def draw(d):
+        d.rectangle([72, 8, 95, 95], fill=WATER)
+        d.rectangle([0, 72, 95, 95], fill=WATER)
+        d.rectangle([20, 8, 40, 30], fill=WATER)
+    spec, result, heights, material = _build(draw)
+    assert [c.tool for c in spec.calls].count("water") == 1
+    assert worst_wall(heights, material) <= WATER_WALL_TOLERANCE
+    assert not [w for w in result.warnings if w.startswith("water wall")], result.warnings
+    wet = material.has_water()
+    assert wet[_cell(20 * (1 - 19 / 96), 20 * (1 - 30 / 96))]  # the pond's middle (row 19, col 30)
+    assert not wet[_cell(20 * (1 - 50 / 96), 20 * (1 - 40 / 96))]  # the land between pond and L (row 50, col 40)
+
+
+def test_water_blobs_nearer_than_the_seam_band_are_one_body():
+    # on a 10 m tile a block (4 px) is 0.42 m: two ponds one block apart (gap 0.42 m < BODY_GAP = 0.5 m) are one
+    # body; two blocks apart (0.83 m) they stay two
+    def ponds(gap_px):
+        return lambda d: (d.rectangle([8, 8, 39, 87], fill=WATER), d.rectangle([40 + gap_px, 8, 87, 87], fill=WATER))
+    for gap_px, bodies in ((4, 1), (8, 2)):
+        img = Image.new("RGB", (96, 96), LEGEND["grass"].rgb)
+        ponds(gap_px)(ImageDraw.Draw(img))
+        buf = io.BytesIO()
+        img.save(buf, "PNG")
+        spec, _ = generate_spec(image=buf.getvalue(), size_x=10.0, size_y=10.0)
+        assert [c.tool for c in spec.calls].count("water") == bodies, gap_px
+        heights, material = spec.build()
+        assert worst_wall(heights, material) <= WATER_WALL_TOLERANCE

@@ -49,6 +49,7 @@ from legged_gente.generation.backends.planner import FREEBOARD, KNEE_HEIGHT, WAT
 from legged_gente.generation.tools import named_regions
 from legged_gente.generation.validation import MAX_CALLS as SPEC_MAX_CALLS
 from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
+from legged_gente.terrain.composition import SEAM_BAND
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 
@@ -71,6 +72,9 @@ pixels, so the ground it encloses or passes by stays open."""
 WATER_SHORE = 1.5
 """Width (m) of the shelving shore of a basin under image water: 0.4 m down over 1.5 m, at most 22 degrees
 (smoothstep's steepest slope is 1.5 depth / width), so a robot can wade in."""
+BODY_GAP = SEAM_BAND + 0.2
+"""Least distance (m) between the boxes of two sketch water bodies: a basin blends ``SEAM_BAND`` past its box, and
+two more 0.1 m cells keep the ground between two bodies whole. Nearer blobs are one body over one box."""
 DRY_INSIDE_MIN = 2.0 * WATER_SHORE
 """Side (m) of the smallest dry rectangle inside a sketch water blob's bounding box that is rebuilt as ground: the
 land an L or a ring of water encloses. Narrower dry parts (a disc's corners) lie on the basin's shore anyway."""
@@ -256,10 +260,12 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
         elif name == "stairs":
             rects = _stairs_rectangles(block_class)
             shape = block_class.shape
-        elif name == "water":  # one rectangle over each water blob's box: one basin, so no dry ridge splits it
-            labels, _ = ndimage.label(block_class == CLASSES.index(name))
-            boxes = [(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop) for sl in ndimage.find_objects(labels)]
-            blobs = [labels[r0:r1, c0:c1] == k for k, (r0, c0, r1, c1) in enumerate(boxes, start=1)]
+        elif name == "water":  # one rectangle over each water body's box: one basin, so no dry ridge splits it
+            water = block_class == CLASSES.index(name)
+            labels, _ = ndimage.label(water)
+            boxes = _water_bodies([(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop)
+                                   for sl in ndimage.find_objects(labels)], block_class.shape, size_x, size_y)
+            blobs = [water[r0:r1, c0:c1] for r0, c0, r1, c1 in boxes]
             stairs = ([_to_metres(r, block_class.shape, size_x, size_y) for r in _stairs_rectangles(block_class)]
                       if "stairs" in present else [])  # stairs under MIN_FRACTION are not built
             for box, blob in zip(boxes, blobs):
@@ -281,6 +287,31 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
             region = _to_metres(rect, shape, size_x, size_y)
             out += [(step, {"region": region}) for step in LEGEND[name].steps]
     return out
+
+
+def _water_bodies(boxes: list[tuple[int, int, int, int]], shape, size_x: float, size_y: float
+                  ) -> list[tuple[int, int, int, int]]:
+    """The boxes of a sketch's water blobs, those nearer each other than ``BODY_GAP`` merged into one box (one
+    basin, one water) until none is. Two boxes that overlap or nearly touch would stack two basins or blend one
+    into the other's rim, and their two waters' surfaces would stand above each other's ground."""
+    row_m, col_m = size_x / shape[0], size_y / shape[1]
+    boxes = list(boxes)
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                a, b = boxes[i], boxes[j]
+                gap_x = max(a[0] - b[2], b[0] - a[2], 0) * row_m
+                gap_y = max(a[1] - b[3], b[1] - a[3], 0) * col_m
+                if np.hypot(gap_x, gap_y) < BODY_GAP:
+                    boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+                    del boxes[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return boxes
 
 
 def _dry_inside(blob: np.ndarray, box, shape, size_x: float, size_y: float) -> list[dict[str, float]]:
