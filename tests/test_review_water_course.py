@@ -6,16 +6,14 @@ centre; the course is v = A sin(2 pi u / L) with u along the axis at ``direction
 atan(2 pi A / L cos(2 pi u / L)) to the axis.
 """
 
-import io
 import math
 
 import numpy as np
-from PIL import Image, ImageDraw
+from test_sketch_water_shapes import _build as sketch
 from test_water_bodies import worst_wall
 
 from legged_gente.generation.backends.image import LEGEND
 from legged_gente.generation.checker import WATER_WALL_TOLERANCE
-from legged_gente.generation.pipeline import generate_spec
 from legged_gente.terrain.composition import Operation, Part, Region, TileSpec
 
 RES = 0.1
@@ -50,15 +48,6 @@ def test_a_current_far_off_the_axis_flows_one_way_down_the_whole_channel():
         assert (np.cos(m.flow_direction[wet]) > 0.0).all(), flow  # every wet cell of the channel flows down +u
 
 
-def _sketch(draw):
-    img = Image.new("RGB", (96, 96), LEGEND["grass"].rgb)
-    draw(ImageDraw.Draw(img))
-    buf = io.BytesIO()
-    img.save(buf, "PNG")
-    spec, result = generate_spec(image=buf.getvalue())
-    return spec.build()
-
-
 def test_the_land_beside_a_diagonal_sketch_river_stays_dry():
     # a water band 20 px (4.2 m) across from the back-right to the front-left corner of a 20 m tile's sketch (96 px:
     # image row r is x = 20 (1 - r / 96) m, column c is y = 20 (1 - c / 96) m): its box is the whole tile, and the
@@ -66,8 +55,8 @@ def test_the_land_beside_a_diagonal_sketch_river_stays_dry():
     # Their edges are stepped, so their row runs are one block high, yet this land is no less enclosed than an L's.
     # Pixel (row 15, col 80) is 45 / sqrt(2) = 32 px (6.6 m) from the band and over 3 m from the tile's edges, past
     # the basin's 1.5 m shore: on the basin's floor, 0.4 m down under 0.3 m of water, unless rebuilt as ground.
-    heights, material = _sketch(lambda d: d.polygon([(0, 0), (20, 0), (95, 75), (95, 95), (75, 95), (0, 20)],
-                                                    fill=LEGEND["water"].rgb))
+    _, _, heights, material = sketch(lambda d: d.polygon([(0, 0), (20, 0), (95, 75), (95, 95), (75, 95), (0, 20)],
+                                                         fill=LEGEND["water"].rgb))
     wet = material.has_water()
     for row, col in ((15, 80), (80, 15)):
         i, j = round(20.0 * (1 - row / 96) / 0.1), round(20.0 * (1 - col / 96) / 0.1)
