@@ -265,10 +265,9 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
             labels, _ = ndimage.label(water)
             boxes = _water_bodies([(sl[0].start, sl[1].start, sl[0].stop, sl[1].stop)
                                    for sl in ndimage.find_objects(labels)], block_class.shape, size_x, size_y)
-            blobs = [water[r0:r1, c0:c1] for r0, c0, r1, c1 in boxes]
             stairs = ([_to_metres(r, block_class.shape, size_x, size_y) for r in _stairs_rectangles(block_class)]
                       if "stairs" in present else [])  # stairs under MIN_FRACTION are not built
-            for box, blob in zip(boxes, blobs):
+            for box in boxes:
                 region = _to_metres(box, block_class.shape, size_x, size_y)
                 for flight in stairs:
                     region = region and _keep_off(region, flight)
@@ -278,7 +277,7 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
                                     f"it wider or farther from the stairs.")
                     continue
                 out += [(step, {"region": region}) for step in LEGEND[name].steps]
-                out += [(base, {"region": land}) for land in _dry_inside(blob, box, block_class.shape, size_x, size_y)]
+                out += [(base, {"region": land}) for land in _dry_inside(water, box, size_x, size_y)]
             continue
         else:
             rects = _rectangles(block_class == CLASSES.index(name))
@@ -295,34 +294,31 @@ def _water_bodies(boxes: list[tuple[int, int, int, int]], shape, size_x: float, 
     basin, one water) until none is. Two boxes that overlap or nearly touch would stack two basins or blend one
     into the other's rim, and their two waters' surfaces would stand above each other's ground."""
     row_m, col_m = size_x / shape[0], size_y / shape[1]
+
+    def near(a, b) -> bool:
+        gap_x = max(a[0] - b[2], b[0] - a[2], 0) * row_m
+        gap_y = max(a[1] - b[3], b[1] - a[3], 0) * col_m
+        return np.hypot(gap_x, gap_y) < BODY_GAP
+
     boxes = list(boxes)
-    merged = True
-    while merged:
-        merged = False
-        for i in range(len(boxes)):
-            for j in range(i + 1, len(boxes)):
-                a, b = boxes[i], boxes[j]
-                gap_x = max(a[0] - b[2], b[0] - a[2], 0) * row_m
-                gap_y = max(a[1] - b[3], b[1] - a[3], 0) * col_m
-                if np.hypot(gap_x, gap_y) < BODY_GAP:
-                    boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
-                    del boxes[j]
-                    merged = True
-                    break
-            if merged:
-                break
+    while pair := next(((i, j) for i in range(len(boxes)) for j in range(i + 1, len(boxes))
+                        if near(boxes[i], boxes[j])), None):
+        i, j = pair
+        a, b = boxes[i], boxes.pop(j)
+        boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
     return boxes
 
 
-def _dry_inside(blob: np.ndarray, box, shape, size_x: float, size_y: float) -> list[dict[str, float]]:
-    """Rectangles (m) of the land a water ``blob`` (its blocks over ``box``, of the sketch's ``shape`` of blocks)
-    leaves inside its box, each holding a square of ``DRY_INSIDE_MIN``: the basin under the box would flood them, so the
-    sketch's ground is built again there (its rim drops to the basin's floor over the seam band: a bank)."""
-    r0, c0, _, _ = box
+def _dry_inside(water: np.ndarray, box, size_x: float, size_y: float) -> list[dict[str, float]]:
+    """Rectangles (m) of the land a water body (the ``water`` blocks of the sketch over its ``box``) leaves inside
+    its box, each holding a square of ``DRY_INSIDE_MIN``: the basin under the box would flood them, so the sketch's
+    ground is built again there (its rim drops to the basin's floor over the seam band: a bank)."""
+    r0, c0, r1, c1 = box
+    shape = water.shape
     rows = int(np.ceil(DRY_INSIDE_MIN * shape[0] / size_x - 1e-9))
     cols = int(np.ceil(DRY_INSIDE_MIN * shape[1] / size_y - 1e-9))
     return [_to_metres((r0 + a, c0 + b, r0 + c, c0 + d), shape, size_x, size_y)
-            for a, b, c, d in _largest_rectangles(~blob, rows, cols)]
+            for a, b, c, d in _largest_rectangles(~water[r0:r1, c0:c1], rows, cols)]
 
 
 def _largest_rectangles(mask: np.ndarray, rows: int, cols: int) -> list[tuple[int, int, int, int]]:
