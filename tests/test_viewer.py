@@ -221,9 +221,9 @@ def test_preview_lies_like_the_input_picture(tmp_path):
 def test_a_large_grid_labels_columns_and_rows():
     from legged_gente.terrain.gallery import curriculum_terrain
 
-    terrain = curriculum_terrain()  # 10 x 21 tiles: 210 > MAX_TILE_LABELS
+    terrain = curriculum_terrain()  # 10 x 22 tiles: 220 > MAX_TILE_LABELS
     labels = terrain_scene(terrain).of_type(Label)
-    assert len(labels) == 21 + 9  # a label per column on row 0, one per further row on column 0
+    assert len(labels) == 22 + 9  # a label per column on row 0, one per further row on column 0
     assert labels["/terrain/tiles/label_0_17"].text == f"col 17: {terrain.tile_names[0, 17]}"
     assert labels["/terrain/tiles/label_9_0"].text == "row 9"
 

@@ -18,7 +18,7 @@ from legged_gente.evaluation.benchmark import Item
 
 CATEGORY_OF_TOOL = {
     "water": "water", "river": "water", "basin": "water",
-    "soil": "soil", "low_friction": "soil",  # the ground's material: deformable or slippery
+    "soil": "soil", "low_friction": "soil", "ice": "soil",  # the ground's material: deformable or slippery
     "pillars": "obstacles", "discrete_obstacles": "obstacles", "rocks": "obstacles", "stepping_stones": "obstacles",
     "gap": "obstacles", "pit": "obstacles",
     "hills": "slopes_and_stairs", "pyramid_slope": "slopes_and_stairs", "stairs": "slopes_and_stairs",

@@ -71,7 +71,7 @@ def _visible(tool: str, heights: np.ndarray, material, window: tuple[slice, slic
         return bool(material.has_water()[window].any())
     if tool == "soil":
         return bool(material.has_soil()[window].any())
-    if tool == "low_friction":
+    if tool in ("low_friction", "ice"):
         return bool((material.friction[window] < ground_friction).any())
     h = heights[window]
     return bool(h.size) and (float(h.max() - h.min()) > MIN_RELIEF or float(np.abs(h).max()) > MIN_RELIEF)

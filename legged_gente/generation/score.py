@@ -50,6 +50,8 @@ def features(calls: Iterable[ToolCall], size_x: float = 20.0, size_y: float = 20
             out |= {"dry_sand": {"sand"}, "wet_sand": {"sand"}, "mud": {"mud"}, "snow": {"snow"}}.get(p["preset"], set())
         elif c.tool == "low_friction" and (p["preset"] == "ice" or (p["preset"] == "custom" and p["mu"] < 0.15)):
             out.add("ice")
+        elif c.tool == "ice" and p["depth"] > 0:
+            out.add("ice")
         elif c.tool == "pillars" and p["density"] > 0:
             out.add("tall" if p["height"] >= TALL else "low")
         elif c.tool in ("discrete_obstacles", "rocks"):

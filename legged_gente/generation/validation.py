@@ -404,6 +404,11 @@ def check_height_stack(
                 f"calls[{bounds.first_beyond}] ({call.tool}) can make |height| reach {bounds.peak:.2f} m > "
                 f"{MAX_ABS_HEIGHT} m on its own region; {advice + '; or ' if advice else ''}give it a smaller region."
             ])
+        if call.mode is None:  # ice: it raises the ground below its surface
+            raise ValidationError([
+                f"calls[{bounds.first_beyond}] ({call.tool}) can raise the ground to {bounds.peak:.2f} m > "
+                f"{MAX_ABS_HEIGHT} m; lower its depth or lay it on lower ground."
+            ])
         raise ValidationError([
             f"calls[{bounds.first_beyond}] ({call.tool} with mode {call.mode!r}) can make |height| reach "
             f"{bounds.peak:.2f} m > {MAX_ABS_HEIGHT} m where regions stack; lower its heights, use mode 'set', or move it."

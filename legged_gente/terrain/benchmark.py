@@ -17,10 +17,10 @@ BENCHMARK_TYPES = [
     "flat", "pyramid_slope", "pyramid_slope:direction=down", "random_uniform", "natural_ground", "hills",
     "waves", "stairs", "stairs:direction=down", "pyramid_stairs", "pyramid_stairs:direction=down",
     "discrete_obstacles", "stepping_stones", "gap", "pit", "pillars", "rocks", "river+water", "basin+water",
-    "hills+soil:preset=dry_sand", "low_friction",
+    "hills+soil:preset=dry_sand", "low_friction", "basin+ice:depth=0.05",
 ]
-"""Twenty-one columns: every geometric atomic, both directions where they have one, water in a river and in a
-basin, sand and ice."""
+"""Twenty-two columns: every geometric atomic, both directions where they have one, water in a river and in a
+basin, sand, slippery ground and a frozen pond (its ice 5 cm above the basin's floor, below the rim as it deepens)."""
 
 
 def benchmark_grid(

@@ -287,7 +287,8 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
     atomic's declared range (``height_bounds`` on the rectangle widened by the band, as the builder generates
     it) and an ``add`` operation shifts the current range by it; in the band the builder blends old and new
     heights convexly, so the range is the union of both; a smoothing filter mixes the heights inside its rectangle,
-    so there the range is that of all of them. Parameters must be complete (``check_params``).
+    so there the range is that of all of them; ice raises its rectangle's cells to at least its surface, ``depth``
+    above the rectangle's lowest height. Parameters must be complete (``check_params``).
     """
     registry = ATOMIC_TERRAINS if registry is None else registry
     band = SEAM_BAND
@@ -320,6 +321,15 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
         inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
         if inside.any():
             lo, hi = np.where(inside, lo[inside].min(), lo), np.where(inside, hi[inside].max(), hi)
+    for k, (part, (x0, y0, x1, y1)) in enumerate(zip(spec.parts, rects)):  # then the materials: ice raises the
+        for op in part.ops:  # ground to its surface, depth above the region's lowest ground
+            inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
+            if op.terrain == "ice" and inside.any():
+                depth = float(op.params["depth"])
+                lo = np.where(inside, np.maximum(lo, lo[inside].min() + depth), lo)
+                hi = np.where(inside, np.maximum(hi, hi[inside].min() + depth), hi)
+                if first_beyond is None and float(hi.max()) > MAX_ABS_HEIGHT:
+                    first_beyond = k
     return HeightBounds(np.array(cut_x), np.array(cut_y), lo, hi, first_beyond)
 
 
@@ -463,6 +473,15 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
     for i0, j0, i1, j1, op, atomic, params, rng in physical:
         patch = atomic.fn((i1 - i0, j1 - j0), res, rng, heights[i0:i1, j0:j1], **params)
         material.paint(patch, i0, j0)
+        if patch.ice_surface is not None:  # frozen water: the ground rises to the ice; water at or below it freezes
+            win = (slice(i0, i1), slice(j0, j1))
+            frozen = patch.ice_surface > NO_WATER / 2
+            top = float(patch.ice_surface[frozen].max(initial=0.0))
+            if top > MAX_ABS_HEIGHT:
+                raise ValueError(f"{op.terrain} on cells ({i0}, {j0})-({i1}, {j1}) stands at {top:.2f} m > {MAX_ABS_HEIGHT} m; "
+                                 f"lower its depth or lay it on lower ground.")
+            heights[win][frozen] = patch.ice_surface[frozen]
+            material.drain(win, frozen & (material.water_surface[win] <= patch.ice_surface))
         if patch.water_surface is not None and patch.flow_kind in (FLOW_CURRENT, FLOW_TIDE):
             _follow_channels(material, patch, i0, j0, course_distance, course_axis, course_angle, course_speedup)
     return heights, material

@@ -17,7 +17,7 @@ from .registry import ATOMIC_TERRAINS, Param
 from .terrain import Terrain, preview_rgb
 
 GALLERY_DIFFICULTY = 0.7
-PHYSICAL_BASE = {"water": "river", "soil": "hills", "low_friction": "flat"}
+PHYSICAL_BASE = {"water": "river", "soil": "hills", "low_friction": "flat", "ice": "basin"}
 """The geometric terrain each physical one is shown on."""
 START, END = "<!-- atomics:start -->", "<!-- atomics:end -->"
 

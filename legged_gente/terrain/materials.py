@@ -109,6 +109,12 @@ class MaterialMap:
         if patch.friction is not None:
             self.friction[win][mask] = patch.friction
 
+    def drain(self, window: tuple[slice, slice], cells: np.ndarray) -> None:
+        """Make ``cells`` (bool, the window's shape) of ``window`` dry: no water surface, no flow."""
+        self.water_surface[window][cells] = NO_WATER
+        for field in ("flow_kind", "flow_speed", "flow_direction", "flow_omega", "flow_phase"):
+            getattr(self, field)[window][cells] = 0
+
     def paste(self, other: "MaterialMap", i0: int, j0: int) -> None:
         """Copy every property of ``other`` into this map at cell offset (i0, j0), remapping soil indices."""
         win = (slice(i0, i0 + other.shape[0]), slice(j0, j0 + other.shape[1]))
@@ -127,6 +133,8 @@ class MaterialPatch:
     soil: name of a soil preset of ``legged_gente.terrain.soil.SOIL_PRESETS``.
     friction: Coulomb friction coefficient of the ground (1).
     mask: (nx, ny) bool, the cells soil and friction apply to (all cells of the region if None).
+    ice_surface: (nx, ny) absolute z (m) up to which the patch raises the ground (frozen water), ``NO_WATER`` where
+    it leaves a cell's height; water at or below it is frozen with it (the tile's builder applies both).
     """
 
     shape: tuple[int, int]
@@ -139,3 +147,4 @@ class MaterialPatch:
     soil: str | None = None
     friction: float | None = None
     mask: np.ndarray | None = None
+    ice_surface: np.ndarray | None = None

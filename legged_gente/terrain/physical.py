@@ -1,8 +1,9 @@
 """Physical atomic terrains: water, deformable soil and low friction, as :class:`MaterialPatch` es.
 
 Every function takes ``(shape, resolution, rng, heights, **params)`` where ``heights`` are the region's ground
-heights, and returns what the region's cells carry. They change no height: combine them with a geometric
-terrain (water in a ``river``, ``soil`` on ``hills`` for dunes). Water painted over soil keeps the soil.
+heights, and returns what the region's cells carry. They change no height, but for ``ice``, which fills a
+depression with frozen water: combine them with a geometric terrain (water in a ``river``, ``soil`` on ``hills``
+for dunes). Water painted over soil keeps the soil.
 """
 
 from __future__ import annotations
@@ -112,3 +113,18 @@ LOW_FRICTION_RANGES = {"ice": (0.05, 0.10), "wet_tiles": (0.30, 0.40)}
 def low_friction(shape, resolution, rng, heights, preset, mu):
     value = mu if preset == "custom" else rng.uniform(*LOW_FRICTION_RANGES[preset])
     return MaterialPatch(shape=shape, friction=float(value))
+
+
+@atomic_terrain(
+    "ice",
+    "physical",
+    "Frozen water: level ice filling the region up to a depth above its lowest ground, as slippery as ice. Lay it "
+    "on a depression (river, pit, basin) as you would water; it raises the ground there to the ice's surface.",
+    {"depth": Param(0.3, "height of the ice surface above the lowest ground of the region", "m", 0.0, 2.0)},
+)
+def ice(shape, resolution, rng, heights, depth):
+    # the water's level (as `water` sets it) turned solid; its friction is the ice preset's (LOW_FRICTION_RANGES)
+    surface = np.float32(heights.min() + depth)
+    frozen = heights < surface
+    return MaterialPatch(shape=shape, ice_surface=np.where(frozen, surface, NO_WATER).astype(np.float32),
+                         friction=float(rng.uniform(*LOW_FRICTION_RANGES["ice"])), mask=frozen)

@@ -12,7 +12,8 @@ Two kinds exist:
 * ``"geometric"``: ``fn(shape, resolution, rng, **params) -> np.ndarray`` returns float32 heights in
   metres of ``shape == (nx, ny)`` cells of ``resolution`` metres (x along axis 0).
 * ``"physical"``: ``fn(shape, resolution, rng, heights, **params) -> MaterialPatch`` returns the material
-  properties for the region (water, soil, friction) given the region's current heights.
+  properties for the region (water, soil, friction) given the region's current heights (and ice, which raises
+  them to its surface).
 """
 
 from __future__ import annotations
@@ -86,7 +87,8 @@ class AtomicTerrain:
     def height_bounds(self, params: dict[str, Any], size_x: float, size_y: float) -> tuple[float, float]:
         """Declared (min, max) height in metres of this terrain on a ``size_x`` x ``size_y`` m region.
 
-        ``params`` must be complete (the output of :meth:`check_params`). Physical terrains change no height.
+        ``params`` must be complete (the output of :meth:`check_params`). Physical terrains declare none (ice
+        fills a depression up to its depth above the region's lowest ground).
         """
         if self.bounds is None:
             return (0.0, 0.0)

@@ -80,7 +80,9 @@ Drop = tuple[str, "str | None"]
 @dataclasses.dataclass(frozen=True)
 class Modifier:
     """Changes the steps of its cue: ``set`` values, ``scale`` factors (per tool, per parameter), ``drop`` steps,
-    ``extra`` steps (added after the drop, so "snowy" replaces the cue's soil by snow)."""
+    ``extra`` steps (added after the drop, so "snowy" replaces the cue's soil by snow), ``turn`` tools into others
+    once the values are set (frozen: water to ice; the step keeps its region and the parameters the new tool takes,
+    so a deep frozen lake is deep ice)."""
 
     name: str
     keywords: tuple[str, ...]
@@ -88,11 +90,12 @@ class Modifier:
     scale: Mapping[str, Mapping[str, float]] = dataclasses.field(default_factory=dict)
     extra: tuple[Step, ...] = ()
     drop: tuple[Drop, ...] = ()
+    turn: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
     def applies_to(self, cue: Cue) -> bool:
         """Whether this modifier changes anything in ``cue``."""
         tools = {s.tool for s in cue.steps}
-        return bool(self.extra) or bool(tools & (set(self.set) | set(self.scale))) or any(
+        return bool(self.extra) or bool(tools & (set(self.set) | set(self.scale) | set(self.turn))) or any(
             _dropped(s, self.drop) for s in cue.steps)
 
 
@@ -335,7 +338,7 @@ MODIFIERS: tuple[Modifier, ...] = (
     Modifier("slippery", ("slippery", "slick", "wet"), extra=(Step("low_friction", {"preset": "wet_tiles"}),)),
     Modifier("flooded", ("flooded", "flooding", "submerged"),
              extra=(Step("basin", {"depth": 0.3, "shore_width": 1.5}, mode="add"), Step("water", {"depth": 0.2}))),
-    Modifier("frozen", ("frozen", "icy", "iced over", "ice-covered"), drop=(("water", None),),
+    Modifier("frozen", ("frozen", "icy", "iced over", "ice-covered"), turn={"water": "ice"},
              extra=(Step("low_friction", {"preset": "ice"}),)),
     Modifier("dry", ("dry", "dried", "dried-up", "dried up"), drop=(("water", None),)),
     Modifier("snowy", ("snowy", "snow-covered", "snow covered", "snowbound"), drop=_ALL_SOIL,
@@ -506,9 +509,19 @@ def keep_off_seams(rect, slot, size_x: float, size_y: float, water: bool):
 
 
 def _steps(cue: Cue, modifiers: list[Modifier]) -> list[Step]:
-    """The cue's recipe after the modifiers' drops, then their extra steps."""
+    """The cue's recipe after the modifiers' drops, then their extra steps (before their turns: :func:`_turned`)."""
     drops = tuple(d for m in modifiers for d in m.drop)
     return [s for s in cue.steps if not _dropped(s, drops)] + [s for m in modifiers for s in m.extra]
+
+
+def _turned(step: Step, params: dict[str, Any], modifiers: list[Modifier],
+            registry: Mapping[str, AtomicTerrain]) -> tuple[Step, dict[str, Any]]:
+    """``step`` and its ``params`` after the modifiers' turns: the new tool keeps the parameters it takes."""
+    for mod in modifiers:
+        if step.tool in mod.turn:
+            step = dataclasses.replace(step, tool=mod.turn[step.tool])
+            params = {k: v for k, v in params.items() if k in registry[step.tool].params}
+    return step, params
 
 
 def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], dict[str, list[Modifier]]]:
@@ -546,7 +559,7 @@ def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], di
 def recipe_steps(text: str) -> list[Step]:
     """Every recipe step :func:`plan_text` builds for ``text`` (modifiers' drops and extra steps applied)."""
     cues, per_cue = _bind_all(text, [])
-    return [step for _, cue in cues for step in _steps(cue, per_cue[cue.name])]
+    return [_turned(step, {}, per_cue[cue.name], ATOMIC_TERRAINS)[0] for _, cue in cues for step in _steps(cue, per_cue[cue.name])]
 
 
 def plan_text(
@@ -574,12 +587,13 @@ def plan_text(
         steps = _steps(cue, used)
         params = [_apply(step, used, registry[step.tool], warnings) for step in steps]
         held = _hold_water(steps, params)
+        steps, params = map(list, zip(*(_turned(step, args, used, registry) for step, args in zip(steps, params))))
         # geometry first, then materials, each in recipe order
         for k in sorted(range(len(steps)), key=lambda k: registry[steps[k].tool].kind != "geometric"):
             step, args, terrain = steps[k], params[k], registry[steps[k].tool]
             rect = _frac_rect(slot, step.where)
             if k in held:
-                rect = keep_off_seams(rect, slot, size_x, size_y, step.tool == "water")
+                rect = keep_off_seams(rect, slot, size_x, size_y, step.tool in ("water", "ice"))
                 if rect[2] <= rect[0] or rect[3] <= rect[1]:
                     raise ValidationError([f"planner cue '{cue.name}' does not fit on a {size_x:g} m x {size_y:g} m "
                                            f"tile: its water keeps {WATER_MARGIN:g} m off its part's edges and no room "
