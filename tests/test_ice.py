@@ -11,7 +11,7 @@ from legged_gente.generation.score import features
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.generation.validation import ValidationError, check_height_stack, validate_call
 from legged_gente.terrain.composition import Operation, Part, Region, TileSpec, stacked_height_bounds
-from legged_gente.terrain.materials import NO_WATER
+from legged_gente.terrain.materials import NO_SOIL, NO_WATER
 from legged_gente.terrain.physical import LOW_FRICTION_RANGES
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
 
@@ -116,3 +116,14 @@ def test_ice_stacked_past_the_height_limit_is_refused_before_building():
     with pytest.raises(ValidationError, match=r"calls\[5\] \(ice\) can raise the ground to 12.00 m > 10.0 m; "
                                               r"lower its depth or lay it on lower ground\."):
         check_height_stack(calls, 20.0, 20.0)
+
+
+def test_ice_covers_the_soil_below_it_and_takes_snow_painted_after_it():
+    mud = Operation("soil", {"preset": "mud"})
+    _, after, material = _pit_tile(mud, Operation("ice", {"depth": 0.3}))
+    frozen = material.friction < 0.5
+    assert frozen.any() and (~frozen[10:50, 10:50]).any()
+    assert np.all(material.soil[frozen] == NO_SOIL)  # a frozen bog is ice to walk on
+    assert np.all(material.soil[10:50, 10:50][~frozen[10:50, 10:50]] != NO_SOIL)  # the bank stays mud
+    _, _, material = _pit_tile(Operation("ice", {"depth": 0.3}), Operation("soil", {"preset": "snow"}))
+    assert np.all(material.soil[10:50, 10:50] != NO_SOIL)  # snow on the ice

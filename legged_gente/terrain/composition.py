@@ -26,7 +26,7 @@ from scipy import ndimage
 
 from .atomic import river_course
 from .heightmap import load_heightmap
-from .materials import FLOW_CURRENT, FLOW_TIDE, NO_WATER, MaterialMap, MaterialPatch
+from .materials import FLOW_CURRENT, FLOW_TIDE, NO_SOIL, NO_WATER, MaterialMap, MaterialPatch
 from .registry import ATOMIC_TERRAINS, AtomicTerrain
 
 SPEC_VERSION = 1
@@ -473,7 +473,8 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
     for i0, j0, i1, j1, op, atomic, params, rng in physical:
         patch = atomic.fn((i1 - i0, j1 - j0), res, rng, heights[i0:i1, j0:j1], **params)
         material.paint(patch, i0, j0)
-        if patch.ice_surface is not None:  # frozen water: the ground rises to the ice; water at or below it freezes
+        if patch.ice_surface is not None:  # frozen water: the ground rises to the ice, water at or below it freezes
+            # and soil painted before lies under it (a frozen bog is ice to walk on, not mud)
             win = (slice(i0, i1), slice(j0, j1))
             frozen = patch.ice_surface > NO_WATER / 2
             top = float(patch.ice_surface[frozen].max(initial=0.0))
@@ -482,6 +483,7 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
                                  f"lower its depth or lay it on lower ground.")
             heights[win][frozen] = patch.ice_surface[frozen]
             material.drain(win, frozen & (material.water_surface[win] <= patch.ice_surface))
+            material.soil[win][frozen] = NO_SOIL
         if patch.water_surface is not None and patch.flow_kind in (FLOW_CURRENT, FLOW_TIDE):
             _follow_channels(material, patch, i0, j0, course_distance, course_axis, course_angle, course_speedup)
     return heights, material

@@ -134,7 +134,8 @@ class MaterialPatch:
     friction: Coulomb friction coefficient of the ground (1).
     mask: (nx, ny) bool, the cells soil and friction apply to (all cells of the region if None).
     ice_surface: (nx, ny) absolute z (m) up to which the patch raises the ground (frozen water), ``NO_WATER`` where
-    it leaves a cell's height; water at or below it is frozen with it (the tile's builder applies both).
+    it leaves a cell's height; water at or below it is frozen with it and soil under it is covered (the tile's
+    builder applies all three).
     """
 
     shape: tuple[int, int]
