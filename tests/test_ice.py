@@ -127,3 +127,18 @@ def test_ice_covers_the_soil_below_it_and_takes_snow_painted_after_it():
     assert np.all(material.soil[10:50, 10:50][~frozen[10:50, 10:50]] != NO_SOIL)  # the bank stays mud
     _, _, material = _pit_tile(Operation("ice", {"depth": 0.3}), Operation("soil", {"preset": "snow"}))
     assert np.all(material.soil[10:50, 10:50] != NO_SOIL)  # snow on the ice
+
+
+def test_frozen_water_is_slippery_where_it_is_ice_and_icy_ground_without_water_everywhere():
+    lake = plan_text("a frozen lake")
+    assert "low_friction" not in [c.tool for c in lake.calls]  # the banks are frozen ground, not glare ice
+    heights, material = TerrainSpec(lake.calls, name="lake").build()
+    ice = [c for c in lake.calls if c.tool == "ice"][0]
+    x0, y0, x1, y1 = (round(v / 0.1) for v in ice.rect(20.0, 20.0))
+    slippery = material.friction < 0.5
+    assert slippery[x0:x1, y0:y1].sum() == slippery.sum() > 0.8 * 60 * 60  # the pond's floor only
+    lo, hi = LOW_FRICTION_RANGES["ice"]
+    assert np.all((material.friction[slippery] >= lo) & (material.friction[slippery] <= hi))
+    # with no water to freeze, "icy" still makes the cue's ground icy
+    path = [c for c in plan_text("an icy path").calls if c.tool == "low_friction"]
+    assert [c.params["preset"] for c in path] == ["ice"]

@@ -82,7 +82,8 @@ class Modifier:
     """Changes the steps of its cue: ``set`` values, ``scale`` factors (per tool, per parameter), ``drop`` steps,
     ``extra`` steps (added after the drop, so "snowy" replaces the cue's soil by snow), ``turn`` tools into others
     once the values are set (frozen: water to ice; the step keeps its region and the parameters the new tool takes,
-    so a deep frozen lake is deep ice)."""
+    so a deep frozen lake is deep ice), and ``fallback`` steps, added when it turns nothing in the cue (icy stairs:
+    ice friction on the stairs)."""
 
     name: str
     keywords: tuple[str, ...]
@@ -91,11 +92,12 @@ class Modifier:
     extra: tuple[Step, ...] = ()
     drop: tuple[Drop, ...] = ()
     turn: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    fallback: tuple[Step, ...] = ()
 
     def applies_to(self, cue: Cue) -> bool:
         """Whether this modifier changes anything in ``cue``."""
         tools = {s.tool for s in cue.steps}
-        return bool(self.extra) or bool(tools & (set(self.set) | set(self.scale) | set(self.turn))) or any(
+        return bool(self.extra or self.fallback) or bool(tools & (set(self.set) | set(self.scale) | set(self.turn))) or any(
             _dropped(s, self.drop) for s in cue.steps)
 
 
@@ -339,7 +341,7 @@ MODIFIERS: tuple[Modifier, ...] = (
     Modifier("flooded", ("flooded", "flooding", "submerged"),
              extra=(Step("basin", {"depth": 0.3, "shore_width": 1.5}, mode="add"), Step("water", {"depth": 0.2}))),
     Modifier("frozen", ("frozen", "icy", "iced over", "ice-covered"), turn={"water": "ice"},
-             extra=(Step("low_friction", {"preset": "ice"}),)),
+             fallback=(Step("low_friction", {"preset": "ice"}),)),
     Modifier("dry", ("dry", "dried", "dried-up", "dried up"), drop=(("water", None),)),
     Modifier("snowy", ("snowy", "snow-covered", "snow covered", "snowbound"), drop=_ALL_SOIL,
              extra=(Step("soil", {"preset": "snow"}),)),
@@ -509,9 +511,13 @@ def keep_off_seams(rect, slot, size_x: float, size_y: float, water: bool):
 
 
 def _steps(cue: Cue, modifiers: list[Modifier]) -> list[Step]:
-    """The cue's recipe after the modifiers' drops, then their extra steps (before their turns: :func:`_turned`)."""
+    """The cue's recipe after the modifiers' drops, then their extra steps and the fallback steps of those that
+    turn nothing left in it (before their turns: :func:`_turned`)."""
     drops = tuple(d for m in modifiers for d in m.drop)
-    return [s for s in cue.steps if not _dropped(s, drops)] + [s for m in modifiers for s in m.extra]
+    kept = [s for s in cue.steps if not _dropped(s, drops)]
+    extra = [s for m in modifiers for s in m.extra]
+    fallback = [s for m in modifiers if not any(s.tool in m.turn for s in kept) for s in m.fallback]
+    return kept + extra + fallback
 
 
 def _turned(step: Step, params: dict[str, Any], modifiers: list[Modifier],
