@@ -9,6 +9,9 @@ import math
 import numpy as np
 import pytest
 
+from legged_gente.envs.gente_biped.gente_biped_config import GenteBipedCfg
+from legged_gente.envs.gente_quadruped.gente_quadruped_config import GenteQuadrupedCfg
+from legged_gente.generation.checker import water_walls
 from legged_gente.terrain.composition import Operation, Part, Region, TileSpec, tile_spec_from_document
 from legged_gente.terrain.materials import FLOW_CURRENT
 from legged_gente.terrain.registry import ATOMIC_TERRAINS
@@ -71,23 +74,37 @@ def test_river_plus_water_surface_and_wet_width_by_hand(difficulty):
 
 # ------------------------------------------------------------------------------- the curriculum's current
 
-def test_the_curriculum_current_flows_at_its_speed_along_plus_x_over_the_whole_tile():
-    """``"water:flow=current,speed=0.5"`` (gente_biped's curriculum) on flat ground: every cell of the tile is wet to
-    the row's depth 0.05 + 0.45 d, with a 0.5 m/s current towards +x (direction 0); the border stays dry."""
+def _current_column(cfg) -> str:
+    return next(t for t in cfg.terrain.terrain_types if "flow=current" in t)
+
+
+@pytest.mark.parametrize("cfg, basin, water", [
+    # the basin's depth ramps 0.1 + 0.5 d (its registry map), the water's 0.05 + 0.45 d
+    (GenteBipedCfg, lambda d: 0.1 + 0.5 * d, lambda d: 0.05 + 0.45 * d),
+    (GenteQuadrupedCfg, lambda d: 0.2, lambda d: 0.12),  # both fixed: 12 cm of water for the short legs
+])
+def test_the_curriculum_current_flows_in_a_basin_that_holds_it(cfg, basin, water):
+    """The curriculum's current tile was water on flat ground: its water stood as a wall at the column's edges. It
+    lies in a basin now: the surface stays below the rim and no wet cell stands over a dry neighbour's ground."""
 
     class Cfg:
         mesh_type, mode, resolution, border_size = "heightfield", "curriculum", 0.1, 0.5
-        terrain_length = terrain_width = 2.0
+        terrain_length = terrain_width = 8.0
         num_rows, num_cols, max_difficulty = 3, 1, 1.0
-        terrain_types, terrain_proportions = ["water:flow=current,speed=0.5"], [1.0]
+        terrain_types, terrain_proportions = [_current_column(cfg)], [1.0]
         static_friction, seed = 1.0, 0
 
     t = Terrain(Cfg, num_robots=1)
-    m, b, n = t.material, 5, 20  # border cells, tile cells
+    h, m, b, n = t.height_field, t.material, 5, 80  # border cells, tile cells
+    assert water_walls(h, m)[0] == 0
+    speed = float(parse_terrain_type(_current_column(cfg).split("+")[-1])[1]["speed"])
     for row, d in enumerate((0.0, 0.5, 1.0)):
         tile = (slice(b + row * n, b + (row + 1) * n), slice(b, b + n))
-        np.testing.assert_allclose(m.water_surface[tile], 0.05 + 0.45 * d, atol=1e-6)
-        assert (m.flow_kind[tile] == FLOW_CURRENT).all()
-        np.testing.assert_allclose(m.flow_speed[tile], 0.5)
-        np.testing.assert_allclose(m.flow_direction[tile], 0.0)
-    assert m.has_water().sum() == 3 * n * n
+        wet = m.has_water()[tile]
+        assert h[tile].min() == pytest.approx(-basin(d), abs=1e-6)  # the basin's flat bottom
+        np.testing.assert_allclose(m.water_surface[tile][wet], -basin(d) + water(d), atol=1e-6)
+        assert -basin(d) + water(d) < 0.0  # below the rim
+        assert wet[n // 2, n // 2] and not wet[0, 0]  # wet in the middle, dry on the rim
+        assert (m.flow_kind[tile][wet] == FLOW_CURRENT).all()
+        np.testing.assert_allclose(m.flow_speed[tile][wet], speed)
+        np.testing.assert_allclose(m.flow_direction[tile][wet], 0.0)  # towards +x

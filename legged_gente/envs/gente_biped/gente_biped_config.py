@@ -22,8 +22,9 @@ class GenteBipedCfg(LeggedRobotCfg):
         terrain_types = [
             "flat", "random_uniform", "natural_ground", "pyramid_slope", "pyramid_slope:direction=down",
             "pyramid_stairs", "pyramid_stairs:direction=down", "discrete_obstacles", "rocks", "waves",
-            "river+water", "water:flow=current,speed=0.5", "hills+soil:preset=dry_sand", "soil:preset=mud", "low_friction",
+            "river+water", "basin+water:flow=current,speed=0.5", "hills+soil:preset=dry_sand", "soil:preset=mud", "low_friction",
         ]
+        # the current flows in a basin that holds it: on flat ground its water stood as a wall at the column's edges
         terrain_proportions = [0.15, 0.1, 0.05, 0.075, 0.075, 0.05, 0.05, 0.05, 0.05, 0.05,
                                0.075, 0.05, 0.075, 0.05, 0.05]
 

@@ -18,8 +18,9 @@ class GenteQuadrupedCfg(LeggedRobotCfg):
     class terrain(LeggedRobotCfg.terrain):
         """The biped's curriculum (rows: difficulty, columns: type). The geometric terrains keep their
         difficulty ramps (steps, blocks and waves up to 0.2 m, rocks 0.25 m, like legged_gym's curriculum);
-        the water is fixed shallow enough to wade: 0.15 m, half the trunk height, where the biped gets up
-        to 0.5 m. The per-type params after ':' replace the curriculum's value on every level."""
+        the water is fixed shallow enough to wade: 0.15 m in the river and 0.12 m in the current's 0.2 m basin,
+        about half the trunk height, where the biped gets up to 0.5 m. The per-type params after ':' replace the
+        curriculum's value on every level."""
 
         mesh_type = "heightfield"
         mode = "curriculum"
@@ -28,7 +29,7 @@ class GenteQuadrupedCfg(LeggedRobotCfg):
         terrain_types = [
             "flat", "random_uniform", "natural_ground", "pyramid_slope", "pyramid_slope:direction=down",
             "pyramid_stairs", "pyramid_stairs:direction=down", "discrete_obstacles", "rocks", "waves",
-            "river:depth=0.2+water:depth=0.15", "water:depth=0.12,flow=current,speed=0.3",
+            "river:depth=0.2+water:depth=0.15", "basin:depth=0.2+water:depth=0.12,flow=current,speed=0.3",
             "hills+soil:preset=dry_sand", "soil:preset=mud", "low_friction",
         ]
         terrain_proportions = [0.15, 0.1, 0.05, 0.075, 0.075, 0.05, 0.05, 0.05, 0.05, 0.05,
