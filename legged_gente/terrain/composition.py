@@ -479,8 +479,8 @@ def build_tile(spec: TileSpec, ground_friction: float = 1.0) -> tuple[np.ndarray
             frozen = patch.ice_surface > NO_WATER / 2
             top = float(patch.ice_surface[frozen].max(initial=0.0))
             if top > MAX_ABS_HEIGHT:
-                raise ValueError(f"{op.terrain} on cells ({i0}, {j0})-({i1}, {j1}) stands at {top:.2f} m > {MAX_ABS_HEIGHT} m; "
-                                 f"lower its depth or lay it on lower ground.")
+                raise ValueError(f"{op.terrain} on cells ({i0}, {j0})-({i1}, {j1}) stands at {top:.2f} m > "
+                                 f"{MAX_ABS_HEIGHT} m; lower its depth or lay it on lower ground.")
             heights[win][frozen] = patch.ice_surface[frozen]
             material.drain(win, frozen & (material.water_surface[win] <= patch.ice_surface))
             material.soil[win][frozen] = NO_SOIL

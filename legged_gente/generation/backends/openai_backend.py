@@ -114,9 +114,9 @@ def system_prompt(size_x: float, size_y: float) -> str:
         f"+x is the front of the tile and +y its left; a region is one of {regions} or a rectangle "
         f"{{x0, y0, x1, y1}} in metres. Calls apply in order: first geometric terrains (heights; mode 'set' "
         f"replaces the region's heights, 'add' adds to them), then physical terrains (water, soil, friction, "
-        f"ice) over the ground they lie on (ice fills a depression to its level surface). Issue all calls at once, using only the tools' declared arguments "
-        f"and ranges. If calls are rejected, answer with one corrected call per rejected call, in their order; "
-        f"accepted calls stay applied: do not send them again."
+        f"ice) over the ground they lie on (ice fills a depression to its level surface). Issue all calls at "
+        f"once, using only the tools' declared arguments and ranges. If calls are rejected, answer with one "
+        f"corrected call per rejected call, in their order; accepted calls stay applied: do not send them again."
     )
 
 
