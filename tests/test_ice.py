@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from legged_gente.generation.backends.planner import plan_text
+from legged_gente.generation.backends.planner import CUES, plan_text
 from legged_gente.generation.checker import _visible
 from legged_gente.generation.score import features
 from legged_gente.generation.spec import TerrainSpec
@@ -142,3 +142,17 @@ def test_frozen_water_is_slippery_where_it_is_ice_and_icy_ground_without_water_e
     # with no water to freeze, "icy" still makes the cue's ground icy
     path = [c for c in plan_text("an icy path").calls if c.tool == "low_friction"]
     assert [c.params["preset"] for c in path] == ["ice"]
+
+
+@pytest.mark.parametrize("cue", [c for c in CUES if any(s.tool == "water" for s in c.steps)], ids=lambda c: c.name)
+def test_every_frozen_water_cue_is_ice_inside_its_depression(cue):
+    """The planner holds each cue's water in a depression FREEBOARD deeper; frozen, that water is ice below its banks:
+    no ice cell stands more than 2 cm above a 4-neighbour that is not ice (an ice plateau's edge)."""
+    plan = plan_text(f"a frozen {cue.keywords[0]} next to stone stairs")
+    assert "water" not in [c.tool for c in plan.calls] and "ice" in [c.tool for c in plan.calls]
+    heights, material = TerrainSpec(plan.calls, name="frozen").build()
+    ice = material.friction < 0.5
+    for a, b in ((np.s_[:-1, :], np.s_[1:, :]), (np.s_[1:, :], np.s_[:-1, :]),
+                 (np.s_[:, :-1], np.s_[:, 1:]), (np.s_[:, 1:], np.s_[:, :-1])):
+        edge = ice[a] & ~ice[b]
+        assert not edge.any() or float((heights[a] - heights[b])[edge].max()) <= 0.02
