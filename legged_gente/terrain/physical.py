@@ -20,6 +20,13 @@ def _lerp(a: float, b: float, d: float) -> float:
     return a + (b - a) * d
 
 
+def _level(heights: np.ndarray, depth: float) -> tuple[np.float32, np.ndarray]:
+    """The surface (m) of water filling a region up to ``depth`` above its lowest ground, and the cells below it:
+    where ``water`` stands and where ``ice``, frozen water, fills."""
+    surface = np.float32(heights.min() + depth)
+    return surface, heights < surface
+
+
 def _water_rules(p) -> None:
     # a speed on still water would be dropped silently ("water:speed=0.5" is still water); a current or tide of
     # speed 0 is allowed: zero means none, as depth 0 is no water
@@ -47,10 +54,10 @@ def _water_rules(p) -> None:
     rules=_water_rules,
 )
 def water(shape, resolution, rng, heights, depth, flow, speed, direction, omega, phase):
-    surface = np.float32(heights.min() + depth)
+    surface, wet = _level(heights, depth)
     return MaterialPatch(
         shape=shape,
-        water_surface=np.where(heights < surface, surface, NO_WATER).astype(np.float32),
+        water_surface=np.where(wet, surface, NO_WATER).astype(np.float32),
         flow_kind=FLOW_KINDS[flow],
         flow_speed=speed,
         flow_direction=direction,
@@ -123,8 +130,7 @@ def low_friction(shape, resolution, rng, heights, preset, mu):
     {"depth": Param(0.3, "height of the ice surface above the lowest ground of the region", "m", 0.0, 2.0)},
 )
 def ice(shape, resolution, rng, heights, depth):
-    # the water's level (as `water` sets it) turned solid; its friction is the ice preset's (LOW_FRICTION_RANGES)
-    surface = np.float32(heights.min() + depth)
-    frozen = heights < surface
+    # the water's level turned solid; its friction is the ice preset's (LOW_FRICTION_RANGES)
+    surface, frozen = _level(heights, depth)
     return MaterialPatch(shape=shape, ice_surface=np.where(frozen, surface, NO_WATER).astype(np.float32),
                          friction=float(rng.uniform(*LOW_FRICTION_RANGES["ice"])), mask=frozen)

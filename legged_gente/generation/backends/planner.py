@@ -97,8 +97,8 @@ class Modifier:
     def applies_to(self, cue: Cue) -> bool:
         """Whether this modifier changes anything in ``cue``."""
         tools = {s.tool for s in cue.steps}
-        return bool(self.extra or self.fallback) or bool(tools & (set(self.set) | set(self.scale) | set(self.turn))) or any(
-            _dropped(s, self.drop) for s in cue.steps)
+        changed = set(self.set) | set(self.scale) | set(self.turn)
+        return bool(self.extra or self.fallback or tools & changed) or any(_dropped(s, self.drop) for s in cue.steps)
 
 
 def _dropped(step: Step, drop: tuple[Drop, ...]) -> bool:
@@ -565,7 +565,8 @@ def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], di
 def recipe_steps(text: str) -> list[Step]:
     """Every recipe step :func:`plan_text` builds for ``text`` (modifiers' drops and extra steps applied)."""
     cues, per_cue = _bind_all(text, [])
-    return [_turned(step, {}, per_cue[cue.name], ATOMIC_TERRAINS)[0] for _, cue in cues for step in _steps(cue, per_cue[cue.name])]
+    return [_turned(step, {}, per_cue[cue.name], ATOMIC_TERRAINS)[0]
+            for _, cue in cues for step in _steps(cue, per_cue[cue.name])]
 
 
 def plan_text(
