@@ -156,3 +156,16 @@ def test_every_frozen_water_cue_is_ice_inside_its_depression(cue):
                  (np.s_[:, :-1], np.s_[:, 1:]), (np.s_[:, 1:], np.s_[:, :-1])):
         edge = ice[a] & ~ice[b]
         assert not edge.any() or float((heights[a] - heights[b])[edge].max()) <= 0.02
+
+
+@pytest.mark.parametrize("text", ["a frozen swamp", "a frozen bog beside a path", "a frozen mud field"])
+def test_frozen_wet_soil_is_hard_ground(text):
+    """Frost hardens a saturated soil: a frozen swamp is ice on its pools and frozen ground on its banks, not mud
+    that the feet sink into. Soils without water in them (dry sand, snow) stay as they are."""
+    thawed = plan_text(text.replace("frozen ", ""))
+    assert any(c.tool == "soil" and c.params["preset"] == "mud" for c in thawed.calls)
+    plan = plan_text(text)
+    assert not any(c.tool == "soil" and c.params["preset"] in ("mud", "wet_sand", "clay_loam") for c in plan.calls)
+    _, material = TerrainSpec(plan.calls, name="frozen").build()
+    assert np.all(material.soil == NO_SOIL)
+    assert any(c.params.get("preset") == "snow" for c in plan_text("a frozen snowy swamp").calls if c.tool == "soil")

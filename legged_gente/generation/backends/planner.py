@@ -340,7 +340,10 @@ MODIFIERS: tuple[Modifier, ...] = (
     Modifier("slippery", ("slippery", "slick", "wet"), extra=(Step("low_friction", {"preset": "wet_tiles"}),)),
     Modifier("flooded", ("flooded", "flooding", "submerged"),
              extra=(Step("basin", {"depth": 0.3, "shore_width": 1.5}, mode="add"), Step("water", {"depth": 0.2}))),
+    # frost hardens the soils that hold water (mud, wet sand, clay loam at 15-46 % moisture, Wong Table 2.3): frozen
+    # ground to walk on, not a soil to sink into
     Modifier("frozen", ("frozen", "icy", "iced over", "ice-covered"), turn={"water": "ice"},
+             drop=(("soil", "mud"), ("soil", "wet_sand"), ("soil", "clay_loam")),
              fallback=(Step("low_friction", {"preset": "ice"}),)),
     Modifier("dry", ("dry", "dried", "dried-up", "dried up"), drop=(("water", None),)),
     Modifier("snowy", ("snowy", "snow-covered", "snow covered", "snowbound"), drop=_ALL_SOIL,
