@@ -117,3 +117,18 @@ def test_generation_doc_quotes_the_planners_scores():
     assert len(rows) == 4
     for kind, split, n, f1, complete, median in rows:
         assert printed[(kind, split, n)] == (f1, complete, median), (kind, split)
+
+
+def test_readme_names_every_atomic_terrain_of_the_registry():
+    """README's counts and lists of the atomic terrains are the registry's: a terrain added to the registry (basin,
+    ice) must not be missing from the front page."""
+    from legged_gente.terrain.registry import ATOMIC_TERRAINS
+
+    readme = " ".join(_doc("README.md").split())
+    kinds = {kind: [n for n, t in ATOMIC_TERRAINS.items() if t.kind == kind] for kind in ("geometric", "physical")}
+    counts = re.search(r"\((\d+) geometric \+ (\d+) physical terrains\)", readme)
+    assert counts and tuple(map(int, counts.groups())) == (len(kinds["geometric"]), len(kinds["physical"]))
+    geometric = re.search(r"Geometric terrains: ([a-z_, ]+)\.", readme).group(1).split(", ")
+    assert geometric == kinds["geometric"]
+    physical = re.findall(r"(\w+) \(", re.search(r"Physical terrains: (.*?)\. Tiles", readme).group(1))
+    assert [p for p in physical if p in ATOMIC_TERRAINS] == kinds["physical"]
