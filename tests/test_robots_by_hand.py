@@ -457,3 +457,39 @@ def test_shipped_biped_policy_walks_in_soil_on_its_soles(preset):
     assert env.episode_length_buf.min().item() > 100  # nobody fell and was reset mid-way
     assert torch.stack(sinkage).max().item() > 0.07  # deeper than the whole shank's end cap clears the sole
     assert torch.stack(shank_force).max().item() == 0.0
+
+
+def test_shipped_quadruped_policy_rests_on_its_calves_in_mud():
+    """docs/robots.md's measurement of the quadruped's known limit: walking at 0.5 m/s in mud (8 robots, 0.5-3 s), its
+    feet sink deeper than the calves' collision capsules clear them (4.2 cm), and a calf touches in about 17 % of
+    the robot-steps, carrying about a fifth of the weight on average; on flat ground, never. When a soil model acts
+    on the legs, this test and the doc change together."""
+    import torch
+
+    from legged_gente.envs.task_registry import task_registry
+
+    cfg, train_cfg = task_registry.get_cfgs("gente_quadruped")
+    cfg.env.num_envs = 8
+    cfg.terrain.terrain_types, cfg.terrain.terrain_proportions = ["soil:preset=mud"], [1.0]
+    cfg.terrain.num_rows, cfg.terrain.num_cols = 1, 2
+    cfg.terrain.terrain_length = cfg.terrain.terrain_width = 6.0
+    cfg.terrain.border_size = 1.0
+    cfg.domain_rand.push_robots = False
+    ranges = cfg.commands.ranges
+    ranges.lin_vel_x, ranges.lin_vel_y, ranges.ang_vel_yaw = [0.5, 0.5], [0.0, 0.0], [0.0, 0.0]
+    env, _ = task_registry.make_env("gente_quadruped", env_cfg=cfg)
+    runner, _ = task_registry.make_pretrained_runner(env, "gente_quadruped", train_cfg)
+    policy = runner.get_inference_policy(device=env.device)
+    calves = [env.mjm.body(f"{leg}_calf").id for leg in ("FL", "FR", "RL", "RR")]
+    obs, touching, calf_load = env.get_observations(), [], []
+    with torch.inference_mode():
+        for step in range(150):  # 3 s of 0.02 s steps
+            obs, _, _, _ = env.step(policy(obs))
+            if step >= 25:
+                fz = env.contact_forces[:, calves, 2].abs()
+                touching.append((fz > 1.0).any(1).float())
+                calf_load.append(fz.sum(1) / (14.0 * G))
+    assert env.episode_length_buf.min().item() > 100
+    assert 0.08 < torch.stack(touching).mean().item() < 0.3
+    assert 0.1 < torch.stack(calf_load).mean().item() < 0.3
+    assert "a calf touches in 17 % of the robot-steps in mud" in ROBOTS_DOC
