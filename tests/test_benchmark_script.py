@@ -28,12 +28,13 @@ def test_terrain_build_prints_its_time(monkeypatch, capsys):
     """--terrain_build prints the grid build's time (the env benchmark itself is skipped here)."""
     from legged_gente.terrain import benchmark as terrain_benchmark
 
-    small = functools.partial(terrain_benchmark.benchmark_grid, num_rows=2, num_cols=20, tile_size=2.0, repeats=1)
+    cols = len(terrain_benchmark.BENCHMARK_TYPES)  # every type gets a column: none is left unbuilt
+    small = functools.partial(terrain_benchmark.benchmark_grid, num_rows=2, num_cols=cols, tile_size=2.0, repeats=1)
     monkeypatch.setattr(terrain_benchmark, "benchmark_grid", small)
     monkeypatch.setattr(benchmark, "run", lambda *args: [{}])
     monkeypatch.setattr(benchmark, "print_table", lambda rows, device: None)
     benchmark.main(["--num_envs", "2", "--device", "cpu", "--terrain_build"])
-    assert "terrain build: 2 x 20 tiles of 2.0 m at 0.1 m" in capsys.readouterr().out
+    assert f"terrain build: 2 x {cols} tiles of 2.0 m at 0.1 m" in capsys.readouterr().out
 
 
 def test_force_kernels_are_timed_on_a_terrain_with_materials(capsys):

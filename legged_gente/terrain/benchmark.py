@@ -1,7 +1,8 @@
 """Terrain build benchmark: a curriculum grid of every terrain type, water and sand included.
 
 ``python -m legged_gente.terrain.benchmark`` prints the wall-clock build time of the issue's reference grid
-(10 rows x 20 columns of 8 m tiles at 0.1 m); ``gente-benchmark`` calls :func:`benchmark_grid`.
+(10 rows of 8 m tiles at 0.1 m, a column per entry of ``BENCHMARK_TYPES``); ``gente-benchmark`` calls
+:func:`benchmark_grid`.
 """
 
 from __future__ import annotations
