@@ -427,7 +427,7 @@ def test_quadruped_pd_stand_as_the_doc_says():
 def test_shipped_biped_policy_walks_in_soil_on_its_soles(preset):
     """The shipped policy walking at 0.5 m/s, 4 robots, 0.5-3 s: its soles sink deeper than the whole shank
     capsule's end clears them (7 cm), so with the whole capsule colliding a shank carried part of the weight on the
-    soil's surface (snow: 27 % of robot-steps, 22 % of the weight; mud: 7 / 6 %). The collision capsule over the
+    soil's surface (docs/robots.md, 8 robots: snow 27 % of robot-steps, 22 % of the weight; mud 7 / 6 %). The collision capsule over the
     shank's upper part (30.7 cm up) is never reached."""
     import torch
     import warp as wp
