@@ -423,19 +423,17 @@ def test_quadruped_pd_stand_as_the_doc_says():
         assert len(fallen) and fallen[0] == pytest.approx(float(seconds), rel=0.15), kp
 
 
-@pytest.mark.parametrize("preset", ["mud", "snow"])
-def test_shipped_biped_policy_walks_in_soil_on_its_soles(preset):
-    """The shipped policy walking at 0.5 m/s, 4 robots, 0.5-3 s: its soles sink deeper than the whole shank
-    capsule's end clears them (7 cm), so with the whole capsule colliding a shank carried part of the weight on the
-    soil's surface (docs/robots.md, 8 robots: snow 27 % of robot-steps, 22 % of the weight; mud 7 / 6 %). The collision capsule over the
-    shank's upper part (30.7 cm up) is never reached."""
+def walk_on_soil(task: str, preset: str, num_envs: int, bodies: list[str]):
+    """The shipped policy of ``task`` commanded straight ahead at 0.5 m/s on ``soil:preset=<preset>`` for 3 s; from
+    0.5 s on, per step: the contact force on ``bodies`` (num_envs, len(bodies), 3) and the deepest sole sinkage. Returns
+    those and the env (its episode lengths tell whether a robot fell)."""
     import torch
     import warp as wp
 
     from legged_gente.envs.task_registry import task_registry
 
-    cfg, train_cfg = task_registry.get_cfgs("gente_biped")
-    cfg.env.num_envs = 4
+    cfg, train_cfg = task_registry.get_cfgs(task)
+    cfg.env.num_envs = num_envs
     cfg.terrain.terrain_types, cfg.terrain.terrain_proportions = [f"soil:preset={preset}"], [1.0]
     cfg.terrain.num_rows, cfg.terrain.num_cols = 1, 2
     cfg.terrain.terrain_length = cfg.terrain.terrain_width = 6.0
@@ -443,20 +441,30 @@ def test_shipped_biped_policy_walks_in_soil_on_its_soles(preset):
     cfg.domain_rand.push_robots = False
     ranges = cfg.commands.ranges
     ranges.lin_vel_x, ranges.lin_vel_y, ranges.ang_vel_yaw = [0.5, 0.5], [0.0, 0.0], [0.0, 0.0]
-    env, _ = task_registry.make_env("gente_biped", env_cfg=cfg)
-    runner, _ = task_registry.make_pretrained_runner(env, "gente_biped", train_cfg)
+    env, _ = task_registry.make_env(task, env_cfg=cfg)
+    runner, _ = task_registry.make_pretrained_runner(env, task, train_cfg)
     policy = runner.get_inference_policy(device=env.device)
-    shanks = [env.mjm.body(f"{side}_shank").id for side in ("left", "right")]
-    obs, shank_force, sinkage = env.get_observations(), [], []
+    ids = [env.mjm.body(name).id for name in bodies]
+    obs, forces, sinkage = env.get_observations(), [], []
     with torch.inference_mode():
         for step in range(150):  # 3 s of 0.02 s steps
             obs, _, _, _ = env.step(policy(obs))
             if step >= 25:
-                shank_force.append(env.contact_forces[:, shanks].norm(dim=-1).amax())
+                forces.append(env.contact_forces[:, ids].clone())
                 sinkage.append(wp.to_torch(env.forces.foot_sinkage).amax())
+    return torch.stack(forces), torch.stack(sinkage), env
+
+
+@pytest.mark.parametrize("preset", ["mud", "snow"])
+def test_shipped_biped_policy_walks_in_soil_on_its_soles(preset):
+    """The shipped policy walking at 0.5 m/s, 4 robots, 0.5-3 s: its soles sink deeper than the whole shank
+    capsule's end clears them (7 cm), so with the whole capsule colliding a shank carried part of the weight on the
+    soil's surface (docs/robots.md, 8 robots: snow 27 % of robot-steps, 22 % of the weight; mud 7 / 6 %). The
+    collision capsule over the shank's upper part (30.7 cm up) is never reached."""
+    shank_force, sinkage, env = walk_on_soil("gente_biped", preset, 4, ["left_shank", "right_shank"])
     assert env.episode_length_buf.min().item() > 100  # nobody fell and was reset mid-way
-    assert torch.stack(sinkage).max().item() > 0.07  # deeper than the whole shank's end cap clears the sole
-    assert torch.stack(shank_force).max().item() == 0.0
+    assert sinkage.max().item() > 0.07  # deeper than the whole shank's end cap clears the sole
+    assert shank_force.abs().max().item() == 0.0
 
 
 def test_shipped_quadruped_policy_rests_on_its_calves_in_mud():
@@ -464,32 +472,9 @@ def test_shipped_quadruped_policy_rests_on_its_calves_in_mud():
     feet sink deeper than the calves' collision capsules clear them (4.2 cm), and a calf touches in about 17 % of
     the robot-steps, carrying about a fifth of the weight on average; on flat ground, never. When a soil model acts
     on the legs, this test and the doc change together."""
-    import torch
-
-    from legged_gente.envs.task_registry import task_registry
-
-    cfg, train_cfg = task_registry.get_cfgs("gente_quadruped")
-    cfg.env.num_envs = 8
-    cfg.terrain.terrain_types, cfg.terrain.terrain_proportions = ["soil:preset=mud"], [1.0]
-    cfg.terrain.num_rows, cfg.terrain.num_cols = 1, 2
-    cfg.terrain.terrain_length = cfg.terrain.terrain_width = 6.0
-    cfg.terrain.border_size = 1.0
-    cfg.domain_rand.push_robots = False
-    ranges = cfg.commands.ranges
-    ranges.lin_vel_x, ranges.lin_vel_y, ranges.ang_vel_yaw = [0.5, 0.5], [0.0, 0.0], [0.0, 0.0]
-    env, _ = task_registry.make_env("gente_quadruped", env_cfg=cfg)
-    runner, _ = task_registry.make_pretrained_runner(env, "gente_quadruped", train_cfg)
-    policy = runner.get_inference_policy(device=env.device)
-    calves = [env.mjm.body(f"{leg}_calf").id for leg in ("FL", "FR", "RL", "RR")]
-    obs, touching, calf_load = env.get_observations(), [], []
-    with torch.inference_mode():
-        for step in range(150):  # 3 s of 0.02 s steps
-            obs, _, _, _ = env.step(policy(obs))
-            if step >= 25:
-                fz = env.contact_forces[:, calves, 2].abs()
-                touching.append((fz > 1.0).any(1).float())
-                calf_load.append(fz.sum(1) / (14.0 * G))
+    force, _, env = walk_on_soil("gente_quadruped", "mud", 8, [f"{leg}_calf" for leg in ("FL", "FR", "RL", "RR")])
+    fz = force[..., 2].abs()  # (steps, robots, calves)
     assert env.episode_length_buf.min().item() > 100
-    assert 0.08 < torch.stack(touching).mean().item() < 0.3
-    assert 0.1 < torch.stack(calf_load).mean().item() < 0.3
+    assert 0.08 < (fz > 1.0).any(2).float().mean().item() < 0.3
+    assert 0.1 < (fz.sum(2) / (14.0 * G)).mean().item() < 0.3
     assert "a calf touches in 17 % of the robot-steps in mud" in ROBOTS_DOC
