@@ -47,6 +47,11 @@ _NON_NEGATIVE = ("drag_coefficient", "added_mass_coefficient", "plate_drag_coeff
                  "noise_std", "contact_threshold", "liftoff_time", "min_friction", "sinkage_rate", "max_rut_depth")
 
 
+# threads a block for the kernels over (worlds, feet or leg segments): a few thousand robots' feet make a grid of a
+# few dozen blocks of Warp's default 256, on a few dozen of the GPU's SMs; smaller blocks spread them over more
+LIMB_BLOCK_DIM = 64
+
+
 def _check_values(cfg) -> None:
     """One ValueError naming the first numeric setting out of its range (infinite ones too: an infinite density
     or noise gives inf / NaN forces, an infinite friction_reference frictionless contacts) and the default to use;
@@ -507,7 +512,7 @@ class TerrainForces:
         feet.sink_step = float(cfg.sinkage_rate) * self.dt
         feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support
         feet.slip, feet.sinkage, feet.soil = self.foot_slip, self.foot_sinkage, self.foot_soil
-        launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev,
+        launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev, block_dim=LIMB_BLOCK_DIM,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
                           int(feet.use_soil and self.nfoot > 0), self.foot_soil, self.foot_touch, self.foot_cand,
                           self.foot_inrut],
@@ -521,7 +526,7 @@ class TerrainForces:
         ))
         if self.npt:
             launches.append(wp.launch(
-                C.sole_contact_kernel, dim=(self.nworld, self.npt), device=dev,
+                C.sole_contact_kernel, dim=(self.nworld, self.npt), device=dev, block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.terrain_geom, m.geom_condim, m.geom_priority,
                         m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
@@ -538,7 +543,7 @@ class TerrainForces:
         d.xfrc_applied.zero_()
         if cfg.wading and self.nseg:
             wp.launch(
-                W.segment_water_kernel, dim=(self.nworld, self.nseg), device=dev,
+                W.segment_water_kernel, dim=(self.nworld, self.nseg), device=dev, block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, self.seg_caps,
                         m.body_rootid, self.point_dofs,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com,
@@ -550,7 +555,7 @@ class TerrainForces:
             )
         if cfg.wading and len(self.foot_water_geom):
             wp.launch(
-                W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev,
+                W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev, block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.foot_water_geom, self.foot_buoyancy, self.foot_added_mass, m.geom_type, m.geom_size,
                         m.geom_bodyid, m.body_rootid, self.point_dofs,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com, d.time,
@@ -567,7 +572,7 @@ class TerrainForces:
             )
         if cfg.soil and self.nfoot:
             wp.launch(
-                K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
+                K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
                         d.cvel, d.subtree_com, self.sole_length, self.sole_width, int(self.sole_disc),
                         float(cfg.bulldozing_speed_reg), self.soil_params,
@@ -576,7 +581,7 @@ class TerrainForces:
             )
         if cfg.soil and self.nfoot and self.has_rft:
             wp.launch(
-                R.rft_force_kernel, dim=(self.nworld, self.nfoot), device=dev,
+                R.rft_force_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
                         d.cvel, d.subtree_com, self.hf_heights, self.hf_origin, self.hf_res, self.sole_length,
                         self.sole_width, int(self.sole_disc), self.sole_area, float(cfg.bulldozing_speed_reg),
@@ -603,7 +608,7 @@ class TerrainForces:
                     c.adhesion, c.geom, c.worldid, d.efc.force, d.njmax, self.foot_fn],
         )
         wp.launch(
-            K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev,
+            K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
             inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
                     self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights,
                     d.time, self.water, self.xi, self.soil_params, self.foot_fn,
