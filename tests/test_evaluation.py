@@ -314,7 +314,9 @@ def test_the_evaluation_gives_the_same_metrics_through_the_compiled_step():
 def _still_env(yaw: list[float], heading: list[float], standing: list[bool], heading_mode: bool = True):
     """The state the recorder reads after a step, for robots facing ``yaw`` (rad) and commanded vx = 0.6 m/s and
     ``heading``; at rest until a test sets ``sim.qvel`` (world frame): nothing simulated."""
-    from types import SimpleNamespace
+    from types import MethodType, SimpleNamespace
+
+    from legged_gente.envs.base.legged_robot import LeggedRobot
 
     n = len(yaw)
     commands = torch.zeros(n, 4)
@@ -326,7 +328,9 @@ def _still_env(yaw: list[float], heading: list[float], standing: list[bool], hea
         base_ang_vel=torch.zeros(n, 3), sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)),
         diverged_buf=zeros, time_out_buf=zeros, torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
         penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3),
-        terminal_qpos=torch.zeros(n, 7))
+        reset_buf=zeros, terminal_qpos=torch.zeros(n, 7), terminal_qvel=torch.zeros(n, 6),
+        terminal_commands=torch.zeros(n, 4))
+    env.episode_end = MethodType(LeggedRobot.episode_end, env)  # the env's own rule for what a step's row shows
     _face(env, yaw)
     return env
 

@@ -4,12 +4,13 @@ the paired comparison's inputs. Nothing here is simulated: the recorder reads a 
 
 import csv
 import math
-from types import SimpleNamespace
+from types import MethodType, SimpleNamespace
 
 import numpy as np
 import pytest
 import torch
 
+from legged_gente.envs.base.legged_robot import LeggedRobot
 from legged_gente.evaluation.benchmark import Item
 from legged_gente.evaluation.evaluator import Recorder, RunResult
 from legged_gente.evaluation.report import build_report, categories_of, summarize_robots, success, write_reports
@@ -129,14 +130,23 @@ def _env(n, yaw=0.0):
     """The state the recorder reads after a step: n robots facing ``yaw`` (rad), at rest, commanded nothing."""
     half = torch.full((n,), yaw / 2)
     zeros = torch.zeros(n, dtype=torch.bool)
-    return SimpleNamespace(
+    env = SimpleNamespace(
         num_envs=n, device="cpu", dt=0.02, commands=torch.zeros(n, 4), heading_command=False,
         standing_still=zeros.clone(), base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3),
         base_ang_vel=torch.zeros(n, 3), base_quat=torch.stack([half.cos(), 0 * half, 0 * half, half.sin()], 1),
         sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)), diverged_buf=zeros.clone(),
         time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
         penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3),
-        terminal_qpos=torch.zeros(n, 7))
+        reset_buf=zeros.clone(), terminal_qpos=torch.zeros(n, 7), terminal_qvel=torch.zeros(n, 6),
+        terminal_commands=torch.zeros(n, 4))
+    env.episode_end = MethodType(LeggedRobot.episode_end, env)  # the env's own rule for a step's row
+    return env
+
+
+def _record(recorder, env, done):
+    """A step's record: the env's reset_buf is the step's dones (what LeggedRobot.step returns)."""
+    env.reset_buf = done
+    recorder.record(env, done)
 
 
 def test_the_tracking_error_leaves_out_exactly_the_settle_steps():
@@ -189,7 +199,7 @@ def test_a_fall_ends_the_measured_window_before_the_step_that_ended_it():
         fell = k == 3
         env.base_lin_vel[:, 0] = env.sim.qvel[:, 0] = torch.tensor([0.0 if fell else 0.2, 0.5])
         env.base_pos[:, 0] += torch.tensor([-5.0 if fell else 0.01, 0.01])  # the reset puts robot 0 elsewhere
-        recorder.record(env, torch.tensor([fell, False]))
+        _record(recorder, env, torch.tensor([fell, False]))
     assert recorder.fell.tolist() == [True, False] and not recorder.diverged.any()
     assert recorder.err_steps.tolist() == [2.0, 4.0]
     assert float(recorder.err_sum[0] / recorder.err_steps[0]) == pytest.approx(0.3, abs=1e-6)

@@ -3,12 +3,13 @@ and "Figures"). The recorder reads a stand-in for the env's state after each ste
 robot for two steps on the flat benchmark."""
 
 import math
-from types import SimpleNamespace
+from types import MethodType, SimpleNamespace
 
 import numpy as np
 import pytest
 import torch
 
+from legged_gente.envs.base.legged_robot import LeggedRobot
 from legged_gente.evaluation import figures
 from legged_gente.evaluation.evaluator import MAX_BASE_SPEED, Recorder, RunResult
 
@@ -19,13 +20,22 @@ def _env(n):
     zeros = torch.zeros(n, dtype=torch.bool)
     commands = torch.zeros(n, 4)
     commands[:, 0] = 0.5
-    return SimpleNamespace(
+    env = SimpleNamespace(
         num_envs=n, device="cpu", dt=0.02, commands=commands, heading_command=False, standing_still=zeros.clone(),
         base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3), base_ang_vel=torch.zeros(n, 3),
         base_quat=torch.tensor([[1.0, 0.0, 0.0, 0.0]] * n), sim=SimpleNamespace(qvel=torch.zeros(n, 6),
                                                                                  qpos=torch.zeros(n, 7)),
         diverged_buf=zeros.clone(), time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
-        penalized_bodies=torch.tensor([0]), contact_forces=torch.zeros(n, 1, 3), terminal_qpos=torch.zeros(n, 7))
+        penalized_bodies=torch.tensor([0]), contact_forces=torch.zeros(n, 1, 3), reset_buf=zeros.clone(),
+        terminal_qpos=torch.zeros(n, 7), terminal_qvel=torch.zeros(n, 6), terminal_commands=torch.zeros(n, 4))
+    env.episode_end = MethodType(LeggedRobot.episode_end, env)  # the env's own rule for a step's row
+    return env
+
+
+def _record(recorder, env, done):
+    """A step's record: the env's reset_buf is the step's dones (what LeggedRobot.step returns)."""
+    env.reset_buf = done
+    recorder.record(env, done)
 
 
 # ------------------------------------------------------------------------------------------------ recorder
@@ -39,7 +49,7 @@ def test_collisions_count_each_contact_once_from_its_onset_and_only_while_measur
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     for k, (f0, f1) in enumerate(forces, start=1):
         env.contact_forces[:, 0, 2] = torch.tensor([f0, f1])
-        recorder.record(env, torch.tensor([False, k == 3]))
+        _record(recorder, env, torch.tensor([False, k == 3]))
     assert recorder.collisions.tolist() == [2.0, 1.0]
     assert recorder.fell.tolist() == [False, True]
 
@@ -60,7 +70,7 @@ def test_the_trace_of_a_fall_keeps_the_pose_it_fell_to():
             env.terminal_qpos[1] = math.nan
             env.base_pos[:] = env.sim.qpos[:] = 0.0
             env.diverged_buf[1] = True
-        recorder.record(env, done)
+        _record(recorder, env, done)
     qpos, pos = torch.stack(recorder.trace["qpos"]), torch.stack(recorder.trace["pos"])
     assert qpos[2, 0, 0] == pytest.approx(0.03) and qpos[2, 0, 2] == pytest.approx(0.2)
     assert pos[2, 0].tolist() == pytest.approx([0.03, 0.0])
@@ -83,7 +93,7 @@ def test_a_launched_or_flagged_robot_is_diverged_not_fallen_and_its_step_is_not_
             env.sim.qvel[1, 0], env.base_pos[1, 0] = 30.0, 0.62
             env.sim.qvel[2, 0] = math.nan
             env.diverged_buf = env.time_out_buf = done = torch.tensor([False, False, False, True])
-        recorder.record(env, done)
+        _record(recorder, env, done)
     assert 30.0 > MAX_BASE_SPEED
     assert recorder.diverged.tolist() == [False, True, True, True] and not recorder.fell.any()
     assert recorder.alive_steps.tolist() == [3.0, 2.0, 2.0, 2.0]
@@ -99,7 +109,7 @@ def test_the_heading_error_is_taken_after_the_settle_time_only():
     env.heading_command, env.commands[:, 3] = True, 0.5
     recorder = Recorder(env, settle_s=0.06, trace_robots=torch.tensor([0]))
     for k in range(1, 6):
-        recorder.record(env, torch.tensor([False, k == 3]))
+        _record(recorder, env, torch.tensor([False, k == 3]))
     assert float(recorder.heading_error[0]) == pytest.approx(math.degrees(0.5), abs=1e-4)
     assert math.isnan(recorder.heading_error[1]) and float(recorder.err_steps[1]) == 0.0
 

@@ -176,9 +176,8 @@ class Recorder:
         self.trace["cmd"].append(env.commands[r, :3].clone())
         self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
         # a world the step reset (not a diverged one): the pose its episode ended in, which gente-view replays
-        ended = (dones & ~env.diverged_buf)[r, None]
-        qpos = torch.where(ended, env.terminal_qpos[r], env.sim.qpos[r])
-        self.trace["pos"].append(torch.where(ended, qpos[:, :2], xy[r]))
+        _, qpos, _, _ = env.episode_end(r)
+        self.trace["pos"].append(qpos[:, :2])
         self.trace["active"].append(alive[r].clone())
         self.trace["qpos"].append(qpos)
 

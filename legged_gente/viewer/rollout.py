@@ -334,16 +334,11 @@ class Recorder:
         from legged_gente.utils.torch_math import quat_rotate_inverse
 
         env, r = self.env, self.robots
-        # a done row: the state the ended episode ended in, which the env keeps before its reset within the step;
-        # its velocity as LeggedRobot._update_state's (free joint: world linear, body angular velocity). A diverged
-        # world's ended state is meaningless (non-finite, absurdly fast or ill-solved): its row keeps the respawn
-        ended = (env.reset_buf[r] & ~env.diverged_buf[r])[:, None]
-        vel = torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1)
-        end_qpos, end_qvel = env.terminal_qpos[r], env.terminal_qvel[r]
-        end_vel = torch.cat([quat_rotate_inverse(end_qpos[:, 3:7], end_qvel[:, 0:3])[:, :2], end_qvel[:, 5:6]], 1)
-        qpos = torch.where(ended, end_qpos, env.sim.qpos[r])
-        cmd = torch.where(ended, env.terminal_commands[r, :3], env.commands[r, :3])
-        vel = torch.where(ended, end_vel, vel)
+        # a done row: the state the ended episode ended in (LeggedRobot.episode_end); the velocity as
+        # LeggedRobot._update_state's (free joint: world linear, body angular velocity)
+        _, qpos, qvel, cmd = env.episode_end(r)
+        vel = torch.cat([quat_rotate_inverse(qpos[:, 3:7], qvel[:, 0:3])[:, :2], qvel[:, 5:6]], 1)
+        cmd = cmd[:, :3]
         forces, points = robot_forces(env, r, self.kin)
         done = env.reset_buf[r].cpu().numpy()
         # the reset redrew the ended episode's force noise and recomputed its forces at the respawn: no arrows
