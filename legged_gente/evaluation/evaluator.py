@@ -176,7 +176,7 @@ class Recorder:
         self.trace["cmd"].append(env.commands[r, :3].clone())
         self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
         # a world the step reset (not a diverged one): the pose its episode ended in, which gente-view replays
-        _, qpos, _, _ = env.episode_end(r)
+        qpos, _, _ = env.episode_end(r)
         self.trace["pos"].append(qpos[:, :2])
         self.trace["active"].append(alive[r].clone())
         self.trace["qpos"].append(qpos)

@@ -336,7 +336,7 @@ class Recorder:
         env, r = self.env, self.robots
         # a done row: the state the ended episode ended in (LeggedRobot.episode_end); the velocity as
         # LeggedRobot._update_state's (free joint: world linear, body angular velocity)
-        _, qpos, qvel, cmd = env.episode_end(r)
+        qpos, qvel, cmd = env.episode_end(r)
         vel = torch.cat([quat_rotate_inverse(qpos[:, 3:7], qvel[:, 0:3])[:, :2], qvel[:, 5:6]], 1)
         cmd = cmd[:, :3]
         forces, points = robot_forces(env, r, self.kin)

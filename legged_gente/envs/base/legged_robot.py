@@ -505,15 +505,13 @@ class LeggedRobot(VecEnv):
         self.sim.step(self.decimation)
         self._post_physics_step()
 
-    def episode_end(self, rows: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-        """After a step, for the worlds ``rows``: whether the step ended their episode, and the qpos, qvel and
-        commands a recorder shows for the step: where it ended, the ended episode's last state and the commands it
-        ran under (kept before the step's reset: a fall's pose); elsewhere the state now. A diverged world's ended
-        state is meaningless (non-finite, absurdly fast or ill-solved): it counts as not ended and shows the
-        respawn."""
-        ended = self.reset_buf[rows] & ~self.diverged_buf[rows]
-        keep = ended[:, None]
-        return (ended, torch.where(keep, self.terminal_qpos[rows], self.sim.qpos[rows]),
+    def episode_end(self, rows: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """After a step, for the worlds ``rows``: the qpos, qvel and commands a recorder shows for the step. Where
+        the step ended an episode, the ended episode's last state and the commands it ran under (kept before the
+        step's reset: a fall's pose); elsewhere the state now. A diverged world's ended state is meaningless
+        (non-finite, absurdly fast or ill-solved): it shows the respawn."""
+        keep = (self.reset_buf[rows] & ~self.diverged_buf[rows])[:, None]
+        return (torch.where(keep, self.terminal_qpos[rows], self.sim.qpos[rows]),
                 torch.where(keep, self.terminal_qvel[rows], self.sim.qvel[rows]),
                 torch.where(keep, self.terminal_commands[rows], self.commands[rows]))
 
