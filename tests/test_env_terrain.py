@@ -197,6 +197,10 @@ def test_forces_act_in_water_and_soil_only(env):
 
 def test_low_friction_tiles_lower_contact_friction(env):
     """The solver sees the cell's friction in the contacts of the robot on the low-friction tile."""
+    slippery = TYPES.index("low_friction")
+    # on the hardest row: the start levels are random, and the easiest row's tile keeps the ground's friction
+    env.terrain_levels[slippery] = env.max_terrain_level - 1
+    env.env_origins[slippery] = env.terrain_origins[env.terrain_levels[slippery], env.terrain_columns[slippery]]
     env.reset()
     for _ in range(10):  # 0.2 s: the robots, spawned 3 cm above their stand, have landed
         env.step(torch.zeros(env.num_envs, env.num_actions))
@@ -205,7 +209,6 @@ def test_low_friction_tiles_lower_contact_friction(env):
     n = int(d.nacon.numpy()[0])
     world = d.contact.worldid.numpy()[:n]
     mu = d.contact.friction.numpy()[:n, 0]
-    slippery = TYPES.index("low_friction")
     x, y = env.base_pos[slippery, :2].tolist()
     i = int(round((x - env.terrain.origin_xy[0]) / env.terrain.resolution))
     j = int(round((y - env.terrain.origin_xy[1]) / env.terrain.resolution))

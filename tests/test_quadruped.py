@@ -101,16 +101,23 @@ def test_forces_resolve_against_the_quadruped_geoms():
     """Wading acts on the leg capsules and soil on the foot spheres, in water and on mud."""
     cfg = GenteQuadrupedCfg()
     cfg.env.num_envs = NUM_ENVS
-    cfg.terrain.num_rows, cfg.terrain.num_cols = 2, 2
+    types = [t for t in GenteQuadrupedCfg.terrain.terrain_types if "water" in t or "soil" in t]
+    assert len(types) == NUM_ENVS  # a robot on each
+    cfg.terrain.num_rows, cfg.terrain.num_cols = 2, len(types)
     cfg.terrain.terrain_length = cfg.terrain.terrain_width = 4.0
     cfg.terrain.border_size = 1.0
-    cfg.terrain.terrain_types = [t for t in GenteQuadrupedCfg.terrain.terrain_types if t.startswith(("water", "soil"))]
-    cfg.terrain.terrain_proportions = [1.0 / len(cfg.terrain.terrain_types)] * len(cfg.terrain.terrain_types)
+    cfg.terrain.terrain_types = types
+    cfg.terrain.terrain_proportions = [1.0 / len(types)] * len(types)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         env = LeggedRobot(cfg, device="cpu")
     # the light calves' and feet's added mass is implicit and their mass matrix full: nothing to warn about
     assert not [str(w.message) for w in caught if str(w.message).startswith("forces:")]
+    # every robot on the hardest row: the start levels are random, and the easiest row's water and soil are the
+    # shallowest and firmest
+    env.terrain_levels[:] = env.max_terrain_level - 1
+    env.env_origins[:] = env.terrain_origins[env.terrain_levels, env.terrain_columns]
+    env.reset()
     forces = env.forces
     assert forces is not None
     mjm = env.mjm
@@ -124,7 +131,8 @@ def test_forces_resolve_against_the_quadruped_geoms():
         obs, rew, _, _ = env.step(0.5 * torch.randn(NUM_ENVS, env.num_actions))
     assert torch.isfinite(obs["critic"]).all() and torch.isfinite(rew).all()
     assert env.diverged_resets.item() == 0
-    # the terrain forces push on the legs: some leg or foot body carries a non-zero external force
+    # the water pushes on the wading robots' legs (buoyancy, whatever they do); on soil a foot at rest may feel none
     xfrc = env.sim.d.xfrc_applied.numpy()
     bodies = np.unique(np.concatenate([forces.seg_body.numpy(), forces.foot_body.numpy()]))
-    assert np.abs(xfrc[:, bodies]).max() > 0.0
+    wading = [w for w in range(NUM_ENVS) if "water" in types[int(env.terrain_columns[w])]]
+    assert len(wading) == 2 and all(np.abs(xfrc[w, bodies]).max() > 0.0 for w in wading)
