@@ -377,6 +377,8 @@ class TerrainForces:
         self.foot_force = z((n, nf), wp.vec3)
         self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
+        # the passive kernels' second and third branches (``_in_parallel``)
+        self._side_streams = [wp.Stream(dev) for _ in range(2)] if dev.is_cuda and cfg.parallel_kernels else []
         self.reset(self._all)
         self.new_policy_step()
 
@@ -540,11 +542,42 @@ class TerrainForces:
         return launches
 
     def passive(self, m, d):
-        cfg, dev = self.cfg, self.device
+        """A substep's terrain forces into the zeroed ``d.xfrc_applied``: the legs' water, the feet's water and the
+        soil (three independent groups: parallel branches on a GPU, see ``_in_parallel``), then the water points'
+        added mass into the mass matrix (it reads both water kernels' points)."""
         d.xfrc_applied.zero_()
+        self._in_parallel(lambda: self._feet_water(m, d), lambda: self._legs_water(m, d), lambda: self._soil(m, d))
+        if self.cfg.wading and not self.cfg.paper_added_mass and (self.nseg or len(self.foot_water_geom)):
+            wp.launch(
+                W.added_mass_kernel, dim=(self.nworld, *self.point_dofs.shape), device=self.device,
+                inputs=[self.point_dofs, self.point_geom, self.point_axes, m.dof_parentid, m.M_rownnz, m.M_rowadr,
+                        d.geom_xmat, d.cdof, self.point_mass, self.point_offset, d.M],
+            )
+
+    def _in_parallel(self, *groups) -> None:
+        """Launch each group of kernels (a callable; the groups independent, their forces added atomically) on a
+        stream of its own, forked from Warp's current stream and joined back into it. At a few thousand robots each
+        kernel fills a small part of the GPU for a latency-bound few microseconds, so the branches overlap; a captured
+        graph keeps them as parallel branches. On the CPU, or with ``parallel_kernels`` off, one after another."""
+        if not self._side_streams:
+            for launch in groups:
+                launch()
+            return
+        main = wp.get_stream(self.device)
+        sides = self._side_streams[:len(groups) - 1]
+        for launch, side in zip(groups[1:], sides):
+            side.wait_stream(main)
+            with wp.ScopedStream(side, sync_enter=False):
+                launch()
+        groups[0]()
+        for side in sides:
+            main.wait_stream(side)
+
+    def _legs_water(self, m, d):
+        cfg = self.cfg
         if cfg.wading and self.nseg:
             wp.launch(
-                W.segment_water_kernel, dim=(self.nworld, self.nseg), device=dev, block_dim=LIMB_BLOCK_DIM,
+                W.segment_water_kernel, dim=(self.nworld, self.nseg), device=self.device, block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, self.seg_caps,
                         m.body_rootid, self.point_dofs,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com,
@@ -554,9 +587,13 @@ class TerrainForces:
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
                         d.xfrc_applied, self.seg_force, self.point_mass, self.point_offset],
             )
+
+    def _feet_water(self, m, d):
+        cfg = self.cfg
         if cfg.wading and len(self.foot_water_geom):
             wp.launch(
-                W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=dev, block_dim=LIMB_BLOCK_DIM,
+                W.foot_water_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=self.device,
+                block_dim=LIMB_BLOCK_DIM,
                 inputs=[self.foot_water_geom, self.foot_buoyancy, self.foot_added_mass, m.geom_type, m.geom_size,
                         m.geom_bodyid, m.body_rootid, self.point_dofs,
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com, d.time,
@@ -565,12 +602,10 @@ class TerrainForces:
                         d.xfrc_applied, self.foot_water_force, self.point_mass, self.point_offset,
                         W.NGAUSS * self.nseg],
             )
-        if cfg.wading and not cfg.paper_added_mass and (self.nseg or len(self.foot_water_geom)):
-            wp.launch(
-                W.added_mass_kernel, dim=(self.nworld, *self.point_dofs.shape), device=dev,
-                inputs=[self.point_dofs, self.point_geom, self.point_axes, m.dof_parentid, m.M_rownnz, m.M_rowadr,
-                        d.geom_xmat, d.cdof, self.point_mass, self.point_offset, d.M],
-            )
+
+    def _soil(self, m, d):
+        """Bekker and bulldozing (then RFT's granular media, which adds to the same feet's forces)."""
+        cfg, dev = self.cfg, self.device
         if cfg.soil and self.nfoot:
             wp.launch(
                 K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
