@@ -4,10 +4,11 @@
     NCCL_NVLS_ENABLE=0 torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only
     torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only --device cpu --ppo_envs 64
 
-Env step: three envs of the task with the same seed get the same random actions: one stepping through the
+Env step: four envs of the task with the same seed get the same random actions: one stepping through the
 whole-step graph with its torch logic compiled (the default: cfg.sim.cuda_graph = "env_step",
-cfg.sim.torch_compile = True), one through the whole-step graph uncompiled, and one with only the substeps
-captured ("physics"), without observation noise and pushes. The first steps (before any reset, so before any
+cfg.sim.torch_compile = True), the same with the force fields' kernels launched one after another
+(cfg.forces.parallel_kernels = False) instead of as parallel branches, one through the whole-step graph uncompiled,
+and one with only the substeps captured ("physics"), without observation noise and pushes. The first steps (before any reset, so before any
 random draw) must agree value by value within 1e-3, the run's mean reward within 10% (after resets the order of
 random draws differs, so resets and commands do); resets, terrain levels and episode lengths are printed.
 Any mismatch, of the env, the evaluation or PPO (a NaN difference included), exits with 1.
@@ -45,11 +46,13 @@ from legged_gente.envs.task_registry import task_registry
 from legged_gente.utils.distributed import init_process_group, rank_device, torchrun_launch
 
 
-def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compile: bool, device: str) -> dict:
+def run(task: str, num_envs: int, steps: int, mode: str, seed: int, torch_compile: bool, device: str,
+        parallel_kernels: bool = True) -> dict:
     env_cfg, _ = task_registry.get_cfgs(task)
     env_cfg.env.num_envs = num_envs
     env_cfg.sim.cuda_graph = mode
     env_cfg.sim.torch_compile = torch_compile
+    env_cfg.forces.parallel_kernels = parallel_kernels
     env_cfg.noise.add_noise = False  # no random draws in the first steps: they must agree value by value
     env_cfg.domain_rand.push_robots = False
     torch.manual_seed(seed)
@@ -264,9 +267,11 @@ def largest(differences: list[float]) -> float:
 
 
 def env_steps(task: str, num_envs: int, steps: int, seed: int, device: str = "cuda") -> bool:
-    """The env-step graph with the torch logic compiled (the default), without, and the physics-only graph
-    without (see :func:`compare_env_runs`); on the CPU, where nothing is captured or compiled, three plain runs."""
+    """The env-step graph with the torch logic compiled (the default), the same with the force fields' kernels one
+    after another instead of in parallel branches, without compiling, and the physics-only graph without (see
+    :func:`compare_env_runs`); on the CPU, where nothing is captured, compiled or branched, four plain runs."""
     runs = {"env_step+compile": run(task, num_envs, steps, "env_step", seed, True, device),
+            "forces in order": run(task, num_envs, steps, "env_step", seed, True, device, parallel_kernels=False),
             "env_step": run(task, num_envs, steps, "env_step", seed, False, device),
             "physics": run(task, num_envs, steps, "physics", seed, False, device)}
     return compare_env_runs(runs)
