@@ -563,6 +563,9 @@ class TerrainForces:
             for launch in groups:
                 launch()
             return
+        if len(groups) - 1 > len(self._side_streams):
+            raise ValueError(f"{len(groups)} groups of kernels need {len(groups) - 1} side streams; "
+                             f"TerrainForces makes {len(self._side_streams)}")
         main = wp.get_stream(self.device)
         sides = self._side_streams[:len(groups) - 1]
         for launch, side in zip(groups[1:], sides):
