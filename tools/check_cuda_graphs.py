@@ -8,10 +8,10 @@ Env step: four envs of the task with the same seed get the same random actions: 
 whole-step graph with its torch logic compiled (the default: cfg.sim.cuda_graph = "env_step",
 cfg.sim.torch_compile = True), the same with the force fields' kernels launched one after another
 (cfg.forces.parallel_kernels = False) instead of as parallel branches, one through the whole-step graph uncompiled,
-and one with only the substeps captured ("physics"), without observation noise and pushes. The first steps (before any reset, so before any
-random draw) must agree value by value within 1e-3, the run's mean reward within 10% (after resets the order of
-random draws differs, so resets and commands do); resets, terrain levels and episode lengths are printed.
-Any mismatch, of the env, the evaluation or PPO (a NaN difference included), exits with 1.
+and one with only the substeps captured ("physics"), without observation noise and pushes. The first steps (before
+any reset, so before any random draw) must agree value by value within 1e-3, the run's mean reward within 10% (after
+resets the order of random draws differs, so resets and commands do); resets, terrain levels and episode lengths
+are printed. Any mismatch, of the env, the evaluation or PPO (a NaN difference included), exits with 1.
 
 Evaluation: ``gente-evaluate``'s rollout (the shipped policy of the task on two benchmark terrains) through the
 env's default step (whole-step graph, compiled) twice, the second run after a reset that follows the capture,

@@ -66,12 +66,12 @@ class ForcesConfig:
     bulldozing_speed_reg: float  speed (m/s) below which the bulldozing (and RFT) force fades out linearly
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
-    parallel_kernels: bool  on a GPU, the legs' water, the feet's water and the soil (independent kernels) run as
-                          concurrent branches, each on a stream of its own; False: one after another (the forces
-                          are the same, up to the order in which the atomic adds sum them)
     max_rut_depth: float  deepest a MuJoCo-collided foot (box soles, or sole_contact off) is shown lowered into its
                            rut (m); the forces use the full sinkage. MuJoCo's heightfield contacts go wrong once a
                            geom is ~3 cm inside a cell (docs/forces.md); analytic sole contacts show the full rut
+    parallel_kernels: bool  on a GPU, the legs' water, the feet's water and the soil (independent kernels) run as
+                          concurrent branches, each on a stream of its own; False: one after another (the forces
+                          are the same, up to the order in which the atomic adds sum them)
     """
 
     wading = True
@@ -103,5 +103,5 @@ class ForcesConfig:
     bulldozing_speed_reg = 0.05
     sinkage_rate = 0.5
     max_rut_depth = 0.01
-    parallel_kernels = True
     sinkage_load_tau = 0.05
+    parallel_kernels = True
