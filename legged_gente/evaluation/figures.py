@@ -74,7 +74,7 @@ def plot_reward_seeds(sources: list[str | Path], out: str | Path, column: str = 
     ax.fill_between(common, mean - std, mean + std, color="tab:blue", alpha=0.25, label="+-1 std")
     ax.set_xlabel("iteration")
     ax.set_ylabel(column.replace("_", " "))
-    ax.set_title(label or "training reward")
+    ax.set_title(label or ("training reward" if column == "mean_reward" else f"{column.replace('_', ' ')} in training"))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     return _save(fig, out)
