@@ -198,10 +198,11 @@ def test_forces_act_in_water_and_soil_only(env):
 def test_low_friction_tiles_lower_contact_friction(env):
     """The solver sees the cell's friction in the contacts of the robot on the low-friction tile."""
     slippery = TYPES.index("low_friction")
-    # on the hardest row: the start levels are random, and the easiest row's tile keeps the ground's friction
-    env.terrain_levels[slippery] = env.max_terrain_level - 1
-    env.env_origins[slippery] = env.terrain_origins[env.terrain_levels[slippery], env.terrain_columns[slippery]]
-    env.reset()
+    # on the hardest row (then a reset): the start levels are random, and the easiest row's tile keeps the ground's
+    # friction
+    levels = env.terrain_levels.clone()
+    levels[slippery] = env.max_terrain_level - 1
+    assert env.load_curriculum_state({"terrain_levels": levels}).startswith("terrain curriculum restored")
     for _ in range(10):  # 0.2 s: the robots, spawned 3 cm above their stand, have landed
         env.step(torch.zeros(env.num_envs, env.num_actions))
     env.sim.step(1)  # a substep's contacts

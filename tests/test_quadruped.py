@@ -113,11 +113,10 @@ def test_forces_resolve_against_the_quadruped_geoms():
         env = LeggedRobot(cfg, device="cpu")
     # the light calves' and feet's added mass is implicit and their mass matrix full: nothing to warn about
     assert not [str(w.message) for w in caught if str(w.message).startswith("forces:")]
-    # every robot on the hardest row: the start levels are random, and the easiest row's water and soil are the
-    # shallowest and firmest
-    env.terrain_levels[:] = env.max_terrain_level - 1
-    env.env_origins[:] = env.terrain_origins[env.terrain_levels, env.terrain_columns]
-    env.reset()
+    # every robot on the hardest row (then a reset): the start levels are random, and the easiest row's water and
+    # soil are the shallowest and firmest
+    hardest = torch.full_like(env.terrain_levels, env.max_terrain_level - 1)
+    assert env.load_curriculum_state({"terrain_levels": hardest}).startswith("terrain curriculum restored")
     forces = env.forces
     assert forces is not None
     mjm = env.mjm
