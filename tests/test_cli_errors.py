@@ -2,6 +2,7 @@
 both spellings (--num_envs, --num-envs) in every command; the CPU default of 4096 robots is called out."""
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -523,3 +524,17 @@ def test_training_flags_are_not_offered_where_nothing_trains(capsys, main, build
         assert name not in help_text
         line = one_line_error(capsys, main, ["--task", "gente_biped_flat", *CPU, name, *(["3"] if name != "--resume" else [])])
         assert f"unrecognized arguments: {name}" in line
+
+
+def test_mujoco_not_installed_says_so_not_opengl(capsys, monkeypatch):
+    """Without the mujoco package the fix is to install it, not to change MUJOCO_GL (the error blamed OpenGL)."""
+    from legged_gente.utils.args import import_mujoco
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # `import mujoco` raises ModuleNotFoundError(name="mujoco")
+    monkeypatch.setenv("MUJOCO_GL", "egl")
+    with pytest.raises(SystemExit) as stop:
+        import_mujoco("gente-train")
+    line = capsys.readouterr().err.strip()
+    assert stop.value.code == 2 and len(line.splitlines()) == 1, line
+    assert line.startswith("gente-train: error: MuJoCo is not installed") and "pip install" in line, line
+    assert "OpenGL" not in line and "MUJOCO_GL" not in line, line

@@ -138,13 +138,24 @@ GL_FIX = ("set MUJOCO_GL=egl (Mesa's libegl1 on a CPU machine, the GPU driver's 
 
 def import_mujoco(prog: str) -> None:
     """Import MuJoCo before a command's modules do: a ``MUJOCO_GL`` it cannot use (an unknown value, osmesa without
-    libOSMesa) breaks its import; here that is one line naming the fix (exit 2) instead of a traceback."""
+    libOSMesa) breaks its import, as does a missing package; here either is one line naming the fix (exit 2)
+    instead of a traceback."""
     try:
         import mujoco  # noqa: F401
-    except (ImportError, RuntimeError, AttributeError, OSError) as error:
-        print(f"{prog}: error: MUJOCO_GL={os.environ.get('MUJOCO_GL')}: MuJoCo's OpenGL backend does not load "
-              f"({type(error).__name__}: {one_line(error)}); {GL_FIX}, or leave MUJOCO_GL unset", file=sys.stderr)
-        sys.exit(2)
+    except ImportError as error:
+        if error.name == "mujoco":  # the package itself, not a library its OpenGL backend loads
+            print(f"{prog}: error: MuJoCo is not installed ({one_line(error)}); install the project's dependencies "
+                  f"with pip install -e . in the checkout (or pip install mujoco==4.0.*)", file=sys.stderr)
+            sys.exit(2)
+        _opengl_error(prog, error)
+    except (RuntimeError, AttributeError, OSError) as error:
+        _opengl_error(prog, error)
+
+
+def _opengl_error(prog: str, error: BaseException) -> None:
+    print(f"{prog}: error: MUJOCO_GL={os.environ.get('MUJOCO_GL')}: MuJoCo's OpenGL backend does not load "
+          f"({type(error).__name__}: {one_line(error)}); {GL_FIX}, or leave MUJOCO_GL unset", file=sys.stderr)
+    sys.exit(2)
 
 
 # What a user can get wrong (a flag, a config value, a file or folder): reported in one line with exit status 2.
