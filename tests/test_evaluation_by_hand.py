@@ -4,17 +4,17 @@ the paired comparison's inputs. Nothing here is simulated: the recorder reads a 
 
 import csv
 import math
-from types import MethodType, SimpleNamespace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import torch
 
-from legged_gente.envs.base.legged_robot import LeggedRobot
 from legged_gente.evaluation.benchmark import Item
 from legged_gente.evaluation.evaluator import Recorder, RunResult
 from legged_gente.evaluation.report import build_report, categories_of, summarize_robots, success, write_reports
 from legged_gente.generation.spec import TerrainSpec
+from recorder_stand_in import record_step, stand_in_env
 
 
 def _spec(*calls, name="t"):
@@ -126,35 +126,12 @@ def test_the_csv_holds_the_documented_columns_and_leaves_undefined_values_empty(
 
 
 # ------------------------------------------------------------------------------------------------ recorder
-def _env(n, yaw=0.0):
-    """The state the recorder reads after a step: n robots facing ``yaw`` (rad), at rest, commanded nothing."""
-    half = torch.full((n,), yaw / 2)
-    zeros = torch.zeros(n, dtype=torch.bool)
-    env = SimpleNamespace(
-        num_envs=n, device="cpu", dt=0.02, commands=torch.zeros(n, 4), heading_command=False,
-        standing_still=zeros.clone(), base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3),
-        base_ang_vel=torch.zeros(n, 3), base_quat=torch.stack([half.cos(), 0 * half, 0 * half, half.sin()], 1),
-        sim=SimpleNamespace(qvel=torch.zeros(n, 6), qpos=torch.zeros(n, 7)), diverged_buf=zeros.clone(),
-        time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
-        penalized_bodies=torch.zeros(0, dtype=torch.long), contact_forces=torch.zeros(n, 1, 3),
-        reset_buf=zeros.clone(), terminal_qpos=torch.zeros(n, 7), terminal_qvel=torch.zeros(n, 6),
-        terminal_commands=torch.zeros(n, 4))
-    env.episode_end = MethodType(LeggedRobot.episode_end, env)  # the env's own rule for a step's row
-    return env
-
-
-def _record(recorder, env, done):
-    """A step's record: the env's reset_buf is the step's dones (what LeggedRobot.step returns)."""
-    env.reset_buf = done
-    recorder.record(env, done)
-
-
 def test_the_tracking_error_leaves_out_exactly_the_settle_steps():
     """settle_s = 0.06 s = 3 steps of 0.02 s. Commanded vx = 0.5 m/s; at step k (1..6) the robot moves at
     0.1 k m/s (base frame = world: it faces +x). Measured: steps 4, 5, 6, errors 0.1, 0.0, 0.1 -> 0.0667 m/s;
     progress (0.4 + 0.5 + 0.6) / (3 x 0.5) = 1.0. One step too many or too few in the window gives 0.0500 or
     0.1000 m/s."""
-    env = _env(1)
+    env = stand_in_env(1)
     env.commands[0, 0] = 0.5
     recorder = Recorder(env, settle_s=0.06, trace_robots=torch.tensor([0]))
     for k in range(1, 7):
@@ -174,7 +151,7 @@ def test_tracking_is_in_the_base_frame_and_progress_along_the_path_in_the_world(
         half = torch.tensor(yaw) / 2
         env.base_quat = torch.stack([half.cos(), 0 * half, 0 * half, half.sin()], 1)
 
-    env = _env(3)
+    env = stand_in_env(3)
     face([math.pi / 2, 0.0, 0.0])
     env.commands[:, 0] = 0.5
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
@@ -192,14 +169,14 @@ def test_a_fall_ends_the_measured_window_before_the_step_that_ended_it():
     """Robot 0 falls in step 3 (dones, not a time-out): steps 1 and 2 are measured, step 3 (after which the env
     has already reset the world, here to a standstill) is not. Its error stays (0.3 + 0.3) / 2 = 0.3 m/s over its
     two steps, its distance the 2 x 0.01 m it walked; fell, not diverged. Robot 1 walks on for all 4 steps."""
-    env = _env(2)
+    env = stand_in_env(2)
     env.commands[:, 0] = 0.5
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     for k in range(1, 5):
         fell = k == 3
         env.base_lin_vel[:, 0] = env.sim.qvel[:, 0] = torch.tensor([0.0 if fell else 0.2, 0.5])
         env.base_pos[:, 0] += torch.tensor([-5.0 if fell else 0.01, 0.01])  # the reset puts robot 0 elsewhere
-        _record(recorder, env, torch.tensor([fell, False]))
+        record_step(recorder, env, torch.tensor([fell, False]))
     assert recorder.fell.tolist() == [True, False] and not recorder.diverged.any()
     assert recorder.err_steps.tolist() == [2.0, 4.0]
     assert float(recorder.err_sum[0] / recorder.err_steps[0]) == pytest.approx(0.3, abs=1e-6)
@@ -210,7 +187,7 @@ def test_a_fall_ends_the_measured_window_before_the_step_that_ended_it():
 def test_energy_is_the_absolute_joint_power_summed_over_policy_steps():
     """tau = (10, -4) N m, qdot = (2, 3) rad/s: |20| + |-12| = 32 W (the negative work counts too), over 3 steps of
     0.02 s: 1.92 J. |tau . qdot| = 8 W would give 0.48 J."""
-    env = _env(1)
+    env = stand_in_env(1)
     env.torques[0], env.dof_vel[0] = torch.tensor([10.0, -4.0]), torch.tensor([2.0, 3.0])
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     for _ in range(3):

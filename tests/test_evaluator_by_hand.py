@@ -3,39 +3,15 @@ and "Figures"). The recorder reads a stand-in for the env's state after each ste
 robot for two steps on the flat benchmark."""
 
 import math
-from types import MethodType, SimpleNamespace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import torch
 
-from legged_gente.envs.base.legged_robot import LeggedRobot
 from legged_gente.evaluation import figures
 from legged_gente.evaluation.evaluator import MAX_BASE_SPEED, Recorder, RunResult
-
-
-def _env(n):
-    """The state the recorder reads after a step: n robots facing +x at the origin, at rest, commanded vx 0.5 m/s,
-    one penalised body each."""
-    zeros = torch.zeros(n, dtype=torch.bool)
-    commands = torch.zeros(n, 4)
-    commands[:, 0] = 0.5
-    env = SimpleNamespace(
-        num_envs=n, device="cpu", dt=0.02, commands=commands, heading_command=False, standing_still=zeros.clone(),
-        base_pos=torch.zeros(n, 3), base_lin_vel=torch.zeros(n, 3), base_ang_vel=torch.zeros(n, 3),
-        base_quat=torch.tensor([[1.0, 0.0, 0.0, 0.0]] * n), sim=SimpleNamespace(qvel=torch.zeros(n, 6),
-                                                                                 qpos=torch.zeros(n, 7)),
-        diverged_buf=zeros.clone(), time_out_buf=zeros.clone(), torques=torch.zeros(n, 2), dof_vel=torch.zeros(n, 2),
-        penalized_bodies=torch.tensor([0]), contact_forces=torch.zeros(n, 1, 3), reset_buf=zeros.clone(),
-        terminal_qpos=torch.zeros(n, 7), terminal_qvel=torch.zeros(n, 6), terminal_commands=torch.zeros(n, 4))
-    env.episode_end = MethodType(LeggedRobot.episode_end, env)  # the env's own rule for a step's row
-    return env
-
-
-def _record(recorder, env, done):
-    """A step's record: the env's reset_buf is the step's dones (what LeggedRobot.step returns)."""
-    env.reset_buf = done
-    recorder.record(env, done)
+from recorder_stand_in import record_step, stand_in_env
 
 
 # ------------------------------------------------------------------------------------------------ recorder
@@ -44,12 +20,12 @@ def test_collisions_count_each_contact_once_from_its_onset_and_only_while_measur
     3 (the same contact), 0, 5 (onset 2), 5: two collisions. Robot 1: 1.0 exactly (not above 1 N), then 2 (onset
     1); it falls in step 3 with 4 N (the env already reset it: not measured), and its 9 N after that count for
     nothing: one collision."""
-    env = _env(2)
+    env = stand_in_env(2, vx=0.5, penalized_bodies=(0,))
     forces = [[0.5, 1.0], [2.0, 2.0], [3.0, 4.0], [0.0, 0.0], [5.0, 9.0], [5.0, 9.0]]
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     for k, (f0, f1) in enumerate(forces, start=1):
         env.contact_forces[:, 0, 2] = torch.tensor([f0, f1])
-        _record(recorder, env, torch.tensor([False, k == 3]))
+        record_step(recorder, env, torch.tensor([False, k == 3]))
     assert recorder.collisions.tolist() == [2.0, 1.0]
     assert recorder.fell.tolist() == [False, True]
 
@@ -59,7 +35,7 @@ def test_the_trace_of_a_fall_keeps_the_pose_it_fell_to():
     within the step (qpos back at the spawn, the fall's pose in terminal_qpos): the traced pose and position of
     that step are the fall's, so gente-view --traces shows the fall; robot 1's world diverged in step 3 and is
     reset as well: its trace keeps the respawn (its last state may be non-finite)."""
-    env = _env(2)
+    env = stand_in_env(2, vx=0.5, penalized_bodies=(0,))
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0, 1]))
     for k in range(1, 4):
         env.base_pos[:, 0] = env.sim.qpos[:, 0] = 0.01 * k
@@ -70,7 +46,7 @@ def test_the_trace_of_a_fall_keeps_the_pose_it_fell_to():
             env.terminal_qpos[1] = math.nan
             env.base_pos[:] = env.sim.qpos[:] = 0.0
             env.diverged_buf[1] = True
-        _record(recorder, env, done)
+        record_step(recorder, env, done)
     qpos, pos = torch.stack(recorder.trace["qpos"]), torch.stack(recorder.trace["pos"])
     assert qpos[2, 0, 0] == pytest.approx(0.03) and qpos[2, 0, 2] == pytest.approx(0.2)
     assert pos[2, 0].tolist() == pytest.approx([0.03, 0.0])
@@ -83,7 +59,7 @@ def test_a_launched_or_flagged_robot_is_diverged_not_fallen_and_its_step_is_not_
     launched at 30 m/s (> MAX_BASE_SPEED = 24.8 m/s, not done: the env does not check it); robot 2's velocity is
     NaN; robot 3's world the env flagged (diverged_buf, reset as a time-out: done). Robots 1-3 are diverged, none
     fell, and each keeps the 2 steps and 0.02 m it had: the launched step's 0.6 m is not distance."""
-    env = _env(4)
+    env = stand_in_env(4, vx=0.5, penalized_bodies=(0,))
     recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
     for k in range(1, 4):
         env.sim.qvel[:, 0] = env.base_lin_vel[:, 0] = 0.5
@@ -93,7 +69,7 @@ def test_a_launched_or_flagged_robot_is_diverged_not_fallen_and_its_step_is_not_
             env.sim.qvel[1, 0], env.base_pos[1, 0] = 30.0, 0.62
             env.sim.qvel[2, 0] = math.nan
             env.diverged_buf = env.time_out_buf = done = torch.tensor([False, False, False, True])
-        _record(recorder, env, done)
+        record_step(recorder, env, done)
     assert 30.0 > MAX_BASE_SPEED
     assert recorder.diverged.tolist() == [False, True, True, True] and not recorder.fell.any()
     assert recorder.alive_steps.tolist() == [3.0, 2.0, 2.0, 2.0]
@@ -105,11 +81,11 @@ def test_the_heading_error_is_taken_after_the_settle_time_only():
     """Heading mode, commanded heading 0.5 rad, both robots facing +x (yaw 0): |0.5 - 0| rad = 28.65 deg. settle_s
     = 0.06 s = 3 steps of 0.02 s. Robot 0 is measured for 5 steps: 28.65 deg. Robot 1 falls in step 3, so its last
     measured step (2) lies inside the settle time: no heading error (NaN), as it has no tracking error."""
-    env = _env(2)
+    env = stand_in_env(2, vx=0.5, penalized_bodies=(0,))
     env.heading_command, env.commands[:, 3] = True, 0.5
     recorder = Recorder(env, settle_s=0.06, trace_robots=torch.tensor([0]))
     for k in range(1, 6):
-        _record(recorder, env, torch.tensor([False, k == 3]))
+        record_step(recorder, env, torch.tensor([False, k == 3]))
     assert float(recorder.heading_error[0]) == pytest.approx(math.degrees(0.5), abs=1e-4)
     assert math.isnan(recorder.heading_error[1]) and float(recorder.err_steps[1]) == 0.0
 
