@@ -210,6 +210,59 @@ def test_max_minutes_stops_after_a_whole_iteration_and_saves_it(tmp_path, monkey
     assert load_checkpoint(run / "model_0.pt")["iter"] == 0
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_training_after_the_iteration_it_arrives_in(tmp_path, monkeypatch, capsys, signum):
+    """Ctrl-C (or SIGTERM) in the middle of iteration 1's policy update: the update and iteration 1 finish, then
+    training stops and saves model_1 (iteration 1), exiting with 128 + the signal. An exception raised in the
+    middle of the update would leave iteration 1 unfinished and unsaved."""
+    from legged_gente.scripts import train as train_script
+    from legged_gente.utils.ppo import GentePPO
+
+    update, calls = GentePPO.update, []
+
+    def update_signalled_in_the_second(self):
+        calls.append(len(calls))
+        if len(calls) == 2:
+            os.kill(os.getpid(), signum)  # delivered now, in the middle of the update
+        return update(self)
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    monkeypatch.setattr(GentePPO, "update", update_signalled_in_the_second)
+    with pytest.raises(SystemExit) as stop:
+        train_script.main(TINY)
+    out = capsys.readouterr().out
+    assert stop.value.code == 128 + signum, out
+    assert ("Interrupted" if signum == signal.SIGINT else "Terminated (SIGTERM)") + ": saved" in out, out
+    assert len(calls) == 2  # no third iteration began
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert sorted(p.name for p in run.glob("model_*.pt")) == ["model_0.pt", "model_1.pt"]  # rsl-rl saves the first
+    assert load_checkpoint(run / "model_1.pt")["iter"] == 1
+
+
+def test_a_second_ctrl_c_stops_at_once(tmp_path, monkeypatch, capsys):
+    """Ctrl-C twice in iteration 1's update: the second stops there, so the last finished iteration, 0, is saved."""
+    from legged_gente.scripts import train as train_script
+    from legged_gente.utils.ppo import GentePPO
+
+    update, calls = GentePPO.update, []
+
+    def update_signalled_twice_in_the_second(self):
+        calls.append(len(calls))
+        if len(calls) == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGINT)
+        return update(self)
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    monkeypatch.setattr(GentePPO, "update", update_signalled_twice_in_the_second)
+    with pytest.raises(SystemExit) as stop:
+        train_script.main(TINY)
+    assert stop.value.code == 128 + signal.SIGINT
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert "Interrupted: saved" in capsys.readouterr().out
+    assert sorted(p.name for p in run.glob("model_*.pt")) == ["model_0.pt"]
+
+
 @pytest.mark.parametrize("minutes", ["0", "-3"])
 def test_max_minutes_must_be_positive(minutes, capsys):
     from legged_gente.scripts import train as train_script

@@ -156,7 +156,8 @@ def test_multi_gpu_report_reads_rsl_rl_logs(tmp_path):
     assert short.returncode != 0 and "only 4 iterations logged" in short.stderr
 
 
-def _deadline_vote(rank: int, port: int, results) -> None:
+def _stop_vote(rank: int, port: int, results) -> None:
+    import signal
     import time
     from types import SimpleNamespace
 
@@ -166,15 +167,18 @@ def _deadline_vote(rank: int, port: int, results) -> None:
 
     dist.init_process_group("gloo", init_method=f"tcp://127.0.0.1:{port}", rank=rank, world_size=2)
     try:
-        # only rank 0 is past its deadline; rank 1 has an hour left
-        logger = SimpleNamespace(deadline=time.monotonic() + (-1.0 if rank == 0 else 3600.0), device="cpu")
-        results[rank] = DeferredLogger._past_deadline(logger)
+        # only rank 0 is past its deadline (rank 1 has an hour left); only rank 1 got SIGTERM so far
+        logger = SimpleNamespace(deadline=time.monotonic() + (-1.0 if rank == 0 else 3600.0), device="cpu",
+                                 stop_signal=None if rank == 0 else signal.SIGTERM)
+        results[rank] = DeferredLogger._stop_reason(logger)
     finally:
         dist.destroy_process_group()
 
 
-def test_max_minutes_stops_every_rank_at_the_same_iteration():
-    """One rank past --max_minutes' deadline stops them all: a rank that went on would hang in the all-reduce."""
+def test_a_deadline_or_a_signal_on_one_rank_stops_every_rank_at_the_same_iteration():
+    """One rank past --max_minutes' deadline, or signalled, stops them all: a rank that went on would hang in the
+    all-reduce."""
+    import signal
     import socket
 
     import torch.multiprocessing as mp
@@ -183,5 +187,5 @@ def test_max_minutes_stops_every_rank_at_the_same_iteration():
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     results = mp.Manager().dict()
-    mp.spawn(_deadline_vote, args=(port, results), nprocs=2, join=True)
-    assert dict(results) == {0: True, 1: True}
+    mp.spawn(_stop_vote, args=(port, results), nprocs=2, join=True)
+    assert dict(results) == {0: (True, signal.SIGTERM), 1: (True, signal.SIGTERM)}

@@ -19,7 +19,7 @@ import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it
 
 from legged_gente.envs.base.base_config import class_to_dict
 from legged_gente.envs.task_registry import default_log_root, task_registry
-from legged_gente.utils.episode_logger import TimeLimitReached
+from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
 
 
 def code_version() -> dict:
@@ -68,11 +68,22 @@ def run_record(task: str, env, env_cfg, train_cfg) -> dict:
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM (what `timeout` and job schedulers send): stop like Ctrl-C, keeping what was learned."""
+    """A second SIGTERM: stop at once like a second Ctrl-C, keeping the last finished iteration."""
 
 
-def _raise_terminated(signum, frame):
-    raise Terminated()
+def _stop_after_the_iteration(logger):
+    """A handler for SIGINT and SIGTERM (what `timeout` and job schedulers send): the first asks the logger to stop
+    training when the running iteration has finished, so that no exception cuts through the step, the CUDA graphs
+    or the update; a second stops at once."""
+
+    def handler(signum, frame):
+        if logger.stop_signal is not None:
+            raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+        logger.stop_signal = signum
+        # os.write, not print: a handler that prints while the interrupted code prints raises a reentrant-call error
+        os.write(2, f"\n{signal.Signals(signum).name}: stopping when this iteration finishes (again: now)\n".encode())
+
+    return handler
 
 
 def train(args) -> Path | None:
@@ -90,19 +101,22 @@ def train(args) -> Path | None:
                                                               indent=1, default=str))
         print(f"Logging to {log_dir}")
     main_thread = threading.current_thread() is threading.main_thread()  # only it may set signal handlers
-    previous = signal.signal(signal.SIGTERM, _raise_terminated) if main_thread else None
+    stop_signals = (signal.SIGINT, signal.SIGTERM)
+    previous = {s: signal.signal(s, _stop_after_the_iteration(runner.logger)) for s in stop_signals} if main_thread else {}
     if args.max_minutes is not None:
         runner.logger.deadline = time.monotonic() + 60.0 * args.max_minutes
     signalled = None
     try:
         runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
-    except (KeyboardInterrupt, TimeLimitReached) as stop:  # Ctrl-C, SIGTERM, --max_minutes: keep what was learned
-        if not isinstance(stop, TimeLimitReached):
+    except (KeyboardInterrupt, StopRequested, TimeLimitReached) as stop:  # Ctrl-C, SIGTERM, --max_minutes: keep
+        if isinstance(stop, StopRequested):                                # what was learned
+            signalled = stop.signum
+        elif not isinstance(stop, TimeLimitReached):
             signalled = signal.SIGTERM if isinstance(stop, Terminated) else signal.SIGINT
         if main_thread:
-            signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the save short
-        what = {Terminated: "Terminated (SIGTERM)", TimeLimitReached: f"Time limit of {args.max_minutes} min reached"
-                }.get(type(stop), "Interrupted")
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a further SIGTERM must not cut the save short
+        what = (f"Time limit of {args.max_minutes} min reached" if isinstance(stop, TimeLimitReached)
+                else "Terminated (SIGTERM)" if signalled == signal.SIGTERM else "Interrupted")
         finished = runner.logger.last_iteration
         if log_dir is not None and finished is None:  # a checkpoint would claim an iteration that did not finish
             print(f"\n{what} before the first iteration finished: nothing to save", flush=True)
@@ -112,8 +126,8 @@ def train(args) -> Path | None:
             runner.save(str(path))
             print(f"\n{what}: saved {path}; continue with --resume", flush=True)
     finally:
-        if main_thread:
-            signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     if signalled is not None:  # a stopped run is no success: `gente-train ... && next` must not go on
         sys.exit(128 + signalled)
     return Path(log_dir) if log_dir else None

@@ -5,8 +5,9 @@ returns to the host at every env step: the CPU waits for the GPU to finish the s
 next one, so the two never overlap. ``DeferredLogger`` keeps the per-step (done, return, length) tensors on
 the device and moves them to the host once per iteration, in ``log``. The numbers it logs are the same.
 
-It also ends training at a wall-clock deadline (``gente-train --max_minutes``): ``log`` runs once per
-iteration, after the policy update, so stopping there leaves a whole iteration to save.
+It also ends training at a wall-clock deadline (``gente-train --max_minutes``) or when a stop was asked for
+(``gente-train``'s Ctrl-C or SIGTERM sets ``stop_signal``): ``log`` runs once per iteration, after the policy
+update, so stopping there leaves a whole iteration to save.
 """
 
 from __future__ import annotations
@@ -22,6 +23,15 @@ class TimeLimitReached(Exception):
     """Training reached its wall-clock deadline after a whole iteration (raised by ``DeferredLogger.log``)."""
 
 
+class StopRequested(Exception):
+    """A signal asked training to stop, and the iteration it arrived in has finished (raised by
+    ``DeferredLogger.log``)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
 class DeferredLogger(Logger):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -30,6 +40,8 @@ class DeferredLogger(Logger):
         """``time.monotonic()`` after which training stops at the end of the iteration (None: never)."""
         self.last_iteration: int | None = None
         """The last iteration logged, so finished, in this process (None: none yet): what a stopped run saves."""
+        self.stop_signal: int | None = None
+        """The signal that asked training to stop at the end of the iteration (None: none)."""
 
     def process_env_step(self, rewards: torch.Tensor, dones: torch.Tensor, extras: dict,
                          intrinsic_rewards: torch.Tensor | None = None) -> None:
@@ -65,7 +77,10 @@ class DeferredLogger(Logger):
         self.flush()
         self._drop_undefined_means()
         super().log(it, *args, **kwargs)
-        if self.deadline is not None and self._past_deadline():
+        late, signum = self._stop_reason()
+        if signum:
+            raise StopRequested(signum)
+        if late:
             raise TimeLimitReached()
 
     def _drop_undefined_means(self) -> None:
@@ -80,12 +95,15 @@ class DeferredLogger(Logger):
             if drop:
                 del extras[key]
 
-    def _past_deadline(self) -> bool:
-        """Whether any rank is past the deadline: every rank must stop at the same iteration, or the ones
-        that go on would wait forever in the next gradient all-reduce."""
-        late = time.monotonic() >= self.deadline
+    def _stop_reason(self) -> tuple[bool, int]:
+        """(past the deadline, the signal that asked to stop or 0) on any rank: every rank must stop at the same
+        iteration, or the ones that go on would wait forever in the next gradient all-reduce (a signal reaches
+        the ranks at different points of an iteration). On several ranks, one small all-reduce per iteration."""
+        late = self.deadline is not None and time.monotonic() >= self.deadline
+        signum = self.stop_signal or 0
         if not (dist.is_available() and dist.is_initialized()):
-            return late
-        flag = torch.tensor([float(late)], device=self.device)
-        dist.all_reduce(flag, op=dist.ReduceOp.MAX)
-        return bool(flag.item())
+            return late, signum
+        flags = torch.tensor([float(late), float(signum)], device=self.device)
+        dist.all_reduce(flags, op=dist.ReduceOp.MAX)
+        late, signum = flags.tolist()
+        return bool(late), int(signum)
