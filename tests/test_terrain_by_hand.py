@@ -200,8 +200,8 @@ def test_without_a_platform_obstacles_keep_the_centre_cell():
 
 def test_discrete_obstacles_count_heights_and_cleared_platform():
     """density 0.2 per m^2 on 10 m x 10 m: 20 blocks; blocks of 0.1 m (one cell each, the one point in
-    [c - 0.05, c + 0.05)); heights +-(0.25..1) * 0.16 m. With seed 1 no two blocks share a cell and none is centred
-    in the last half cell past the grid's points (x or y in [9.95, 10) m: no point in its box)."""
+    [c - 0.05, c + 0.05), the centres drawn over the points' span [0, 9.9] m); heights +-(0.25..1) * 0.16 m. With
+    seed 1 no two blocks share a cell."""
     h = heights("discrete_obstacles", {"max_height": 0.16, "min_size": 0.1, "max_size": 0.1, "density": 0.2,
                                        "platform": 0.0}, (100, 100), seed=1)
     blocks = h[h != 0.0]
@@ -219,6 +219,52 @@ def test_pillars_are_the_declared_height_and_count():
     h = heights("pillars", {"height": 1.5, "min_radius": 0.04, "max_radius": 0.04, "density": 0.1, "platform": 0.0},
                 (100, 100))
     assert int((h > 0).sum()) == 10 and set(h[h > 0].tolist()) == {1.5}
+
+
+class _FixedDraws:
+    """A stand-in generator whose every uniform draw is the fraction ``u`` of its range and whose signs are all +."""
+
+    def __init__(self, u):
+        self.u = u
+
+    def uniform(self, low, high, size):
+        return np.full(size, low + (high - low) * self.u)
+
+    def choice(self, options, size):
+        return np.full(size, max(options))
+
+
+SCATTERED = [  # sizes and radii fixed (low == high), so only the centres' draw moves an obstacle
+    ("discrete_obstacles", {"max_height": 0.2, "min_size": 0.33, "max_size": 0.33, "density": 0.1}),
+    ("pillars", {"min_radius": 0.17, "max_radius": 0.17, "density": 0.1}),
+    ("rocks", {"min_radius": 0.17, "max_radius": 0.17, "density": 0.1}),
+]
+
+
+def _scattered(name, params, u, shape):
+    a = ATOMIC_TERRAINS[name]
+    return a.fn(shape, RES, _FixedDraws(u), **a.check_params({**params, "platform": 0.0}))
+
+
+@pytest.mark.parametrize("name,params", SCATTERED)
+def test_obstacle_centres_span_the_cell_points_so_mirrored_draws_give_mirrored_obstacles(name, params):
+    """The cell points of 41 x 31 cells span x in [0, 4.0] m and y in [0, 3.0] m. Centres drawn at the fraction
+    u = 0.23 of that span, (0.92, 0.69) m, and at 0.77, (3.08, 2.31) m, are mirror images through the region's
+    centre, so the obstacles' footprints are too. (Drawn over [0, n * 0.1) m the second centre moved 0.1 * 0.77 m
+    further than the first, half a cell further out on average.)"""
+    near = _scattered(name, params, 0.23, (41, 31)) != 0.0
+    far = _scattered(name, params, 0.77, (41, 31)) != 0.0
+    assert near.any() and np.array_equal(far, near[::-1, ::-1])
+
+
+def test_a_pillar_drawn_at_the_end_of_the_centres_range_stands_on_the_last_cell():
+    """A 0.04 m pillar covers one cell. A centre drawn at the fraction 0.9999999 of its range lies on the last cell
+    point, (40, 30) at (4.0, 3.0) m; at 0, on cell (0, 0). (Drawn over [0, n * 0.1) m it was at 4.1 m, past the
+    region: it vanished.)"""
+    p = {"min_radius": 0.04, "max_radius": 0.04, "density": 0.1}
+    for u, cell in ((0.9999999, [40, 30]), (0.0, [0, 0])):
+        h = _scattered("pillars", p, u, (41, 31))
+        assert np.argwhere(h > 0).tolist() == [cell], u
 
 
 # ------------------------------------------------------------------------------------------- composition

@@ -313,6 +313,12 @@ def _count(density: float, shape, resolution) -> int:
     return int(round(density * shape[0] * shape[1] * resolution**2))
 
 
+def _point_span(shape, resolution: float) -> np.ndarray:
+    """Extent (m) of the cell points i * resolution along x and y: obstacle centres are drawn over it, so that
+    they are spread evenly about the region's centre (not over n * resolution, half a cell further out)."""
+    return (np.array(shape) - 1) * resolution
+
+
 def _boxes(h: np.ndarray, resolution: float, centres: np.ndarray, half_sizes: np.ndarray, heights: np.ndarray):
     """Write axis-aligned boxes (centres and half sizes in m from the region's corner) into ``h``; later win. A cell
     is inside when its point i * resolution lies in [low, high), as for a Region."""
@@ -339,8 +345,7 @@ def _boxes(h: np.ndarray, resolution: float, centres: np.ndarray, half_sizes: np
 )
 def discrete_obstacles(shape, resolution, rng, max_height, min_size, max_size, density, platform):
     n = _count(density, shape, resolution)
-    extent = np.array(shape) * resolution
-    centres = rng.uniform(0.0, 1.0, (n, 2)) * extent
+    centres = rng.uniform(0.0, 1.0, (n, 2)) * _point_span(shape, resolution)
     half = rng.uniform(min_size, max_size, (n, 2)) / 2.0
     heights = max_height * rng.uniform(0.25, 1.0, n) * rng.choice([-1.0, 1.0], n)
     h = np.zeros(shape, F32)
@@ -446,7 +451,7 @@ def _scatter(rng, max_density: float, shape, resolution: float, min_radius: floa
     """Centres (m) and radii of as many round obstacles as the highest density allows; callers keep the first n,
     so a denser terrain is a superset of a sparser one with the same seed."""
     n_max = _count(max_density, shape, resolution)
-    centres = rng.uniform(0.0, 1.0, (n_max, 2)) * np.array(shape) * resolution
+    centres = rng.uniform(0.0, 1.0, (n_max, 2)) * _point_span(shape, resolution)
     radii = min_radius + (max_radius - min_radius) * rng.uniform(0.0, 1.0, n_max)
     return n_max, centres, radii
 
