@@ -239,6 +239,39 @@ def test_a_signal_stops_training_after_the_iteration_it_arrives_in(tmp_path, mon
     assert load_checkpoint(run / "model_1.pt")["iter"] == 1
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_still_stops_training_after_a_library_replaced_its_handler(tmp_path, monkeypatch, capsys, signum):
+    """Triton, which torch.compile loads in the first iterations on a GPU, installs LLVM's handlers for SIGINT and
+    SIGTERM at the C level, over Python's: the signal then killed training with nothing saved. Here a stand-in
+    library sets the C-level disposition to "ignore" (behind Python's back) in iteration 0's update, and the signal
+    comes in iteration 2's: it must still stop training after iteration 2 and save it. Ignored, training would run
+    to its 4 iterations and exit without one."""
+    import ctypes
+
+    from legged_gente.scripts import train as train_script
+    from legged_gente.utils.ppo import GentePPO
+
+    libc_signal = ctypes.CDLL(None).signal
+    libc_signal.argtypes, libc_signal.restype = [ctypes.c_int, ctypes.c_void_p], ctypes.c_void_p
+    update, calls = GentePPO.update, []
+
+    def update_with_a_library_then_a_signal(self):
+        calls.append(len(calls))
+        if len(calls) == 1:
+            libc_signal(signum, 1)  # SIG_IGN, as a C library's own handler would, unseen by Python's signal module
+        if len(calls) == 3:
+            os.kill(os.getpid(), signum)
+        return update(self)
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    monkeypatch.setattr(GentePPO, "update", update_with_a_library_then_a_signal)
+    with pytest.raises(SystemExit) as stop:
+        train_script.main([*TINY[:6], "--max_iterations", "4", *TINY[8:]])
+    assert stop.value.code == 128 + signum, capsys.readouterr().out
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert load_checkpoint(max(run.glob("model_*.pt"), key=lambda p: int(p.stem[6:])))["iter"] == 2
+
+
 def test_a_second_ctrl_c_stops_at_once(tmp_path, monkeypatch, capsys):
     """Ctrl-C twice in iteration 1's update: the second stops there, so the last finished iteration, 0, is saved."""
     from legged_gente.scripts import train as train_script
