@@ -3,8 +3,13 @@ while it fills (no browser)."""
 
 from __future__ import annotations
 
+import os
+import signal
 import socket
+import subprocess
+import sys
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +133,52 @@ def test_a_seeded_play_is_repeatable():
     np.testing.assert_array_equal(first.qpos, again.qpos)
     np.testing.assert_array_equal(first.cmd, again.cmd)
     assert not np.array_equal(first.cmd, other.cmd)  # another seed: other commands
+
+
+CTRL_C_AFTER_A_LIBRARY = """
+import ctypes, signal, sys
+from legged_gente.scripts import view
+
+libc_signal = ctypes.CDLL(None).signal
+libc_signal.argtypes, libc_signal.restype = [ctypes.c_int, ctypes.c_void_p], ctypes.c_void_p
+play = view._run_play
+
+
+def play_after_a_library(*args):
+    libc_signal(signal.SIGINT, 1)  # SIG_IGN behind Python's back, as Triton's LLVM installs its own handler
+    print("library loaded", flush=True)
+    play(*args)
+
+
+view._run_play = play_after_a_library
+view.main(sys.argv[1:])
+"""
+
+
+def test_ctrl_c_still_stops_the_viewer_after_the_play_thread_loaded_a_library(tmp_path):
+    """On a GPU the play thread's first compiled step loads Triton, which installs LLVM's SIGINT handler over
+    Python's at the C level: Ctrl-C then ended gente-view at once, and --record's rollout was never written. A
+    stand-in library does the same (it makes SIGINT ignored): Ctrl-C must still finish the rollout and write it.
+    Ignored, the viewer would serve until the test's time limit."""
+    out = tmp_path / "rollout.npz"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "PYTHONUNBUFFERED": "1"}
+    cmd = [sys.executable, "-c", CTRL_C_AFTER_A_LIBRARY, "--task", "gente_biped_flat", "--play", "--policy", "zero",
+           "--robots", "1", "--num_envs", "1", "--steps", "20", "--headless", "--port", str(free_port()),
+           "--record", str(out)]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    seen = []
+    for line in proc.stdout:
+        seen.append(line)
+        if "library loaded" in "".join(seen) and "serving" in "".join(seen):
+            break
+    threading.Event().wait(1.0)  # the viewer's loop ticks every 0.2 s
+    proc.send_signal(signal.SIGINT)
+    try:
+        rest, _ = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        rest, _ = proc.communicate()
+    printed = "".join(seen) + rest
+    assert proc.returncode == 0, printed
+    assert "finishing the rollout to record it" in printed and f"wrote {out}" in printed, printed
+    assert Rollout.load(out).num_steps == 20

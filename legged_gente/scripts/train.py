@@ -102,8 +102,7 @@ def train(args) -> Path | None:
         print(f"Logging to {log_dir}")
     main_thread = threading.current_thread() is threading.main_thread()  # only it may set signal handlers
     stop_signals = (signal.SIGINT, signal.SIGTERM) if main_thread else ()
-    runner.logger.stop_handlers = dict.fromkeys(stop_signals, _stop_after_the_iteration(runner.logger))
-    previous = {s: signal.signal(s, handler) for s, handler in runner.logger.stop_handlers.items()}
+    previous = {s: signal.signal(s, _stop_after_the_iteration(runner.logger)) for s in stop_signals}
     if args.max_minutes is not None:
         runner.logger.deadline = time.monotonic() + 60.0 * args.max_minutes
     signalled = None

@@ -13,6 +13,7 @@ Open the printed address in a browser. ``--headless`` only serves (no browser is
 
 from __future__ import annotations
 
+import signal
 import sys
 import threading
 import time
@@ -23,6 +24,7 @@ import numpy as np
 
 from legged_gente.utils.args import (
     USER_ERRORS, build_parser, check_output, error_text, flag, import_mujoco, one_line, parse_args)
+from legged_gente.utils.signals import take_back
 
 import_mujoco("gente-view")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
@@ -257,6 +259,7 @@ def main(argv=None) -> None:
     try:
         while deadline is None or time.monotonic() < deadline:
             time.sleep(0.2)
+            take_back((signal.SIGINT,))  # from Triton, if the play thread's compiled step loaded it
     except KeyboardInterrupt:
         pass
     if play is not None:

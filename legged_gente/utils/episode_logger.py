@@ -12,13 +12,13 @@ update, so stopping there leaves a whole iteration to save.
 
 from __future__ import annotations
 
-import signal
 import time
-from collections.abc import Callable
 
 import torch
 import torch.distributed as dist
 from rsl_rl.utils.logger import Logger
+
+from legged_gente.utils.signals import take_back
 
 
 class TimeLimitReached(Exception):
@@ -44,10 +44,6 @@ class DeferredLogger(Logger):
         """The last iteration logged, so finished, in this process (None: none yet): what a stopped run saves."""
         self.stop_signal: int | None = None
         """The signal that asked training to stop at the end of the iteration (None: none)."""
-        self.stop_handlers: dict[int, Callable] = {}
-        """Signal handlers that ``log`` installs again after every iteration (set from the main thread). Triton,
-        which torch.compile loads in the first iterations on a GPU, registers LLVM's own SIGINT and SIGTERM
-        handlers at the C level over Python's, and those kill the process: a signal would lose the save."""
 
     def process_env_step(self, rewards: torch.Tensor, dones: torch.Tensor, extras: dict,
                          intrinsic_rewards: torch.Tensor | None = None) -> None:
@@ -80,8 +76,7 @@ class DeferredLogger(Logger):
 
     def log(self, it: int, *args, **kwargs) -> None:
         self.last_iteration = it
-        for signum, handler in self.stop_handlers.items():  # taken back from any library that replaced them
-            signal.signal(signum, handler)
+        take_back()  # a signal must reach the stop handlers, not Triton's (utils/signals.py)
         self.flush()
         self._drop_undefined_means()
         super().log(it, *args, **kwargs)
