@@ -156,10 +156,11 @@ view.main(sys.argv[1:])
 
 
 def test_ctrl_c_still_stops_the_viewer_after_the_play_thread_loaded_a_library(tmp_path):
-    """On a GPU the play thread's first compiled step loads Triton, which installs LLVM's SIGINT handler over
-    Python's at the C level: Ctrl-C then ended gente-view at once, and --record's rollout was never written. A
-    stand-in library does the same (it makes SIGINT ignored): Ctrl-C must still finish the rollout and write it.
-    Ignored, the viewer would serve until the test's time limit."""
+    """With --set sim.torch_compile=True on a GPU (play turns it off by default) the play thread's first compiled
+    step loads Triton, which installs LLVM's SIGINT handler over Python's at the C level: Ctrl-C would end
+    gente-view at once, before --record's rollout is written. A stand-in library replaces the handler too (it makes
+    SIGINT ignored): Ctrl-C must still finish the rollout and write it. Ignored, the viewer would serve until the
+    test's time limit."""
     out = tmp_path / "rollout.npz"
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "PYTHONUNBUFFERED": "1"}
     cmd = [sys.executable, "-c", CTRL_C_AFTER_A_LIBRARY, "--task", "gente_biped_flat", "--play", "--policy", "zero",

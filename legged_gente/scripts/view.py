@@ -259,7 +259,7 @@ def main(argv=None) -> None:
     try:
         while deadline is None or time.monotonic() < deadline:
             time.sleep(0.2)
-            take_back((signal.SIGINT,))  # from Triton, if the play thread's compiled step loaded it
+            take_back((signal.SIGINT,))  # from Triton, if the play thread's step is compiled (sim.torch_compile)
     except KeyboardInterrupt:
         pass
     if play is not None:
