@@ -133,16 +133,18 @@ def test_figure_c_draws_the_tile_in_metres_with_x_to_the_right(tmp_path, monkeyp
 
 
 def test_figure_d_plots_each_terrains_success_rate_over_its_moving_robots(tmp_path, monkeypatch):
-    """Three checkpoints (iterations 0, 50, 100), two terrains of four robots. At iteration 0 every robot tracks
-    at 1 m/s error: 0 %. Later, terrain 0: one success, one tracking 0.4 m/s (fails), one told to stand (left
-    out), one diverged (a failure): 1 of 3 = 33.3 %; terrain 1: three successes and a fall: 75 %."""
+    """Three checkpoints (iterations 0 and 50 in a run's folder, 100 in the folder of its resume), two terrains of
+    four robots. At iteration 0 every robot tracks at 1 m/s error: 0 %. Later, terrain 0: one success, one tracking
+    0.4 m/s (fails), one told to stand (left out), one diverged (a failure): 1 of 3 = 33.3 %; terrain 1: three
+    successes and a fall: 75 %."""
     import legged_gente.evaluation.benchmark as benchmark
     import legged_gente.evaluation.evaluator as evaluator
 
-    run_dir = tmp_path / "run"
-    run_dir.mkdir()
-    for iteration in (100, 0, 50):
-        (run_dir / f"model_{iteration}.pt").write_bytes(b"")
+    run_dir, resumed = tmp_path / "run", tmp_path / "run_resumed"  # --resume continues in a new folder
+    for folder, iterations in ((run_dir, (50, 0)), (resumed, (100,))):
+        folder.mkdir()
+        for iteration in iterations:
+            (folder / f"model_{iteration}.pt").write_bytes(b"")
 
     def metrics(trained):
         n = 8
@@ -163,7 +165,8 @@ def test_figure_d_plots_each_terrains_success_rate_over_its_moving_robots(tmp_pa
     monkeypatch.setattr(evaluator, "Evaluation", StubEvaluation)
     monkeypatch.setattr(evaluator, "load_policy", lambda evaluation, checkpoint: checkpoint)
     kept = _keep_figure(monkeypatch)
-    figures.success_over_training("gente_biped", run_dir, ["a", "b"], tmp_path / "d.png", robots_per_terrain=4)
+    figures.success_over_training("gente_biped", [run_dir, resumed], ["a", "b"], tmp_path / "d.png",
+                                  robots_per_terrain=4)
     ax = kept[0].axes[0]
     assert ax.get_ylabel() == "success rate (%)" and ax.get_xlabel() == "training iteration"
     a, b = ax.lines
@@ -191,6 +194,8 @@ def test_the_figures_command_reports_a_mistake_in_one_line(tmp_path, monkeypatch
         "--col": ["reward", str(tmp_path / "a.csv"), "--col", "terrain_level", "--out", out],
         "max_checkpoints": ["training", "--run", str(run_dir), "--benchmark", "flat", "--items", "flat",
                             "--max_checkpoints", "0", "--out", out],
+        "model_0.pt is in both": ["training", "--run", str(run_dir), str(run_dir), "--benchmark", "flat", "--items",
+                                  "flat", "--out", out],
     }
     for expected, argv in cases.items():
         with pytest.raises(SystemExit) as exit_info:

@@ -3,13 +3,13 @@
     python -m legged_gente.evaluation.figures reward  RUN_OR_CSV [RUN_OR_CSV ...] --out reward.png
     python -m legged_gente.evaluation.figures tracking EVAL_DIR/traces.npz --out tracking.png [--ids ID ...]
     python -m legged_gente.evaluation.figures waypoints --task gente_biped --checkpoint CKPT --item ID --out wp.png
-    python -m legged_gente.evaluation.figures training --task gente_biped --run RUN_DIR --items A B C --out succ.png
+    python -m legged_gente.evaluation.figures training --run RUN_DIR [RESUMED_DIR ...] --items A B C --out succ.png
 
 (a) mean training reward with a +-1 std band over seeds (TensorBoard run folders or CSVs with an
 ``iteration``/``step`` column); (b) commanded vs actual vx and vy on several terrains (from gente-evaluate's
 traces.npz); (c) overhead trajectories on a grey heightmap with start, end and waypoints for several reach
 distances d through one terrain; (d) success rate over training iterations on a few terrains (evaluates
-several checkpoints of one run).
+several checkpoints of one run, over the folders of its --resume chunks).
 """
 
 from __future__ import annotations
@@ -155,10 +155,13 @@ def waypoint_figure(task: str, item_id: str, out: str | Path, benchmark: str = "
 
 
 # ------------------------------------------------------------------------------ (d) success over training
-def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], out: str | Path,
+def success_over_training(task: str, run_dirs: list[str | Path], item_ids: list[str], out: str | Path,
                           benchmark: str = "gente100", max_checkpoints: int = 8, robots_per_terrain: int = 16,
                           device: str = "cpu", episode_s: float = 10.0, tracking_threshold: float | None = None) -> Path:
-    """Evaluate up to ``max_checkpoints`` evenly spaced checkpoints of a run on ``item_ids``; plot success vs iteration."""
+    """Evaluate up to ``max_checkpoints`` evenly spaced checkpoints of a run on ``item_ids``; plot success vs iteration.
+
+    ``run_dirs`` are the run's folders: ``gente-train --resume`` continues in a new one, so a run trained in chunks
+    spans several."""
     if max_checkpoints < 1:
         raise ValueError(f"max_checkpoints {max_checkpoints}: evaluate at least 1 checkpoint "
                          f"(--max_checkpoints 1 or more)")
@@ -168,9 +171,16 @@ def success_over_training(task: str, run_dir: str | Path, item_ids: list[str], o
     from legged_gente.utils.checkpoints import _iteration
 
     items = load_benchmark(benchmark, item_ids)
-    checkpoints = sorted(Path(run_dir).glob("model_*.pt"), key=_iteration)
-    if not checkpoints:
-        raise FileNotFoundError(f"no model_*.pt in {run_dir}; pass a training run folder.")
+    found = {}
+    for run_dir in run_dirs:
+        for checkpoint in Path(run_dir).glob("model_*.pt"):
+            if _iteration(checkpoint) in found:
+                raise ValueError(f"{checkpoint.name} is in both {found[_iteration(checkpoint)].parent} and {run_dir}: "
+                                 f"give the folders of one run and its resumes, each once.")
+            found[_iteration(checkpoint)] = checkpoint
+    if not found:
+        raise FileNotFoundError(f"no model_*.pt in {', '.join(map(str, run_dirs))}; pass a training run's folders.")
+    checkpoints = [found[i] for i in sorted(found)]
     pick = np.unique(np.linspace(0, len(checkpoints) - 1, min(max_checkpoints, len(checkpoints))).round().astype(int))
     evaluation = Evaluation(task, items, robots_per_terrain, device, episode_s, "velocity")
     iterations, rates = [], []
@@ -229,7 +239,8 @@ def main(argv=None) -> None:
     src.add_argument("--exported")
     src.add_argument("--baseline", choices=("zero", "random"))
     d = sub.choices["training"]
-    d.add_argument("--run", required=True, help="training run folder with model_*.pt")
+    d.add_argument("--run", nargs="+", required=True,
+                   help="training run folder with model_*.pt, then the folders of its --resume chunks")
     d.add_argument("--items", nargs="+", required=True, help="three benchmark item ids")
     d.add_argument("--max_checkpoints", type=int, default=8)
     d.add_argument("--robots_per_terrain", type=int, default=16)
