@@ -9,6 +9,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -155,12 +156,20 @@ view.main(sys.argv[1:])
 """
 
 
+def ignores_sigint(pid: int) -> bool:
+    """Whether process ``pid`` ignores SIGINT at the C level (Linux's /proc status: SigIgn, a hex mask whose bit
+    signo - 1 is set for each ignored signal)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigIgn:"):
+            return bool(int(line.split()[1], 16) >> (signal.SIGINT - 1) & 1)
+    raise AssertionError(f"/proc/{pid}/status has no SigIgn line")
+
+
 def test_ctrl_c_still_stops_the_viewer_after_the_play_thread_loaded_a_library(tmp_path):
     """With --set sim.torch_compile=True on a GPU (play turns it off by default) the play thread's first compiled
     step loads Triton, which installs LLVM's SIGINT handler over Python's at the C level: Ctrl-C would end
     gente-view at once, before --record's rollout is written. A stand-in library replaces the handler too (it makes
-    SIGINT ignored): Ctrl-C must still finish the rollout and write it. Ignored, the viewer would serve until the
-    test's time limit."""
+    SIGINT ignored): the viewer must take SIGINT back, and Ctrl-C then finish the rollout and write it."""
     out = tmp_path / "rollout.npz"
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "PYTHONUNBUFFERED": "1"}
     cmd = [sys.executable, "-c", CTRL_C_AFTER_A_LIBRARY, "--task", "gente_biped_flat", "--play", "--policy", "zero",
@@ -172,7 +181,15 @@ def test_ctrl_c_still_stops_the_viewer_after_the_play_thread_loaded_a_library(tm
         seen.append(line)
         if "library loaded" in "".join(seen) and "serving" in "".join(seen):
             break
-    threading.Event().wait(1.0)  # the viewer's loop ticks every 0.2 s
+    # Ctrl-C only once the viewer's loop has taken SIGINT back: while it is ignored the signal is lost. The loop ticks
+    # every 0.2 s, but the play thread's rollout can hold it back for seconds; never taken back, the test fails here.
+    deadline = time.monotonic() + 60.0
+    while ignores_sigint(proc.pid):
+        if time.monotonic() > deadline:
+            proc.kill()
+            proc.communicate()
+            pytest.fail("gente-view still ignores SIGINT after 60 s: it did not take it back")
+        time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     try:
         rest, _ = proc.communicate(timeout=120)
