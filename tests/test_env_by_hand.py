@@ -298,6 +298,34 @@ def test_the_curriculum_promotes_past_half_a_tile_demotes_under_half_the_command
     env.reset()
 
 
+def test_a_first_episode_shortened_by_a_random_start_is_held_to_the_distance_of_its_own_time(hf_env):
+    """rsl-rl starts training (and a --resume) with random episode lengths, so each robot's first episode is cut
+    short. Robots 0-2 start at step 900 of the 1000-step (20 s) episode: 2 s at 0.3 m/s is 0.6 m, down under
+    0.3 m: robot 0 walked 0.4 m and keeps its level, robot 1 walked 0.2 m and goes down (legged_gym's rule held
+    both to the whole episode's 6 m: both down). Robot 3 started at step 0: down under 3 m, as before. Once reset,
+    robot 0's next episode is whole again: 0.4 m is then too little."""
+    env = hf_env
+    assert env.max_episode_length == 1000 and env.max_episode_length_s == pytest.approx(20.0)
+    start = torch.tensor([900, 900, 900, 0, 0])
+    env.episode_length_buf = start  # as rsl-rl's OnPolicyRunner.learn(init_at_random_ep_len=True) assigns it
+    env.episode_length_buf[:] = torch.where(start > 0, 1000, 999)  # robots 0-2 time out now; 3 and 4 walked 999
+    env.terrain_levels[:] = torch.tensor([1, 1, 1, 1, 1])
+    env.env_origins[:] = env.terrain_origins[env.terrain_levels, env.terrain_columns]
+    env.commands[:, :2] = torch.tensor([0.18, 0.24])  # |v| = 0.3 m/s
+    walked = torch.tensor([0.4, 0.2, 3.1, 2.9, 3.1])
+    env.sim.qpos[:, 0:2] = env.env_origins[:, :2] + walked[:, None] * torch.tensor([0.6, 0.8])
+    env._update_state()
+    env._log_and_update_curriculum(torch.ones(5, dtype=torch.bool), torch.zeros(5, dtype=torch.bool))
+    assert env.terrain_levels.tolist() == [1, 0, 1, 0, 1]
+    env._reset_envs(torch.tensor([True, False, False, False, False]))
+    env.episode_length_buf[0] = 1000  # its whole next episode walked
+    env.sim.qpos[0, 0:2] = env.env_origins[0, :2] + 0.4 * torch.tensor([0.6, 0.8])
+    env._update_state()
+    env._log_and_update_curriculum(torch.tensor([True, False, False, False, False]), torch.zeros(5, dtype=torch.bool))
+    assert env.terrain_levels.tolist() == [0, 0, 1, 0, 1]
+    env.reset()
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # episode statistics, the curriculum restored
 # ---------------------------------------------------------------------------------------------------------------

@@ -323,6 +323,7 @@ class LeggedRobot(VecEnv):
         self.last_actions = torch.zeros_like(self.actions)
         self.last_dof_vel = torch.zeros(n, self.num_actions, device=dev)
         self._episode_length_buf = torch.zeros(n, dtype=torch.long, device=dev)
+        self._episode_start_step = torch.zeros(n, dtype=torch.long, device=dev)  # > 0 in a randomly started episode
         self.reset_buf = torch.ones(n, dtype=torch.bool, device=dev)
         self.time_out_buf = torch.zeros(n, dtype=torch.bool, device=dev)
         self.diverged_buf = torch.zeros(n, dtype=torch.bool, device=dev)
@@ -462,8 +463,10 @@ class LeggedRobot(VecEnv):
 
     @episode_length_buf.setter
     def episode_length_buf(self, value: torch.Tensor) -> None:
-        """An assignment (rsl-rl's random initial episode lengths) copies into the buffer the step reads."""
+        """An assignment (rsl-rl's random initial episode lengths) copies into the buffer the step reads; each robot's
+        current episode is then shorter by its start, which the terrain curriculum allows for."""
         self._episode_length_buf.copy_(value)
+        self._episode_start_step.copy_(value)
 
     def get_observations(self) -> TensorDict:
         return self.obs_buf.clone()  # a copy: the next step overwrites obs_buf in place
@@ -635,11 +638,14 @@ class LeggedRobot(VecEnv):
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
         """Up a level after walking more than half a tile; down after less than half the commanded distance
-        (legged_gym's game-inspired curriculum). A robot that solves the hardest level goes to a random level
+        (legged_gym's game-inspired curriculum; the distance commanded over the episode's own time). A robot that solves the hardest level goes to a random level
         (``solved_top_level = "random"``, legged_gym) or stays there (``"stay"``)."""
         distance = torch.norm(self.base_pos[:, :2] - self.env_origins[:, :2], dim=1)
         move_up = distance > 0.5 * self.terrain_length
-        commanded = torch.norm(self.commands[:, :2], dim=1) * self.max_episode_length_s
+        # the commanded distance over the time the episode had: legged_gym takes the whole episode, which demotes
+        # every robot whose first episode rsl-rl started at a random length (training's start, each --resume)
+        episode_s = self.max_episode_length_s * (1.0 - self._episode_start_step / self.max_episode_length)
+        commanded = torch.norm(self.commands[:, :2], dim=1) * episode_s
         move_down = (distance < 0.5 * commanded) & ~move_up
         level = self.terrain_levels + move_up.long() - move_down.long()
         top = self.max_terrain_level - 1
@@ -699,6 +705,7 @@ class LeggedRobot(VecEnv):
             buf[:] = torch.where(m, 0.0, buf)
         self.feet_air_time.reset(mask)
         self.episode_length_buf[:] = torch.where(mask, 0, self.episode_length_buf)
+        self._episode_start_step[:] = torch.where(mask, 0, self._episode_start_step)
         self.episode_sums.masked_fill_(m, 0.0)
 
     def _resample_commands(self, mask: torch.Tensor) -> None:
