@@ -210,6 +210,27 @@ def test_max_minutes_stops_after_a_whole_iteration_and_saves_it(tmp_path, monkey
     assert load_checkpoint(run / "model_0.pt")["iter"] == 0
 
 
+def test_max_minutes_counts_the_envs_build(tmp_path, monkeypatch, capsys):
+    """A time-limited job's clock runs from its start: on a fresh machine building the env (compiling the kernels)
+    takes minutes. Here the build takes 3 s and --max_minutes 0.04 allows 2.4 s: the deadline has passed when the
+    first iteration ends, so training stops after it (counted from the start of learning, it would run on)."""
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.scripts import train as train_script
+
+    make_env = task_registry.make_env
+
+    def slow_make_env(*args, **kwargs):
+        time.sleep(3.0)
+        return make_env(*args, **kwargs)
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    monkeypatch.setattr(task_registry, "make_env", slow_make_env)
+    train_script.main([*TINY[:6], "--max_iterations", "50", "--max_minutes", "0.04", *TINY[8:]])
+    assert "Time limit of 0.04 min reached: saved" in capsys.readouterr().out
+    run = next((tmp_path / "gente_biped_flat").iterdir())
+    assert [p.name for p in run.glob("model_*.pt")] == ["model_0.pt"]
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_training_after_the_iteration_it_arrives_in(tmp_path, monkeypatch, capsys, signum):
     """Ctrl-C (or SIGTERM) in the middle of iteration 1's policy update: the update and iteration 1 finish, then

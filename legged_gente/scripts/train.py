@@ -87,6 +87,7 @@ def _stop_after_the_iteration(logger):
 
 
 def train(args) -> Path | None:
+    started = time.monotonic()  # --max_minutes counts the env's build too, as a job's time limit does
     check_log_root(None, default_log_root())
     env, env_cfg = task_registry.make_env(args.task, args)
     runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
@@ -104,7 +105,7 @@ def train(args) -> Path | None:
     stop_signals = (signal.SIGINT, signal.SIGTERM) if main_thread else ()
     previous = {s: signal.signal(s, _stop_after_the_iteration(runner.logger)) for s in stop_signals}
     if args.max_minutes is not None:
-        runner.logger.deadline = time.monotonic() + 60.0 * args.max_minutes
+        runner.logger.deadline = started + 60.0 * args.max_minutes
     signalled = None
     try:
         runner.learn(train_cfg.runner.max_iterations, init_at_random_ep_len=True)
@@ -136,8 +137,9 @@ def train(args) -> Path | None:
 def build_train_parser():
     parser = build_parser("Train a legged robot with PPO (rsl-rl) on MuJoCo-Warp.", prog="gente-train")
     parser.add_argument(*flag("--max_minutes"), type=float,
-                        help="stop after the iteration that passes this much wall-clock time, saving a checkpoint "
-                             "to continue with --resume (for time-limited jobs; no signal needed)")
+                        help="stop after the iteration that passes this much wall-clock time since the env's "
+                             "build began (kernel compilation included), saving a checkpoint to continue with "
+                             "--resume (for time-limited jobs; no signal needed)")
     parser.add_argument("--pretrained", action="store_true",
                         help="start from the policy shipped for --task (its actor; the critic, optimiser and "
                              "curriculum start afresh, and the critic trains alone for the first "
