@@ -637,9 +637,9 @@ class LeggedRobot(VecEnv):
         return f"terrain curriculum restored: mean level {levels.float().mean():.2f}"
 
     def _update_terrain_curriculum(self, done: torch.Tensor) -> None:
-        """Up a level after walking more than half a tile; down after less than half the commanded distance
-        (legged_gym's game-inspired curriculum; the distance commanded over the episode's own time). A robot that solves the hardest level goes to a random level
-        (``solved_top_level = "random"``, legged_gym) or stays there (``"stay"``)."""
+        """Up a level after walking more than half a tile; down after less than half the distance commanded over
+        the episode's own time (legged_gym's game-inspired curriculum). A robot that solves the hardest level goes to
+        a random level (``solved_top_level = "random"``, legged_gym) or stays there (``"stay"``)."""
         distance = torch.norm(self.base_pos[:, :2] - self.env_origins[:, :2], dim=1)
         move_up = distance > 0.5 * self.terrain_length
         # the commanded distance over the time the episode had: legged_gym takes the whole episode, which demotes
