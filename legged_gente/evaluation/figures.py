@@ -168,16 +168,17 @@ def success_over_training(task: str, run_dirs: list[str | Path], item_ids: list[
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy
     from legged_gente.evaluation.report import TRACKING_THRESHOLD, success
-    from legged_gente.utils.checkpoints import _iteration
+    from legged_gente.utils.checkpoints import _iteration, _models
 
     items = load_benchmark(benchmark, item_ids)
     found = {}
     for run_dir in run_dirs:
-        for checkpoint in Path(run_dir).glob("model_*.pt"):
-            if _iteration(checkpoint) in found:
-                raise ValueError(f"{checkpoint.name} is in both {found[_iteration(checkpoint)].parent} and {run_dir}: "
-                                 f"give the folders of one run and its resumes, each once.")
-            found[_iteration(checkpoint)] = checkpoint
+        for checkpoint in _models(Path(run_dir)):
+            iteration = _iteration(checkpoint)
+            if iteration in found:
+                raise ValueError(f"{checkpoint.name} is in both {found[iteration].parent} and {run_dir}: give the "
+                                 f"folders of one run and its resumes, each once.")
+            found[iteration] = checkpoint
     if not found:
         raise FileNotFoundError(f"no model_*.pt in {', '.join(map(str, run_dirs))}; pass a training run's folders.")
     checkpoints = [found[i] for i in sorted(found)]
