@@ -39,11 +39,10 @@ case "$phase" in
   eval)
     python3 -m legged_gente.scripts.evaluate --task "$task" --checkpoint "$(latest_run)" --benchmark gente100 \
       --robots_per_terrain "${ROBOTS:-16}" --out "$OUT_DIR/eval" --device cuda --no_progress 2>&1 | grep -v "^Module" | tail -12
-    # figure (d): success over training on $FIG_ITEMS, from the checkpoints of all runs (resumed runs included)
+    # figure (d): success over training on $FIG_ITEMS, from the run's folder and those of its --resume chunks
     if [ -n "${FIG_ITEMS:-}" ]; then
-      mkdir -p /tmp/all_checkpoints && cp "$GENTE_LOG_ROOT/$task"/20*/model_*.pt /tmp/all_checkpoints/
-      python3 -m legged_gente.evaluation.figures training --task "$task" --run /tmp/all_checkpoints --items $FIG_ITEMS \
-        --device cuda --out "$OUT_DIR/${task}_success_over_training.png" 2>&1 | grep -v "^Module" | tail -3
+      python3 -m legged_gente.evaluation.figures training --task "$task" --run "$GENTE_LOG_ROOT/$task"/20* \
+        --items $FIG_ITEMS --device cuda --out "$OUT_DIR/${task}_success_over_training.png" 2>&1 | grep -v "^Module" | tail -3
     fi ;;
   *) echo "unknown phase $phase: use train, report or eval" >&2; exit 2 ;;
 esac
