@@ -94,14 +94,32 @@ def test_evaluate_checkpoint_takes_a_shipped_policy_file(tmp_path):
     assert report["meta"]["policy_file"] == str(policies_root() / SHIPPED / "model.pt")
 
 
-def test_resuming_from_a_policy_only_checkpoint_is_a_one_line_error(tmp_path, capsys):
+def _policy_only_run(tmp_path):
+    """A run folder holding a shipped, actor-only model.pt as its model_7.pt."""
     run = tmp_path / SHIPPED / "shipped_run"
     run.mkdir(parents=True)
     (run / "model_7.pt").write_bytes((policies_root() / SHIPPED / "model.pt").read_bytes())
+    return run
+
+
+def test_play_takes_a_policy_only_checkpoint_from_a_run_folder(tmp_path, capsys):
+    """gente-play loads a run's policy alone, as gente-evaluate --checkpoint does: an actor-only file plays."""
+    run = _policy_only_run(tmp_path)
+    play_script.main(["--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--headless", "--steps", "1",
+                      "--log_root", str(tmp_path), "--set", "actor.hidden_dims=[32, 32]",
+                      "--set", "critic.hidden_dims=[32, 32]"])
+    assert f"Loaded model from {run / 'model_7.pt'}" in capsys.readouterr().out
+
+
+def test_resuming_training_from_a_policy_only_checkpoint_is_a_one_line_error(tmp_path, capsys, monkeypatch):
+    from legged_gente.scripts import train as train_script
+
+    _policy_only_run(tmp_path)
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
     with pytest.raises(SystemExit) as exit_info:
-        play_script.main(["--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--headless", "--steps", "1",
-                          "--log_root", str(tmp_path), "--set", "actor.hidden_dims=[32, 32]",
-                          "--set", "critic.hidden_dims=[32, 32]"])
+        train_script.main(["--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--headless", "--resume",
+                           "--max_iterations", "1", "--set", "actor.hidden_dims=[32, 32]",
+                           "--set", "critic.hidden_dims=[32, 32]"])
     assert exit_info.value.code == 2
     line = capsys.readouterr().err.strip().splitlines()[-1]
     assert "holds only the policy" in line and "model_7.pt" in line, line

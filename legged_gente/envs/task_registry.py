@@ -210,10 +210,11 @@ class TaskRegistry:
         return env, env_cfg
 
     def make_alg_runner(self, env, name: str, args=None, train_cfg: LeggedRobotCfgPPO | None = None,
-                        log_root: Path | str | None = "default"):
+                        log_root: Path | str | None = "default", policy_only: bool = False):
         """An rsl-rl OnPolicyRunner for ``env``; loads a checkpoint when resuming (latest run by default; an
         unreadable latest checkpoint falls back to the newest readable one). ``log_root``: where runs are
-        ("default": ``default_log_root()``; None: no run folder)."""
+        ("default": ``default_log_root()``; None: no run folder). ``policy_only``: load the checkpoint's policy
+        alone, for playing it (an actor-only ``model.pt`` plays too; training needs the critic and optimiser)."""
         from legged_gente.utils.checkpoints import find_checkpoint, pretrained_policy
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 
@@ -250,7 +251,8 @@ class TaskRegistry:
             log_dir = None  # under torchrun only rank 0 writes the run folder (rsl-rl logs from rank 0 only)
         if runner_cfg.resume:
             runner.loaded_checkpoint = load_newest_readable(runner, experiment_root, runner_cfg.load_run,
-                                                            runner_cfg.checkpoint)
+                                                            runner_cfg.checkpoint,
+                                                            {"actor": True} if policy_only else None)
             if env.terrain_curriculum:  # play's and flat tasks' envs have none: nothing to say
                 print(runner.curriculum_message)
             # a checkpoint stores the last *finished* iteration; continue with the next one
@@ -315,16 +317,17 @@ def network_sizes_from(checkpoint: Path, train_cfg: LeggedRobotCfgPPO) -> bool:
     return bool(recorded)
 
 
-def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1) -> Path:
+def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1, load_cfg: dict | None = None) -> Path:
     """Load the newest checkpoint that reads (a truncated or corrupt newer one is skipped, and said so);
-    a checkpoint of another task is an error, not skipped. The path loaded."""
+    a checkpoint of another task is an error, not skipped. ``load_cfg``: the parts to load, as rsl-rl's (None:
+    all). The path loaded."""
     from legged_gente.utils.checkpoints import CheckpointError, UnreadableCheckpoint, checkpoint_candidates
 
     candidates = checkpoint_candidates(experiment_root, load_run, checkpoint)
     skipped = []
     for path in candidates:
         try:
-            runner.load(str(path))
+            runner.load(str(path), load_cfg)
         except UnreadableCheckpoint as error:
             if len(candidates) == 1:
                 raise

@@ -91,7 +91,7 @@ def play(args) -> dict:
     else:
         train_cfg.runner.resume = True
         runner, train_cfg, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg,
-                                                             log_root=log_root)
+                                                             log_root=log_root, policy_only=True)
         checkpoint = runner.loaded_checkpoint
         export_dir = checkpoint.parent / "exported"  # per run: another run's play never overwrites it
     policy = runner.get_inference_policy(device=env.device)

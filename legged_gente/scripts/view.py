@@ -156,7 +156,8 @@ def _make_play(args):
     else:
         train_cfg.runner.resume = True
         log_root = args.log_root or default_log_root()
-        runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=log_root)
+        runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=log_root,
+                                                     policy_only=True)
         policy = runner.get_inference_policy(device=env.device)
     return env, policy, Recorder(env, args.task, robots)
 

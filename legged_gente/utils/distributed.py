@@ -204,8 +204,8 @@ class GenteOnPolicyRunner(OnPolicyRunner):
         if "critic_state_dict" not in loaded and wanted.get("critic"):
             raise CheckpointError(
                 f"checkpoint {path} holds only the policy (a shipped model.pt): play or evaluate it (gente-play "
-                f"--pretrained, gente-evaluate --checkpoint) or fine-tune it (gente-train --pretrained); resuming "
-                f"training needs a run's model_<N>.pt.")
+                f"--pretrained or --load_run, gente-evaluate --checkpoint) or fine-tune it (gente-train --pretrained); "
+                f"resuming training needs a run's model_<N>.pt.")
         missing = [key for part, key in (("optimizer", "optimizer_state_dict"), ("iteration", "iter"))
                    if wanted.get(part) and key not in loaded]
         if missing:
