@@ -57,11 +57,13 @@ with torch.inference_mode():
             load += force[..., 2].clamp(min=0).sum(1) / weight
 steps = round(3.0 / env.dt) - start
 tile = torch.as_tensor(evaluation.tile)
-lines = [f"{task}, the shipped policy, bodies other than the feet, {robots} robots per tile, 0.5 m/s ahead, {steps} steps from 0.5 s to 3 s"]
+lines = [f"{task}, the shipped policy, bodies other than the feet, {robots} robots per tile, 0.5 m/s ahead, "
+         f"{steps} steps from 0.5 s to 3 s"]
 for t, item in enumerate(items):
     on = tile == t
     lines.append(f"{item.id:9s} touching in {100 * touching[on].sum() / (steps * on.sum()):5.1f} % of robot-steps; "
                  f"their vertical load {100 * load[on].sum() / (steps * on.sum()):5.1f} % of the weight on average, "
-                 f"{100 * load[on].sum() / max(touching[on].sum(), 1):5.1f} % while touching; reset {int(fell[on].sum())}")
+                 f"{100 * load[on].sum() / max(touching[on].sum(), 1):5.1f} % while touching; "
+                 f"reset {int(fell[on].sum())}")
 print("\n".join(lines))
 (out / f"{task}_{robots}.txt").write_text("\n".join(lines) + "\n")
