@@ -469,12 +469,13 @@ def test_shipped_biped_policy_walks_in_soil_on_its_soles(preset):
 
 def test_shipped_quadruped_policy_rests_on_its_calves_in_mud():
     """docs/robots.md's measurement of the quadruped's known limit: walking at 0.5 m/s in mud (8 robots, 0.5-3 s), its
-    feet sink deeper than the calves' collision capsules clear them (4.2 cm), and a calf touches in about 17 % of
-    the robot-steps, carrying about a fifth of the weight on average; on flat ground, never. When a soil model acts
+    feet sink deeper than the calves' collision capsules clear them (4.2 cm), and a calf touches in about a quarter
+    of the robot-steps (26 %), the calves carrying about 30 % of the weight on average; on flat ground, never (the
+    doc's numbers: 16 robots per soil in the evaluation's env, docs/results/legs_on_soil_cpu). When a soil model acts
     on the legs, this test and the doc change together."""
     force, _, env = walk_on_soil("gente_quadruped", "mud", 8, [f"{leg}_calf" for leg in ("FL", "FR", "RL", "RR")])
     fz = force[..., 2].abs()  # (steps, robots, calves)
     assert env.episode_length_buf.min().item() > 100
-    assert 0.08 < (fz > 1.0).any(2).float().mean().item() < 0.3
-    assert 0.1 < (fz.sum(2) / (14.0 * G)).mean().item() < 0.3
-    assert "a calf touches in 17 % of the robot-steps in mud" in ROBOTS_DOC
+    assert 0.18 < (fz > 1.0).any(2).float().mean().item() < 0.35
+    assert 0.2 < (fz.sum(2) / (14.0 * G)).mean().item() < 0.4
+    assert "ground (any body but a foot counted) in 26 % of the robot-steps in mud" in ROBOTS_DOC
