@@ -14,7 +14,7 @@ from pathlib import Path
 import torch
 
 from legged_gente.evaluation.benchmark import Item
-from legged_gente.evaluation.evaluator import Evaluation, load_policy
+from legged_gente.evaluation.evaluator import Evaluation, load_policy, settle_steps
 from legged_gente.utils.torch_math import yaw_of
 
 task, robots, out = sys.argv[1], int(sys.argv[2]), Path(sys.argv[3])
@@ -35,7 +35,7 @@ policy = load_policy(evaluation, pretrained=True)
 feet = set(env.feet.tolist())
 legs = torch.tensor([i for i in range(1, env.mjm.nbody) if i not in feet])  # every body but the world and the feet
 weight = float(env.mjm.body_subtreemass[env.base]) * 9.81
-start = round(0.5 / env.dt)
+start = settle_steps(0.5, env.dt)  # the first 0.5 s left out, as the evaluation's settling
 touching = torch.zeros(env.num_envs)
 load = torch.zeros(env.num_envs)
 fell = torch.zeros(env.num_envs, dtype=torch.bool)
@@ -47,7 +47,7 @@ with torch.inference_mode():
                             heading], 1)
     still = torch.zeros(env.num_envs, dtype=torch.bool)
     obs = env.set_commands(commands, still)
-    for step in range(round(3.0 / env.dt)):
+    for step in range(evaluation.num_steps):  # the 3 s episode
         _, _, dones, _ = env.step(policy(obs))
         fell |= dones.bool()
         obs = env.set_commands(commands, still)
@@ -55,7 +55,7 @@ with torch.inference_mode():
             force = env.contact_forces[:, legs]
             touching += (torch.norm(force, dim=-1) > 1.0).any(1).float()
             load += force[..., 2].clamp(min=0).sum(1) / weight
-steps = round(3.0 / env.dt) - start
+steps = evaluation.num_steps - start
 tile = torch.as_tensor(evaluation.tile)
 lines = [f"{task}, the shipped policy, bodies other than the feet, {robots} robots per tile, 0.5 m/s ahead, "
          f"{steps} steps from 0.5 s to 3 s"]
