@@ -137,8 +137,13 @@ def test_a_seeded_play_is_repeatable():
 
 
 CTRL_C_AFTER_A_LIBRARY = """
-import ctypes, signal, sys
+import ctypes, faulthandler, signal, sys
 from legged_gente.scripts import view
+
+faulthandler.register(signal.SIGUSR1, all_threads=True)  # the test's failure message shows where each thread is
+# as started from a terminal: a test run that inherited SIGINT ignored (a background job of a script) passes that on,
+# and Python keeps an ignored SIGINT ignored, which the viewer then rightly restores
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 libc_signal = ctypes.CDLL(None).signal
 libc_signal.argtypes, libc_signal.restype = [ctypes.c_int, ctypes.c_void_p], ctypes.c_void_p
@@ -186,9 +191,12 @@ def test_ctrl_c_still_stops_the_viewer_after_the_play_thread_loaded_a_library(tm
     deadline = time.monotonic() + 60.0
     while ignores_sigint(proc.pid):
         if time.monotonic() > deadline:
+            proc.send_signal(signal.SIGUSR1)
+            time.sleep(1.0)
             proc.kill()
-            proc.communicate()
-            pytest.fail("gente-view still ignores SIGINT after 60 s: it did not take it back")
+            rest, _ = proc.communicate()
+            pytest.fail("gente-view still ignores SIGINT after 60 s: it did not take it back; its output and "
+                        "threads:\n" + "".join(seen) + rest)
         time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     try:
