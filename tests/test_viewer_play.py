@@ -59,7 +59,8 @@ def test_view_cli_plays_pretrained_and_records(tmp_path, capsys):
     (["--task", "gente_biped", "--pretrained"], "add --play"),
     (["--task", "gente_biped", "--play", "--pretrained", "--policy", "zero"], "leave out --policy zero"),
     (["--task", "gente_biped", "--play", "--pretrained", "--checkpoint", "3"], "--load_run and --checkpoint"),
-    (["--task", "gente_quadruped_flat", "--play", "--pretrained"], "no policy is shipped for task 'gente_quadruped_flat'"),
+    (["--task", "gente_quadruped_flat", "--play", "--pretrained"],
+     "no policy is shipped for task 'gente_quadruped_flat'"),
 ])
 def test_pretrained_errors(argv, message, capsys):
     with pytest.raises(SystemExit) as exit_info:
@@ -124,8 +125,9 @@ def test_a_plane_task_records_the_ground_the_viewer_shows():
 def test_a_seeded_play_is_repeatable():
     """--seed fixes what the env draws (commands, spawn yaws), so the same seed plays the same rollout."""
     def play(seed: int) -> Rollout:
-        args = parse_args(view_script.build_arg_parser(), ["--task", "gente_biped", "--device", "cpu", "--play",
-                                                           "--pretrained", "--robots", "2", "--seed", str(seed), *SMALL])
+        argv = ["--task", "gente_biped", "--device", "cpu", "--play", "--pretrained", "--robots", "2",
+                "--seed", str(seed), *SMALL]
+        args = parse_args(view_script.build_arg_parser(), argv)
         env, policy, recorder = view_script._make_play(args)
         view_script._run_play(env, policy, recorder, 5, None)
         return recorder.rollout()
