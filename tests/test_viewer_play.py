@@ -144,7 +144,7 @@ from legged_gente.scripts import view
 
 faulthandler.register(signal.SIGUSR1, all_threads=True)  # the test's failure message shows where each thread is
 # as started from a terminal: a test run that inherited SIGINT ignored (a background job of a script) passes that on,
-# and Python keeps an ignored SIGINT ignored, which the viewer then rightly restores
+# Python then installs no handler (getsignal gives SIG_IGN), and the viewer's take_back rightly keeps it ignored
 signal.signal(signal.SIGINT, signal.default_int_handler)
 
 libc_signal = ctypes.CDLL(None).signal
