@@ -472,3 +472,123 @@ def test_a_body_other_than_a_foot_gets_at_most_tan_phi_on_soil():
         assert abs(travel[0]) < 0.01 and abs(v[0]) < 0.01, (soil, travel, v)
         assert (v[1] > 0.3 and travel[1] > 0.3) if slides else (abs(travel[1]) < 0.01 and abs(v[1]) < 0.01), \
             (soil, travel, v)
+
+
+def leg_world(mass, leg_contype, leg="0 0 0.05 0 0 0.15", foot_z=0.0, heights=None):
+    """A 'calf' on a vertical slide carrying a capsule leg (r 2 cm, ``leg`` its fromto) and, on a welded child
+    body, a 2 cm foot ball centred ``foot_z`` below the calf's origin; ``mass`` kg in all."""
+    xml = f"""<mujoco><option timestep="0.005"/>
+      <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
+      <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+        <body name="calf" pos="0 0 0.3"><joint name="z" type="slide" axis="0 0 1"/>
+          <geom type="box" size="0.02 0.02 0.02" pos="0 0 0.2" mass="{mass - 0.05}" contype="0" conaffinity="0"/>
+          <geom name="leg" type="capsule" size="0.02" fromto="{leg}" mass="0" contype="{leg_contype}"
+                conaffinity="{leg_contype}"/>
+          <body name="foot" pos="0 0 {-foot_z}">
+            <geom name="sole" type="sphere" size="0.02" mass="0.05" contype="0" conaffinity="0"/></body>
+        </body></worldbody></mujoco>"""
+    mjm = mujoco.MjModel.from_xml_string(xml)
+    if heights is not None:
+        mjm.hfield_data[:] = heights.T.ravel()  # MuJoCo's rows are y
+    return mjm
+
+
+def settle_on(mjm, mat, z0, substeps, heights=None, **cfg):
+    """Drop the calf from ``z0`` and run; returns the calf's height, the foot's rut, the leg's contacts."""
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=1, nconmax=16, njmax=64)
+    h = np.zeros(SHAPE, np.float32) if heights is None else heights
+    f = TerrainForces(mjm, m, d, h, ORIGIN, RES, mat, type("C", (Cfg,), {"foot_geom_names": ["sole"], **cfg})(),
+                      seed=1)
+    f.install()
+    qpos = d.qpos.numpy()
+    qpos[0, 0] = z0 - 0.3
+    d.qpos.assign(qpos)
+    run(m, d, f, substeps)
+    n = int(d.nacon.numpy()[0])
+    leg = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, "leg")
+    mask = d.contact.geom.numpy()[:n, 1] == leg
+    return 0.3 + d.qpos.numpy()[0, 0], f.foot_sinkage.numpy()[0, 0], d.contact.dist.numpy()[:n][mask], \
+        d.contact.frame.numpy()[:n][mask, 0]
+
+
+def test_a_calf_as_wide_as_its_foot_follows_it_into_its_rut():
+    """The quadruped's case in mud: 3.5 kg on a 2 cm foot ball, p = 3.5 * 9.81 / (pi 0.02^2) = 27.3 kPa, sinks
+    z = (27.3e3 / (0.77e3 / 0.02 + 51.91e3))^2 = 9.1 cm (Bekker, b = r; Wong Table 2.3), deeper than the leg's
+    capsule clears the sole (its lowest point 5 cm up). Held rigid by the soil's surface, the leg stops the foot
+    at about 5 cm and carries the load; following its foot into the rut, it never touches and the foot sinks the
+    whole 9.1 cm."""
+    wp.set_device(DEV)
+    z_bekker = (3.5 * G / (math.pi * 0.02**2) / (0.77e3 / 0.02 + 51.91e3)) ** 2
+    slow = dict(sinkage_rate=0.1, sinkage_load_tau=0.2)
+    height, rut, leg_dist, _ = settle_on(leg_world(3.5, 0), soil_map("t_mud"), 0.021, 400,
+                                         rut_leg_geom_names=["leg"], **slow)
+    assert rut == pytest.approx(z_bekker, rel=0.06), (rut, z_bekker)
+    assert 0.02 - height == pytest.approx(rut, abs=0.003)  # the sole's centre 2 cm above its rut's floor
+    assert len(leg_dist) == 0
+    height, rut, leg_dist, _ = settle_on(leg_world(3.5, 1), soil_map("t_mud"), 0.021, 400, **slow)
+    assert 0.045 < 0.02 - height < 0.056 and rut < 0.056, (height, rut)  # held up by the leg, 5 cm down
+    assert len(leg_dist) > 0
+
+
+def test_a_rut_leg_lying_on_rigid_ground_touches_with_its_two_ends():
+    """A leg lying flat (along x, 0.14 m of axis, r 2 cm) on rigid ground rests on its end spheres, as MuJoCo's
+    capsule against a plane: its axis r above the ground, two contacts with vertical normals, none from the inner
+    spheres of its chain."""
+    wp.set_device(DEV)
+    flat = "-0.07 0 0 0.07 0 0"
+    height, _, dist, normals = settle_on(leg_world(2.0, 0, leg=flat, foot_z=-0.2), soil_map(), 0.03, 200,
+                                         rut_leg_geom_names=["leg"])
+    assert height == pytest.approx(0.02, abs=0.002)
+    assert len(dist) == 2
+    np.testing.assert_allclose(normals, [[0.0, 0.0, 1.0]] * 2, atol=1e-6)
+
+
+def test_a_rut_leg_across_a_ridge_rests_on_the_ridge():
+    """Across a ridge 5 cm high (one row of vertices, slopes of 0.5 down to the neighbouring rows) the leg's ends
+    hang over the slopes: an inner sphere of its chain carries it, as MuJoCo's own capsule collision does (on its
+    ends alone it would sink to 1.5 + 2 cm, through the ridge)."""
+    wp.set_device(DEV)
+    h = np.zeros(SHAPE, np.float32)
+    h[20, :] = 0.05  # x = ORIGIN + 20 * RES = 0
+    flat = "-0.07 0 0 0.07 0 0"
+    ours, _, dist, _ = settle_on(leg_world(2.0, 0, leg=flat, foot_z=-0.2, heights=h), soil_map(), 0.08, 200,
+                                 heights=h, rut_leg_geom_names=["leg"])
+    mujocos, *_ = settle_on(leg_world(2.0, 1, leg=flat, foot_z=-0.2, heights=h), soil_map(), 0.08, 200, heights=h)
+    # resting on the apex line (x = 0, z = 0.05): the axis at most r above it, and at least above the ridge
+    assert 0.05 < ours < 0.07 + 0.002 and ours == pytest.approx(mujocos, abs=0.003), (ours, mujocos)
+    assert 1 <= len(dist) <= 2
+
+
+@pytest.mark.parametrize("leg, problem", [
+    ("-0.07 0 0 0.07 0 0", None),
+    ("wide", "wider than the sole"),
+    ("other", "with 0 feet at or below it"),
+])
+def test_rut_legs_are_checked(leg, problem):
+    wp.set_device(DEV)
+    if leg == "wide":  # a 3 cm leg on a 2 cm foot ball
+        mjm = leg_world(2.0, 0)
+        mjm.geom_size[mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, "leg"), 0] = 0.03
+    elif leg == "other":  # the leg on the foot, the foot ball on the calf: no foot below the leg's body
+        mjm = mujoco.MjModel.from_xml_string(f"""<mujoco><option timestep="0.005"/>
+          <asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>
+          <worldbody><geom name="terrain" type="hfield" hfield="hf"/>
+            <body name="calf" pos="0 0 0.3"><joint type="slide" axis="0 0 1"/>
+              <geom name="sole" type="sphere" size="0.02" mass="1" contype="0" conaffinity="0"/>
+              <body name="other" pos="0.2 0 0"><geom name="leg" type="capsule" size="0.02" fromto="0 0 0 0 0 0.1"
+                mass="1" contype="0" conaffinity="0"/></body></body></worldbody></mujoco>""")
+    else:
+        mjm = leg_world(2.0, 0, leg=leg)
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=1, nconmax=16, njmax=64)
+    cfg = type("C", (Cfg,), {"foot_geom_names": ["sole"], "rut_leg_geom_names": ["leg"]})()
+    args = (mjm, m, d, np.zeros(SHAPE, np.float32), ORIGIN, RES, soil_map(), cfg)
+    if problem is None:
+        TerrainForces(*args, seed=1)
+        cfg.sole_contact = False
+        with pytest.raises(ValueError, match="forces.sole_contact is off"):
+            TerrainForces(*args, seed=1)
+    else:
+        with pytest.raises(ValueError, match=problem):
+            TerrainForces(*args, seed=1)

@@ -16,6 +16,11 @@ vertically, a quadruped foot inside a 1.5 m pillar was launched at ~10 m/s.
 A foot's soil rut lowers the surface under it: the sphere is tested ``rut`` higher than it is (the surface
 vertically lowered by the rut), so the foot sits in its full Bekker rut with the contact's usual stiffness.
 
+A leg segment no wider than its foot (``ForcesConfig.rut_leg_geom_names``: the quadruped's calves, as wide as their
+foot balls) follows the foot down the hole the foot pressed: its capsule, a chain of spheres along its axis
+(``leg_points``), touches the terrain through the same contacts, over soil against the surface lowered by its
+foot's rut. It does not load the rut, and on soil its friction is ``tan phi`` (``kernels.ground_friction``).
+
 ``numpy`` references of every function sit beside their Warp twins (``*_fn``) and are tested against them.
 """
 
@@ -285,6 +290,7 @@ def sole_contact_kernel(
     pt_geom: wp.array[int],
     pt_end: wp.array[float],
     pt_foot: wp.array[int],
+    pt_leg_step: wp.array[float],
     terrain_geom: int,
     # model
     geom_condim: wp.array[int],
@@ -335,7 +341,11 @@ def sole_contact_kernel(
     nacon: wp.array[int],
 ):
     """One contact per sole point and world against the heightfield lowered by its foot's rut; the contact's
-    material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``).
+    material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``). A leg
+    point (``pt_leg_step`` > 0: its spacing along the capsule, in ``pt_end``'s units) sees its foot's rut only over
+    a soil cell and leaves the rut's state alone. Of a leg's chain the two end spheres touch, as MuJoCo's capsule
+    against a plane, and an inner sphere only where it lies deeper than its neighbours (a step's edge between the
+    ends), so a calf lying on flat ground makes two contacts, not one per sphere.
 
     The rut deepens towards Bekker's z(F_N / sole area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at
     most sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``). The
@@ -347,26 +357,40 @@ def sole_contact_kernel(
     size = geom_size[w % geom_size.shape[0], g]
     radius = size[0]
     xm = geom_xmat[w, g]
-    centre = geom_xpos[w, g] + (pt_end[k] * size[1]) * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    axis = size[1] * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    centre = geom_xpos[w, g] + pt_end[k] * axis
     s_foot = feet.soil[w, f]
+    step = pt_leg_step[k]
+    leg = int(0)
+    if step > 0.0:
+        leg = 1
     rut = float(0.0)
     if s_foot >= 0:
         rut = feet.sinkage[w, f]
+        if leg != 0:
+            under = cell_of(centre, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
+            if soilmap.soil[under[0], under[1]] < 0:
+                rut = 0.0  # the foot's hole is in the soil, not in the rock beside it
     geoms = wp.vec2i(terrain_geom, g)
     mid = w % geom_margin.shape[0]
     gid = w % geom_gap.shape[0]
     margin = geom_margin[mid, terrain_geom] + geom_margin[mid, g]
     gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
     # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
-    res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, radius + wp.max(margin + gap, 0.0) + rut,
-                            max_depth)
+    reach = radius + wp.max(margin + gap, 0.0) + rut
+    res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, reach, max_depth)
     dist = res[3]
-    if dist - rut < margin and rut > 0.0:
+    if dist - rut < margin and rut > 0.0 and leg == 0:
         foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
     if dist >= margin + gap:
         return
+    if leg != 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:  # an inner sphere of a leg: only at a local deepest point
+        before = sphere_contact_fn(heights, hf_origin, hf_res, centre - step * axis, radius, rut, reach, max_depth)
+        after = sphere_contact_fn(heights, hf_origin, hf_res, centre + step * axis, radius, rut, reach, max_depth)
+        if not (dist < before[3] and dist <= after[3]):
+            return
     normal = wp.vec3(res[0], res[1], res[2])
-    if s_foot >= 0:
+    if s_foot >= 0 and leg == 0:
         z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
                            feet.support[w, f])
         # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
@@ -377,7 +401,10 @@ def sole_contact_kernel(
         geom_condim, geom_priority, geom_solmix, geom_solref, geom_solimp, geom_friction, geom_adhesion,
         pair_dim, pair_solref, pair_solreffriction, pair_solimp, pair_adhesion, pair_friction, geoms, -1, w)
     cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
-    friction = ground_friction(friction, cell, f, w, soilmap, feet)
+    traction_of = f  # a foot's soil traction; a leg's tan(phi)
+    if leg != 0:
+        traction_of = -1
+    friction = ground_friction(friction, cell, traction_of, w, soilmap, feet)
     if friction[0] < feet.min_friction:
         condim = 1  # frictionless (ForcesConfig.min_friction says why)
     write_contact(naconmax, 0, wp.max(dist, -max_depth), pos, make_frame(normal), margin, gap, condim, friction, solref,
@@ -404,6 +431,23 @@ def sole_points(mjm: mujoco.MjModel, foot_groups) -> tuple[np.ndarray, np.ndarra
                 ends += [-1.0, 1.0]
                 feet += [f, f]
     return np.asarray(geoms, np.int32), np.asarray(ends, np.float32), np.asarray(feet, np.int32)
+
+
+def leg_points(mjm: mujoco.MjModel, leg_geoms, leg_feet) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The contact points of the leg capsules that follow their feet into the ruts: (geom, end, foot, step) per
+    point, spheres of the capsule's radius along its axis (ends -1 ... +1), ``step`` apart in the ends' units and at
+    most one radius apart in metres, so the chain's surface stays within r (1 - cos 30 deg) = 0.13 r of the capsule's
+    between two points and matches it at each."""
+    geoms, ends, feet, steps = [], [], [], []
+    for g, f in zip(leg_geoms, leg_feet):
+        radius, half = float(mjm.geom_size[g, 0]), float(mjm.geom_size[g, 1])
+        count = max(int(np.ceil(2.0 * half / radius - 1e-6)) + 1, 2)
+        geoms += [g] * count
+        ends += list(np.linspace(-1.0, 1.0, count))
+        feet += [f] * count
+        steps += [2.0 / (count - 1)] * count
+    return (np.asarray(geoms, np.int32), np.asarray(ends, np.float32), np.asarray(feet, np.int32),
+            np.asarray(steps, np.float32))
 
 
 def exclude_sole_collisions(spec: mujoco.MjSpec, names) -> None:

@@ -422,17 +422,28 @@ class TerrainForces:
         return geoms
 
     def _setup_sole_contacts(self, mjm, groups):
-        """Sphere / capsule sole geoms get analytic terrain contacts (``contact.py``) when ``sole_contact`` is on;
-        MuJoCo must then not collide them with the terrain (the geoms on the world body that collide: a heightfield's
-        pieces, which share their collision settings; the contacts made here name the first)."""
+        """Sphere / capsule sole geoms get analytic terrain contacts (``contact.py``) when ``sole_contact`` is on, and
+        so do the legs of ``rut_leg_geom_names``; MuJoCo must then not collide them with the terrain (the geoms on
+        the world body that collide: a heightfield's pieces, which share their collision settings; the contacts made
+        here name the first)."""
         self.npt = 0
+        legs = list(self.cfg.rut_leg_geom_names)
+        if legs and not (self.cfg.sole_contact and groups):
+            raise ValueError(f"forces.rut_leg_geom_names {legs} follow their feet's analytic sole contacts, but "
+                             f"forces.sole_contact is off or there are no foot_geom_names; turn it on or list no legs.")
         if not (self.cfg.sole_contact and groups):
             return
         geoms, ends, feet = C.sole_points(mjm, groups)
         ground = [g for g in range(mjm.ngeom) if mjm.geom_bodyid[g] == 0 and (mjm.geom_contype[g] or
                                                                             mjm.geom_conaffinity[g])]
         if len(geoms) == 0:
+            if legs:
+                raise ValueError(f"forces.rut_leg_geom_names {legs}: the feet have no sphere or capsule soles, whose "
+                                 f"analytic contacts a leg follows; list no legs for box soles.")
             return
+        leg_geoms, leg_ends, leg_feet, leg_steps = C.leg_points(mjm, *self._rut_legs(mjm, legs, groups))
+        geoms, ends, feet, steps = (np.concatenate(p) for p in (
+            (geoms, leg_geoms), (ends, leg_ends), (feet, leg_feet), (np.zeros(len(geoms), np.float32), leg_steps)))
         if not ground:
             raise ValueError("forces.sole_contact needs a colliding terrain geom on the world body, found none; set "
                              "forces.sole_contact=False for such scenes.")
@@ -441,14 +452,43 @@ class TerrainForces:
                         for t in ground if (mjm.geom_contype[g] & mjm.geom_conaffinity[t]) or
                         (mjm.geom_conaffinity[g] & mjm.geom_contype[t])})
         if clash:
-            raise ValueError(f"forces.sole_contact: sole geoms {clash} still collide with the terrain in MuJoCo; "
-                             f"build the model with external_forces.contact.exclude_sole_collisions(spec, names) "
+            raise ValueError(f"forces.sole_contact: sole or rut leg geoms {clash} still collide with the terrain in "
+                             f"MuJoCo; build the model with external_forces.contact.exclude_sole_collisions(spec, names) "
                              f"(contype = conaffinity = 0) or set forces.sole_contact=False.")
         self.npt = len(geoms)
         dev = self.device
         self.pt_geom = wp.array(geoms, dtype=int, device=dev)
         self.pt_end = wp.array(ends, dtype=float, device=dev)
         self.pt_foot = wp.array(feet, dtype=int, device=dev)
+        self.pt_leg_step = wp.array(steps, dtype=float, device=dev)
+
+    def _rut_legs(self, mjm, names, groups) -> tuple[np.ndarray, list[int]]:
+        """The geoms of ``rut_leg_geom_names`` and the foot each follows: the one foot whose body is the geom's body
+        or hangs below it. A leg follows its foot down the foot's hole only if it is a capsule no wider than the
+        sole (a disc's diameter, a rectangle's smaller side)."""
+        geoms = _geom_ids(mjm, names, "rut_leg_geom_names")
+        capsule = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
+        sole = min(self.sole_length, self.sole_width)  # a disc's: its diameter, both
+        foot_bodies = [int(mjm.geom_bodyid[group[0]]) for group in groups]
+        feet = []
+        for name, g in zip(names, geoms):
+            if int(mjm.geom_type[g]) != capsule:
+                raise ValueError(f"forces.rut_leg_geom_names: {name!r} is not a capsule; list the legs' capsules.")
+            if 2.0 * float(mjm.geom_size[g, 0]) > sole + 1e-9:
+                raise ValueError(f"forces.rut_leg_geom_names: {name!r} is {2 * mjm.geom_size[g, 0]:.4g} m wide, wider "
+                                 f"than the sole ({sole:.4g} m), so it cannot follow its foot into the foot's rut; "
+                                 f"leave it out.")
+            below = []
+            for f, b in enumerate(foot_bodies):
+                while b > 0 and b != int(mjm.geom_bodyid[g]):
+                    b = int(mjm.body_parentid[b])
+                if b > 0:
+                    below.append(f)
+            if len(below) != 1:
+                raise ValueError(f"forces.rut_leg_geom_names: {name!r} is on a body with {len(below)} feet at or below "
+                                 f"it; list a geom of one leg, above exactly one foot.")
+            feet.append(below[0])
+        return geoms, feet
 
     def _sole(self, mjm, groups):
         """Sole length (along the foot body's x axis), width (along its y axis) and whether it is a disc: from the
@@ -530,7 +570,7 @@ class TerrainForces:
         if self.npt:
             launches.append(wp.launch(
                 C.sole_contact_kernel, dim=(self.nworld, self.npt), device=dev, block_dim=LIMB_BLOCK_DIM,
-                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.terrain_geom, m.geom_condim, m.geom_priority,
+                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.pt_leg_step, self.terrain_geom, m.geom_condim, m.geom_priority,
                         m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
                         m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
                         m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,

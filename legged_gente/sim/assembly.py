@@ -109,9 +109,9 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
         geom.friction = [cfg.terrain.static_friction, *geom.friction[1:]]
     if owns_sole_contacts(cfg, terrain):
-        # the terrain force fields collide sphere / capsule soles with the heightfield analytically
-        # (external_forces/contact.py); MuJoCo must not collide them too
-        for name in cfg.forces.foot_geom_names:
+        # the terrain force fields collide sphere / capsule soles, and the legs that follow them into their ruts,
+        # with the heightfield analytically (external_forces/contact.py); MuJoCo must not collide them too
+        for name in [*cfg.forces.foot_geom_names, *cfg.forces.rut_leg_geom_names]:
             geom = spec.geom(name)
             if geom is not None and geom.type in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CAPSULE):
                 geom.contype, geom.conaffinity = 0, 0

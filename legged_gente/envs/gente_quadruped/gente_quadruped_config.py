@@ -64,6 +64,8 @@ class GenteQuadrupedCfg(LeggedRobotCfg):
         # TerrainForces derives from the geom (sole_length/width None): discs of radius 0.02 m
         leg_geom_names = [f"{leg}_{part}_geom" for leg in ("FL", "FR", "RL", "RR") for part in ("thigh", "calf")]
         foot_geom_names = [f"{leg}_foot_geom" for leg in ("FL", "FR", "RL", "RR")]
+        # the calves' collision capsules are as wide as the foot balls: in soil they follow their foot into its rut
+        rut_leg_geom_names = [f"{leg}_calf_collision" for leg in ("FL", "FR", "RL", "RR")]
 
     class rewards(LeggedRobotCfg.rewards):
         base_height_target = 0.3  # m, also the reference height of the height scan
