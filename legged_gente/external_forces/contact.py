@@ -378,17 +378,33 @@ def sole_contact_kernel(
     gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
     # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
     reach = radius + wp.max(margin + gap, 0.0) + rut
-    res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, reach, max_depth)
-    dist = res[3]
-    if dist - rut < margin and rut > 0.0 and leg == 0:
-        foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
-    if dist >= margin + gap:
+    # the sphere, then for an inner sphere of a leg its two neighbours: it touches only at a local deepest point
+    # (one call site of sphere_contact_fn: inlined once, the kernel keeps the soles' register count)
+    tests = int(1)
+    if leg != 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:
+        tests = 3
+    res = wp.vec4(0.0)
+    touches = int(1)
+    for j in range(tests):
+        shift = float(0.0)
+        if j == 1:
+            shift = -step
+        elif j == 2:
+            shift = step
+        r = sphere_contact_fn(heights, hf_origin, hf_res, centre + shift * axis, radius, rut, reach, max_depth)
+        if j == 0:
+            res = r
+            if r[3] - rut < margin and rut > 0.0 and leg == 0:
+                foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
+            if r[3] >= margin + gap:
+                touches = 0
+        elif (j == 1 and not res[3] < r[3]) or (j == 2 and not res[3] <= r[3]):
+            touches = 0
+        if touches == 0:
+            break
+    if touches == 0:
         return
-    if leg != 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:  # an inner sphere of a leg: only at a local deepest point
-        before = sphere_contact_fn(heights, hf_origin, hf_res, centre - step * axis, radius, rut, reach, max_depth)
-        after = sphere_contact_fn(heights, hf_origin, hf_res, centre + step * axis, radius, rut, reach, max_depth)
-        if not (dist < before[3] and dist <= after[3]):
-            return
+    dist = res[3]
     normal = wp.vec3(res[0], res[1], res[2])
     if s_foot >= 0 and leg == 0:
         z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
