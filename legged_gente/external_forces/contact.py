@@ -284,150 +284,169 @@ def sphere_contact_fn(heights: wp.array2d[float], origin: wp.vec2, res: float, c
     return wp.vec4(normal[0], normal[1], normal[2], best - radius)
 
 
-@wp.kernel
-def sole_contact_kernel(
-    # sole points (host constants): geom, capsule end (-1, 0 sphere, +1), foot
-    pt_geom: wp.array[int],
-    pt_end: wp.array[float],
-    pt_foot: wp.array[int],
-    pt_leg_step: wp.array[float],
-    terrain_geom: int,
-    # model
-    geom_condim: wp.array[int],
-    geom_priority: wp.array[int],
-    geom_solmix: wp.array2d[float],
-    geom_solref: wp.array2d[wp.vec2],
-    geom_solimp: wp.array2d[vec5],
-    geom_friction: wp.array2d[wp.vec3],
-    geom_adhesion: wp.array2d[float],
-    geom_margin: wp.array2d[float],
-    geom_gap: wp.array2d[float],
-    geom_size: wp.array2d[wp.vec3],
-    pair_dim: wp.array[int],
-    pair_solref: wp.array2d[wp.vec2],
-    pair_solreffriction: wp.array2d[wp.vec2],
-    pair_solimp: wp.array2d[vec5],
-    pair_adhesion: wp.array2d[float],
-    pair_friction: wp.array2d[vec5],
-    # state
-    geom_xpos: wp.array2d[wp.vec3],
-    geom_xmat: wp.array2d[wp.mat33],
-    heights: wp.array2d[float],
-    hf_origin: wp.vec2,
-    hf_res: float,
-    soilmap: SoilMap,
-    feet: FootSoil,
-    max_depth: float,
-    naconmax: int,
-    # out
-    foot_touch: wp.array2d[int],
-    foot_cand: wp.array2d[float],
-    foot_inrut: wp.array2d[int],
-    contact_dist: wp.array[float],
-    contact_pos: wp.array[wp.vec3],
-    contact_frame: wp.array[wp.mat33],
-    contact_includemargin: wp.array[float],
-    contact_friction: wp.array[vec5],
-    contact_solref: wp.array[wp.vec2],
-    contact_solreffriction: wp.array[wp.vec2],
-    contact_solimp: wp.array[vec5],
-    contact_dim: wp.array[int],
-    contact_geom: wp.array[wp.vec2i],
-    contact_efc_address: wp.array2d[int],
-    contact_worldid: wp.array[int],
-    contact_type: wp.array[int],
-    contact_geomcollisionid: wp.array[int],
-    contact_adhesion: wp.array[float],
-    nacon: wp.array[int],
-):
-    """One contact per sole point and world against the heightfield lowered by its foot's rut; the contact's
-    material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``). A leg
-    point (``pt_leg_step`` > 0: its spacing along the capsule, in ``pt_end``'s units) sees its foot's rut only over
-    a soil cell and leaves the rut's state alone. Of a leg's chain the two end spheres touch, as MuJoCo's capsule
-    against a plane, and an inner sphere only where it lies deeper than its neighbours (a step's edge between the
-    ends), so a calf lying on flat ground makes two contacts, not one per sphere.
+def _sole_contact_kernel(with_legs: bool):
+    """The sole-contact kernel, compiled with the rut legs' branch (``with_legs``) or without it, so a robot
+    without rut legs runs the soles' code alone."""
 
-    The rut deepens towards Bekker's z(F_N / sole area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at
-    most sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``). The
-    solver sees at most ``max_depth`` of penetration (``ForcesConfig.sole_contact_max_depth`` says why).
-    """
-    w, k = wp.tid()
-    g = pt_geom[k]
-    f = pt_foot[k]
-    size = geom_size[w % geom_size.shape[0], g]
-    radius = size[0]
-    xm = geom_xmat[w, g]
-    axis = size[1] * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
-    centre = geom_xpos[w, g] + pt_end[k] * axis
-    s_foot = feet.soil[w, f]
-    step = pt_leg_step[k]
-    leg = int(0)
-    if step > 0.0:
-        leg = 1
-    rut = float(0.0)
-    if s_foot >= 0:
-        rut = feet.sinkage[w, f]
-        if leg != 0:
-            under = cell_of(centre, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
-            if soilmap.soil[under[0], under[1]] < 0:
-                rut = 0.0  # the foot's hole is in the soil, not in the rock beside it
-    geoms = wp.vec2i(terrain_geom, g)
-    mid = w % geom_margin.shape[0]
-    gid = w % geom_gap.shape[0]
-    margin = geom_margin[mid, terrain_geom] + geom_margin[mid, g]
-    gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
-    # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
-    reach = radius + wp.max(margin + gap, 0.0) + rut
-    # the sphere, then for an inner sphere of a leg its two neighbours: it touches only at a local deepest point
-    # (one call site of sphere_contact_fn: inlined once, the kernel keeps the soles' register count)
-    tests = int(1)
-    if leg != 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:
-        tests = 3
-    res = wp.vec4(0.0)
-    touches = int(1)
-    for j in range(tests):
-        shift = float(0.0)
-        if j == 1:
-            shift = -step
-        elif j == 2:
-            shift = step
-        r = sphere_contact_fn(heights, hf_origin, hf_res, centre + shift * axis, radius, rut, reach, max_depth)
-        if j == 0:
-            res = r
-            if r[3] - rut < margin and rut > 0.0 and leg == 0:
+    @wp.kernel(module="unique")
+    def kernel(
+        # sole points (host constants): geom, capsule end (-1, 0 sphere, +1), foot
+        pt_geom: wp.array[int],
+        pt_end: wp.array[float],
+        pt_foot: wp.array[int],
+        pt_leg_step: wp.array[float],
+        terrain_geom: int,
+        # model
+        geom_condim: wp.array[int],
+        geom_priority: wp.array[int],
+        geom_solmix: wp.array2d[float],
+        geom_solref: wp.array2d[wp.vec2],
+        geom_solimp: wp.array2d[vec5],
+        geom_friction: wp.array2d[wp.vec3],
+        geom_adhesion: wp.array2d[float],
+        geom_margin: wp.array2d[float],
+        geom_gap: wp.array2d[float],
+        geom_size: wp.array2d[wp.vec3],
+        pair_dim: wp.array[int],
+        pair_solref: wp.array2d[wp.vec2],
+        pair_solreffriction: wp.array2d[wp.vec2],
+        pair_solimp: wp.array2d[vec5],
+        pair_adhesion: wp.array2d[float],
+        pair_friction: wp.array2d[vec5],
+        # state
+        geom_xpos: wp.array2d[wp.vec3],
+        geom_xmat: wp.array2d[wp.mat33],
+        heights: wp.array2d[float],
+        hf_origin: wp.vec2,
+        hf_res: float,
+        soilmap: SoilMap,
+        feet: FootSoil,
+        max_depth: float,
+        naconmax: int,
+        # out
+        foot_touch: wp.array2d[int],
+        foot_cand: wp.array2d[float],
+        foot_inrut: wp.array2d[int],
+        contact_dist: wp.array[float],
+        contact_pos: wp.array[wp.vec3],
+        contact_frame: wp.array[wp.mat33],
+        contact_includemargin: wp.array[float],
+        contact_friction: wp.array[vec5],
+        contact_solref: wp.array[wp.vec2],
+        contact_solreffriction: wp.array[wp.vec2],
+        contact_solimp: wp.array[vec5],
+        contact_dim: wp.array[int],
+        contact_geom: wp.array[wp.vec2i],
+        contact_efc_address: wp.array2d[int],
+        contact_worldid: wp.array[int],
+        contact_type: wp.array[int],
+        contact_geomcollisionid: wp.array[int],
+        contact_adhesion: wp.array[float],
+        nacon: wp.array[int],
+    ):
+        """One contact per sole point and world against the heightfield lowered by its foot's rut; the contact's
+        material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``). A leg
+        point (``pt_leg_step`` > 0: its spacing along the capsule, in ``pt_end``'s units) sees its foot's rut only over
+        a soil cell and leaves the rut's state alone. Of a leg's chain the two end spheres touch, as MuJoCo's capsule
+        against a plane, and an inner sphere only where it lies deeper than its neighbours (a step's edge between the
+        ends), so a calf lying on flat ground makes two contacts, not one per sphere.
+
+        The rut deepens towards Bekker's z(F_N / sole area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at
+        most sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``). The
+        solver sees at most ``max_depth`` of penetration (``ForcesConfig.sole_contact_max_depth`` says why).
+        """
+        w, k = wp.tid()
+        g = pt_geom[k]
+        f = pt_foot[k]
+        size = geom_size[w % geom_size.shape[0], g]
+        radius = size[0]
+        xm = geom_xmat[w, g]
+        axis = size[1] * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+        centre = geom_xpos[w, g] + pt_end[k] * axis
+        s_foot = feet.soil[w, f]
+        leg = int(0)
+        if wp.static(with_legs):
+            if pt_leg_step[k] > 0.0:
+                leg = 1
+        rut = float(0.0)
+        if s_foot >= 0:
+            rut = feet.sinkage[w, f]
+            if wp.static(with_legs) and leg != 0:
+                under = cell_of(centre, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0],
+                                soilmap.soil.shape[1])
+                if soilmap.soil[under[0], under[1]] < 0:
+                    rut = 0.0  # the foot's hole is in the soil, not in the rock beside it
+        geoms = wp.vec2i(terrain_geom, g)
+        mid = w % geom_margin.shape[0]
+        gid = w % geom_gap.shape[0]
+        margin = geom_margin[mid, terrain_geom] + geom_margin[mid, g]
+        gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
+        # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
+        reach = radius + wp.max(margin + gap, 0.0) + rut
+        if wp.static(not with_legs):
+            res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, reach, max_depth)
+            if res[3] - rut < margin and rut > 0.0:
                 foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
-            if r[3] >= margin + gap:
-                touches = 0
-        elif (j == 1 and not res[3] < r[3]) or (j == 2 and not res[3] <= r[3]):
-            touches = 0
-        if touches == 0:
-            break
-    if touches == 0:
-        return
-    dist = res[3]
-    normal = wp.vec3(res[0], res[1], res[2])
-    if s_foot >= 0 and leg == 0:
-        z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
-                           feet.support[w, f])
-        # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
-        wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + feet.sink_step))
-        foot_touch[w, f] = 1
-    pos = centre - (radius + 0.5 * dist) * normal
-    condim, friction, solref, solreffriction, solimp, adhesion = contact_material_params(
-        geom_condim, geom_priority, geom_solmix, geom_solref, geom_solimp, geom_friction, geom_adhesion,
-        pair_dim, pair_solref, pair_solreffriction, pair_solimp, pair_adhesion, pair_friction, geoms, -1, w)
-    cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
-    traction_of = f  # a foot's soil traction; a leg's tan(phi)
-    if leg != 0:
-        traction_of = -1
-    friction = ground_friction(friction, cell, traction_of, w, soilmap, feet)
-    if friction[0] < feet.min_friction:
-        condim = 1  # frictionless (ForcesConfig.min_friction says why)
-    write_contact(naconmax, 0, wp.max(dist, -max_depth), pos, make_frame(normal), margin, gap, condim, friction, solref,
-                  solreffriction, solimp, adhesion, geoms, wp.vec2i(-1, -1), w, contact_dist, contact_pos,
-                  contact_frame, contact_includemargin, contact_friction, contact_solref, contact_solreffriction,
-                  contact_solimp, contact_dim, contact_geom, contact_efc_address, contact_worldid, contact_type,
-                  contact_geomcollisionid, contact_adhesion, nacon)
+            if res[3] >= margin + gap:
+                return
+        else:
+            # the sphere, then for an inner sphere of a leg its two neighbours: it touches only at a local deepest
+            # point (one call site of sphere_contact_fn: inlined once)
+            step = pt_leg_step[k]
+            tests = int(1)
+            if leg != 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:
+                tests = 3
+            res = wp.vec4(0.0)
+            touches = int(1)
+            for j in range(tests):
+                shift = float(0.0)
+                if j == 1:
+                    shift = -step
+                elif j == 2:
+                    shift = step
+                r = sphere_contact_fn(heights, hf_origin, hf_res, centre + shift * axis, radius, rut, reach, max_depth)
+                if j == 0:
+                    res = r
+                    if r[3] - rut < margin and rut > 0.0 and leg == 0:
+                        foot_inrut[w, f] = 1
+                    if r[3] >= margin + gap:
+                        touches = 0
+                elif (j == 1 and not res[3] < r[3]) or (j == 2 and not res[3] <= r[3]):
+                    touches = 0
+                if touches == 0:
+                    break
+            if touches == 0:
+                return
+        dist = res[3]
+        normal = wp.vec3(res[0], res[1], res[2])
+        if s_foot >= 0 and leg == 0:
+            z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
+                               feet.support[w, f])
+            # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
+            wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + feet.sink_step))
+            foot_touch[w, f] = 1
+        pos = centre - (radius + 0.5 * dist) * normal
+        condim, friction, solref, solreffriction, solimp, adhesion = contact_material_params(
+            geom_condim, geom_priority, geom_solmix, geom_solref, geom_solimp, geom_friction, geom_adhesion,
+            pair_dim, pair_solref, pair_solreffriction, pair_solimp, pair_adhesion, pair_friction, geoms, -1, w)
+        cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
+        traction_of = f  # a foot's soil traction; a leg's tan(phi)
+        if leg != 0:
+            traction_of = -1
+        friction = ground_friction(friction, cell, traction_of, w, soilmap, feet)
+        if friction[0] < feet.min_friction:
+            condim = 1  # frictionless (ForcesConfig.min_friction says why)
+        write_contact(naconmax, 0, wp.max(dist, -max_depth), pos, make_frame(normal), margin, gap, condim, friction,
+                      solref, solreffriction, solimp, adhesion, geoms, wp.vec2i(-1, -1), w, contact_dist, contact_pos,
+                      contact_frame, contact_includemargin, contact_friction, contact_solref, contact_solreffriction,
+                      contact_solimp, contact_dim, contact_geom, contact_efc_address, contact_worldid, contact_type,
+                      contact_geomcollisionid, contact_adhesion, nacon)
+
+    return kernel
+
+
+sole_contact_kernel = _sole_contact_kernel(with_legs=False)
+sole_and_leg_contact_kernel = _sole_contact_kernel(with_legs=True)
 
 
 # --------------------------------------------------------------------------------------------------------

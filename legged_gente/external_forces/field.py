@@ -426,7 +426,7 @@ class TerrainForces:
         so do the legs of ``rut_leg_geom_names``; MuJoCo must then not collide them with the terrain (the geoms on
         the world body that collide: a heightfield's pieces, which share their collision settings; the contacts made
         here name the first)."""
-        self.npt = 0
+        self.npt, self.has_rut_legs = 0, False
         legs = list(self.cfg.rut_leg_geom_names)
         if legs and not (self.cfg.sole_contact and groups):
             raise ValueError(f"forces.rut_leg_geom_names {legs} follow their feet's analytic sole contacts, but "
@@ -453,9 +453,10 @@ class TerrainForces:
                         (mjm.geom_conaffinity[g] & mjm.geom_contype[t])})
         if clash:
             raise ValueError(f"forces.sole_contact: sole or rut leg geoms {clash} still collide with the terrain in "
-                             f"MuJoCo; build the model with external_forces.contact.exclude_sole_collisions(spec, names) "
+                             f"MuJoCo; build the model with external_forces.contact.exclude_sole_collisions(spec, "
+                             f"names) "
                              f"(contype = conaffinity = 0) or set forces.sole_contact=False.")
-        self.npt = len(geoms)
+        self.npt, self.has_rut_legs = len(geoms), len(leg_geoms) > 0
         dev = self.device
         self.pt_geom = wp.array(geoms, dtype=int, device=dev)
         self.pt_end = wp.array(ends, dtype=float, device=dev)
@@ -534,7 +535,7 @@ class TerrainForces:
         """The contact filter's analytic sole contacts alone: the feet's collision with the terrain, which
         ``gente-benchmark`` times apart from the force kernels (its raw physics has them too)."""
         for launch in self._recorded_filter(m, d):
-            if launch.kernel is C.sole_contact_kernel:
+            if launch.kernel in (C.sole_contact_kernel, C.sole_and_leg_contact_kernel):
                 launch.launch()
 
     def _recorded_filter(self, m, d) -> list:
@@ -569,12 +570,13 @@ class TerrainForces:
         ))
         if self.npt:
             launches.append(wp.launch(
-                C.sole_contact_kernel, dim=(self.nworld, self.npt), device=dev, block_dim=LIMB_BLOCK_DIM,
-                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.pt_leg_step, self.terrain_geom, m.geom_condim, m.geom_priority,
-                        m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion, m.geom_margin,
-                        m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction, m.pair_solimp,
-                        m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights, self.hf_origin,
-                        self.hf_res, self.soilmap, feet, float(cfg.sole_contact_max_depth), d.naconmax,
+                C.sole_and_leg_contact_kernel if self.has_rut_legs else C.sole_contact_kernel,
+                dim=(self.nworld, self.npt), device=dev, block_dim=LIMB_BLOCK_DIM,
+                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.pt_leg_step, self.terrain_geom, m.geom_condim,
+                        m.geom_priority, m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion,
+                        m.geom_margin, m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction,
+                        m.pair_solimp, m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights,
+                        self.hf_origin, self.hf_res, self.soilmap, feet, float(cfg.sole_contact_max_depth), d.naconmax,
                         self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
