@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import warp as wp
 
+from legged_gente.external_forces import contact as C
 from legged_gente.external_forces.field import ForcesConfig, TerrainForces
 from legged_gente.terrain.soil import SOIL_PRESETS, register_custom_soil
 from legged_gente.terrain.materials import MaterialMap
@@ -585,7 +586,11 @@ def test_rut_legs_are_checked(leg, problem):
     cfg = type("C", (Cfg,), {"foot_geom_names": ["sole"], "rut_leg_geom_names": ["leg"]})()
     args = (mjm, m, d, np.zeros(SHAPE, np.float32), ORIGIN, RES, soil_map(), cfg)
     if problem is None:
-        TerrainForces(*args, seed=1)
+        # the soles' kernel compiled with the legs' branch only for a robot that has rut legs
+        for legs, kernel in ((["leg"], C.sole_and_leg_contact_kernel), ([], C.sole_contact_kernel)):
+            cfg.rut_leg_geom_names = legs
+            assert TerrainForces(*args, seed=1)._recorded_filter(m, d)[-1].kernel is kernel
+        cfg.rut_leg_geom_names = ["leg"]
         cfg.sole_contact = False
         with pytest.raises(ValueError, match="forces.sole_contact is off"):
             TerrainForces(*args, seed=1)
