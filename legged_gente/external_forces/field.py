@@ -454,8 +454,7 @@ class TerrainForces:
         if clash:
             raise ValueError(f"forces.sole_contact: sole or rut leg geoms {clash} still collide with the terrain in "
                              f"MuJoCo; build the model with external_forces.contact.exclude_sole_collisions(spec, "
-                             f"names) "
-                             f"(contype = conaffinity = 0) or set forces.sole_contact=False.")
+                             f"names) (contype = conaffinity = 0) or set forces.sole_contact=False.")
         self.npt, self.has_rut_legs = len(geoms), len(leg_geoms) > 0
         dev = self.device
         self.pt_geom = wp.array(geoms, dtype=int, device=dev)
