@@ -110,7 +110,7 @@ def test_readme_gives_the_two_commands_ci_runs():
     commands = [line for line in block if not line.startswith("#")]
     setup = "python3 -m venv .venv && . .venv/bin/activate && pip install torch==2.13.0 && "
     assert len(commands) == 2 and all(c.startswith(setup) for c in commands), block
-    assert commands[0].endswith("gente-train --task=gente_biped_flat --headless")
+    assert commands[0].endswith("gente-train --task=gente_biped --headless")
     assert commands[1].endswith('pip install -e ".[test]" && python -m pytest -q')
     assert block[block.index(commands[1]) - 1] == "# set up and run the tests (CPU)"
     assert "grep -A1 -x '# set up and run the tests (CPU)' README.md" in (REPO / ".ci" / "run").read_text()
