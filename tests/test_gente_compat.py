@@ -315,6 +315,19 @@ def test_a_live_model_corrects_values_outside_our_range_that_an_import_clamps():
         ("clamped", "step_height=30 gives stairs.step_height=30 m, outside our range [0.0, 0.3]; imported as 0.3.")]
 
 
+def test_a_live_gente_call_finer_than_the_cells_goes_back_to_the_model():
+    """At --resolution 0.5 a 0.3 m tread is under one cell: the live model is told so and corrects it, as with our
+    own tools, instead of the finished spec failing its grid check with no round left to fix it."""
+    fine = {"step_width": 0.3, "step_height": 0.1, "part": 1}
+    first = _completion([_gcall("stairs_terrain", fine, 0)])
+    second = _completion([_gcall("stairs_terrain", fine | {"step_width": 1.0}, 1)])
+    with FakeServer([ok(first), ok(second)]) as srv:
+        result = OpenAIBackend(srv.url, "m", toolset="gente", timeout=5.0, resolution=0.5).generate(text="x")
+    assert [(c.tool, c.params["step_width"]) for c in result.calls] == [("stairs", 1.0)]
+    (rejection,) = [m["content"] for m in srv.requests[1]["messages"] if m["role"] == "tool" and m["tool_call_id"] == "g0"]
+    assert rejection.startswith("REJECTED: stairs_terrain -> stairs:") and "0.5 m cell" in rejection
+
+
 def test_a_transcript_of_too_many_calls_is_refused_whole_not_cut():
     call = _gcall("flat_ground_terrain", {"terrain": "init_terrain", "height": 0.2, "part": 1})
     result = import_transcript({"tool_calls": [call] * 257}, "long", "multi")

@@ -518,14 +518,15 @@ def _region(args: dict[str, Any], schema: str | None, issues: list[Issue]) -> st
 
 def translate_call(
     name: Any, arguments: Any, schema: str | None = "multi", size_x: float = GENTE_TILE, size_y: float = GENTE_TILE,
-    live: bool = False,
+    live: bool = False, resolution: float | None = None,
 ) -> Translation:
     """Translate one GenTe call (``schema``: the tool list it was served, ``single`` or ``multi``; None: either).
 
     ``live``: the call of a model that can correct it (``--toolset gente``), so a value outside our range blocks
     the call (``bad_value``, with the range) instead of being imported at the nearest bound (``clamped``, for
-    recorded transcripts). Never raises for bad input: everything is reported in ``issues``; blocked calls have
-    no ``calls``.
+    recorded transcripts). ``resolution`` (m): a translated call finer than the cells is blocked (``rejected``), as
+    :func:`validate_call` blocks our own tools' calls. Never raises for bad input: everything is reported in
+    ``issues``; blocked calls have no ``calls``.
     """
     tool_name = name if isinstance(name, str) else repr(name)
     tool_name = tool_name[:80]
@@ -568,7 +569,7 @@ def translate_call(
     for our_tool, params in ours:
         layout = {"region": region} | ({"mode": "add"} if ATOMIC_TERRAINS[our_tool].kind == "geometric" else {})
         try:
-            calls.append(validate_call(our_tool, {**params, **layout}, size_x, size_y))
+            calls.append(validate_call(our_tool, {**params, **layout}, size_x, size_y, resolution=resolution))
         except ValidationError as exc:
             issues.append(Issue("rejected", f"{tool.name} -> {our_tool}: {exc}"))
             return Translation(tool.name, [], issues)

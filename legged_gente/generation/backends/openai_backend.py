@@ -295,7 +295,8 @@ class OpenAIBackend:
         if self.toolset == "gente":
             from legged_gente.generation.gente_compat import translate_call
 
-            translation = translate_call(name, arguments, "multi", self.size_x, self.size_y, live=True)
+            translation = translate_call(name, arguments, "multi", self.size_x, self.size_y, live=True,
+                                         resolution=self.resolution)
             if translation.blocked:
                 raise ValidationError([i.message for i in translation.issues])
             return translation.calls, [f"{translation.gente_tool}: {i.message}" for i in translation.issues]
