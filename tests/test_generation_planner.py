@@ -183,6 +183,14 @@ def test_negated_nouns_remove_parts_of_recipes():
     assert set(NEGATED) >= {"sand", "snow", "water", "waves"}
 
 
+def test_a_long_text_binds_as_its_one_sentence():
+    """Binding walks the cues nearest first (bisection over the sorted mentions): a sentence said as often as
+    gente-generate's longest text holds it plans what it plans once."""
+    once = "Icy stone steps by a calm sea, a deep river beside them. "
+    many = once * (10_000 // len(once))
+    assert len(many) > 9_900 and plan_text(many).calls == plan_text(once).calls
+
+
 def test_modifier_binds_to_the_following_noun():
     calls = plan_text("icy stone steps by a calm sea").calls
     stairs = [c.rect(20, 20) for c in calls if c.tool == "stairs"]

@@ -24,7 +24,9 @@ project ships; change :data:`KNEE_HEIGHT` for other robots.
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
+import itertools
 import math
 import re
 from typing import Any, Mapping
@@ -399,9 +401,16 @@ def _mentions(items, text: str, keys) -> list[Mention]:
 
 
 def _outermost(mentions: list[Mention]) -> list[Mention]:
-    """Drop mentions lying inside a longer one ("stepping stones" hides "stones", "knee-deep" hides "deep")."""
-    return [(a, b, x) for a, b, x in mentions
-            if not any(c <= a and b <= d and d - c > b - a for c, d, _ in mentions)]
+    """Drop mentions lying inside a longer one ("stepping stones" hides "stones", "knee-deep" hides "deep").
+
+    One sweep over the distinct spans by start (longest first): a span ending within the reach of an earlier one
+    lies inside it."""
+    inner, reach = set(), -1
+    for a, b in sorted({(a, b) for a, b, _ in mentions}, key=lambda span: (span[0], -span[1])):
+        if b <= reach:
+            inner.add((a, b))
+        reach = max(reach, b)
+    return [(a, b, x) for a, b, x in mentions if (a, b) not in inner]
 
 
 def _scan(text: str) -> tuple[list[Mention], list[Mention]]:
@@ -413,29 +422,54 @@ def _scan(text: str) -> tuple[list[Mention], list[Mention]]:
     cues = _mentions(CUES, text, lambda c: c.keywords) or _mentions(CUES, text, lambda c: c.weak)
     both = _outermost(cues + mods)
     is_cue = lambda x: isinstance(x, Cue)  # noqa: E731
-    return sorted(m for m in both if is_cue(m[2]) and m in cues), sorted((m for m in both if not is_cue(m[2])), key=lambda m: m[0])
+    return sorted(m for m in both if is_cue(m[2])), sorted((m for m in both if not is_cue(m[2])), key=lambda m: m[0])
 
 
 def find_cues(text: str) -> list[tuple[int, Cue]]:
     """Cues mentioned in ``text`` with the position of their first mention, in order of first mention."""
+    return _first_mentions(_scan(text.lower())[0])
+
+
+def _first_mentions(cue_mentions: list[Mention]) -> list[tuple[int, Cue]]:
     first: dict[str, tuple[int, Cue]] = {}
-    for start, _, cue in _scan(text.lower())[0]:
+    for start, _, cue in cue_mentions:
         first.setdefault(cue.name, (start, cue))
     return sorted(first.values(), key=lambda pc: (pc[0], pc[1].name))
 
 
-def _bind(text: str, mod: Mention, cue_mentions: list[Mention]) -> tuple[Cue | None, Cue | None]:
-    """(cue the modifier changes, cue it was aimed at) for one modifier mention (module docstring's rule)."""
+def _bind(text: str, mod: Mention, cue_mentions: list[Mention], sentence_ends: list[int]) -> tuple[Cue | None, Cue | None]:
+    """(cue the modifier changes, cue it was aimed at) for one modifier mention (module docstring's rule).
+
+    ``cue_mentions`` sorted by start, none inside another (so their ends are sorted too); ``sentence_ends``: the
+    positions of ``text``'s sentence ends, sorted. The candidates are walked nearest first and the walk stops at
+    the first that the modifier applies to, so a long text binds in about linear time."""
     start, end, modifier = mod
-    following = [m for m in cue_mentions if m[0] >= end and not _PHRASE_END.search(text[end:m[0]])
-                 and len(text[end:m[0]].split()) <= 3]
-    preceding = [m for m in cue_mentions if m[1] <= start and not _SENTENCE_END.search(text[m[1]:start])]
-    ordered = following[:1] + sorted(preceding, key=lambda m: start - m[1])
-    ordered += sorted(cue_mentions, key=lambda m: min(abs(m[0] - end), abs(start - m[1])))
-    for m in ordered:
-        if modifier.applies_to(m[2]):
-            return m[2], ordered[0][2]
-    return None, ordered[0][2] if ordered else None
+    following = []
+    nxt = bisect.bisect_left(cue_mentions, end, key=lambda m: m[0])  # a later cue's gap holds this one's
+    if nxt < len(cue_mentions):
+        gap = text[end:cue_mentions[nxt][0]]
+        if not _PHRASE_END.search(gap) and len(gap.split(None, 3)) <= 3:
+            following = [cue_mentions[nxt]]
+    k = bisect.bisect_left(sentence_ends, start)
+    sentence_start = sentence_ends[k - 1] if k else -1  # a preceding cue must end after the sentence's last end
+    lo = bisect.bisect_right(cue_mentions, sentence_start, key=lambda m: m[1])
+    hi = bisect.bisect_right(cue_mentions, start, key=lambda m: m[1])
+
+    def preceding():  # nearest end first; mentions of one span in their order
+        i = hi
+        while i > lo:
+            j = i - 1
+            while j > lo and cue_mentions[j - 1][1] == cue_mentions[i - 1][1]:
+                j -= 1
+            yield from cue_mentions[j:i]
+            i = j
+
+    distance = lambda m: min(abs(m[0] - end), abs(start - m[1]))  # noqa: E731
+    candidates = itertools.chain(following, preceding())
+    aimed = next(itertools.chain(following, preceding()), None) or min(cue_mentions, key=distance, default=None)
+    target = next((m for m in candidates if modifier.applies_to(m[2])), None) or min(
+        (m for m in cue_mentions if modifier.applies_to(m[2])), key=distance, default=None)
+    return (target[2] if target else None), (aimed[2] if aimed else None)
 
 
 def _negations(text: str) -> list[Modifier]:
@@ -537,7 +571,7 @@ def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], di
     """The cues laid out (at most 4, by first mention) and the modifiers bound to each (negations included)."""
     lower = text.lower()
     cue_mentions, mod_mentions = _scan(lower)
-    cues = find_cues(text)
+    cues = _first_mentions(cue_mentions)
     if not cues:
         warnings.append(
             f"no scene cue recognised in {text!r}; built flat ground. Known cues: "
@@ -552,8 +586,9 @@ def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], di
     kept = {c.name for _, c in cues}
     cue_mentions = [m for m in cue_mentions if m[2].name in kept]
     per_cue: dict[str, list[Modifier]] = {c.name: [] for _, c in cues}
+    sentence_ends = [m.start() for m in _SENTENCE_END.finditer(lower)]
     for mention in mod_mentions:
-        target, aimed = _bind(lower, mention, cue_mentions)
+        target, aimed = _bind(lower, mention, cue_mentions, sentence_ends)
         if target is None:
             warnings.append(f"modifier '{mention[2].name}' does not apply to {aimed.name if aimed else 'anything'}; ignored.")
         elif mention[2] not in per_cue[target.name]:
