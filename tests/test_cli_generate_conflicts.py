@@ -1,5 +1,5 @@
-"""gente-generate refuses a flag that its other flags would silently ignore (one line, exit 2, before any model is
-asked)."""
+"""gente-generate refuses bad input with one line and exit status 2, before any model is asked: a flag that its other
+flags would silently ignore, a --base-url that is not an http(s) address; and a tile the planner cannot lay out."""
 
 import pytest
 
@@ -15,6 +15,9 @@ OPENAI = ["--backend", "openai", "--base-url", "http://localhost:1/v1", "--model
                                                    "leave out --two-phase."),
     (["--text", "a lake", *OPENAI, "--vision-model", "v"], "--vision-model describes the image in --two-phase; add "
                                                            "--two-phase (and --image) or leave it out."),
+    *[(["--text", "a lake", "--backend", "openai", "--base-url", url, "--model", "m"],
+       f"--base-url {url}: not an http:// or https:// address with a host; give the server's API address, e.g. "
+       f"http://localhost:8000/v1.") for url in ("file:///tmp/fs", "data:,{}", "localhost:8000/v1", "http:///v1", "http://[::1/v1")],
 ])
 def test_flags_that_would_be_ignored_are_refused(capsys, monkeypatch, tmp_path, argv, message):
     def never(*args, **kwargs):
@@ -26,3 +29,12 @@ def test_flags_that_would_be_ignored_are_refused(capsys, monkeypatch, tmp_path, 
     err = capsys.readouterr().err
     assert exit_info.value.code == 2 and "Traceback" not in err
     assert err.strip().splitlines()[-1] == f"gente-generate: error: {message}"
+
+
+def test_a_tile_the_planner_cannot_lay_out_is_bad_input(capsys, tmp_path):
+    """The planner asks no model: its refusal is of the text and the tile, exit 2 (1 is a server or model that
+    failed). The stairs recipe rises 0.12 m every 0.35 m, beyond the 10 m height bound over a 200 m tile."""
+    assert generate_script.main(["--text", "stairs", "--size", "200", "--resolution", "1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("gente-generate: error: planner cue 'stairs' does not fit on a 200 m x 200 m tile: ask for a "
+                          "smaller tile") and "Traceback" not in err and not (tmp_path / "o").exists()

@@ -229,6 +229,15 @@ def test_timeout_must_be_a_finite_positive_number(timeout):
     assert str(info.value) == f"timeout must be > 0 and at most 86400 seconds, got {timeout}."
 
 
+@pytest.mark.parametrize("base_url", ["file:///tmp/fs", "data:,{}", "ftp://host/v1", "localhost:8000/v1", "http:///v1"])
+def test_the_base_url_must_be_an_http_address(base_url):
+    """urllib's opener would read a file: or data: address too, and its answer has no HTTP status."""
+    with pytest.raises(ValueError) as info:
+        OpenAIBackend(base_url, "m")
+    assert str(info.value) == (f"base_url {base_url}: not an http:// or https:// address with a host; give the "
+                               f"server's API address, e.g. http://localhost:8000/v1.")
+
+
 @pytest.mark.parametrize("max_retries", [-1, 11, 10**6])
 def test_correction_rounds_are_bounded(max_retries):
     """Each round is a request of up to ``timeout`` seconds: their number is capped so a run's time is bounded."""

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, GenerationError
 from legged_gente.generation.backends.image import open_image
+from legged_gente.generation.backends.openai_backend import base_url_problem
 from legged_gente.generation.emit import DEFAULT_BASE, emit, resolve_base
 from legged_gente.generation.pipeline import BACKENDS, generate_spec
 from legged_gente.generation.validation import (
@@ -94,6 +95,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--image {args.image} is not a file.")
     if args.backend == "openai" and not (args.base_url and args.model):
         parser.error("--backend openai needs --base-url and --model.")
+    if args.base_url and base_url_problem(args.base_url):
+        parser.error(f"--base-url {printable(args.base_url[:200])}: {base_url_problem(args.base_url)}.")
     if args.backend == "planner" and (args.base_url or args.model or args.vision_model or args.two_phase
                                       or args.toolset != "ours"):
         parser.error("--base-url/--model/--vision-model/--two-phase/--toolset are for --backend openai.")
@@ -153,8 +156,8 @@ def main(argv: list[str] | None = None) -> int:
         for warning in result.warnings:
             print(f"warning: {printable(warning)}", file=sys.stderr)
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
-    except (ValidationError, GenerationError) as exc:  # the server or the model failed
-        return _error(exc, 1)
+    except (ValidationError, GenerationError) as exc:  # the server or the model failed; the planner asks none, so
+        return _error(exc, 1 if args.backend == "openai" else 2)  # its refusal is of the text, image or tile
     except (ValueError, OSError) as exc:  # the user's input (e.g. the API key's variable) or the output folder
         return _error(exc, 2)
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))

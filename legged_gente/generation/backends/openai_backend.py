@@ -141,6 +141,19 @@ class _NoRedirect(urllib.request.HTTPRedirectHandler):
 _OPENER = urllib.request.build_opener(_NoRedirect)
 
 
+def base_url_problem(base_url: str) -> str | None:
+    """Why ``base_url`` cannot be a server's API address (urllib would also open file:, data: and ftp: ones), or None."""
+    try:
+        parts = urllib.parse.urlsplit(base_url)
+        usable = parts.scheme in ("http", "https") and bool(parts.hostname)
+    except ValueError:  # e.g. an unclosed IPv6 bracket
+        usable = False
+    if not usable:
+        return ("not an http:// or https:// address with a host; give the server's API address, e.g. "
+                "http://localhost:8000/v1")
+    return None
+
+
 class OpenAIBackend:
     """Tool calling against an OpenAI-compatible server (``base_url``, ``model``, key from ``api_key_env``)."""
 
@@ -172,6 +185,9 @@ class OpenAIBackend:
             raise ValueError("the gente toolset translates into the global terrain registry; pass no registry.")
         if vision_model and not two_phase:
             raise ValueError("vision_model describes the image in two_phase; pass two_phase=True or leave it out.")
+        problem = base_url_problem(base_url)
+        if problem:
+            raise ValueError(f"base_url {printable(base_url[:200])}: {problem}.")
         self.toolset, self.resolution = toolset, resolution
         self.base_url, self.model = base_url, model
         self.endpoint = base_url.rstrip("/") + "/chat/completions"
