@@ -198,6 +198,10 @@ def test_bad_input_is_refused_before_any_request(tmp_path, capsys):
         (["--text", "x", "--base", "os; import sys:Cfg"],
          "gente-generate: error: --base: base 'os; import sys:Cfg' must look like 'package.module:Class.nested'; "
          f"e.g. {DEFAULT_BASE!r}."),
+        (["--text", "x", "--base", "zipfile:Path"],  # a class the emitted module's own Path import would lose
+         "gente-generate: error: --base: base 'zipfile:Path' is reached through the name 'Path', which the emitted "
+         "module binds itself (['Path', 'SPEC_PATH', 'PROVENANCE', 'build']); pass a class reached through another "
+         "name."),
         (["--text", "x", "--out", str(tmp_path / "FILE" / "o")],
          f"gente-generate: error: --out {tmp_path / 'FILE' / 'o'}: {tmp_path / 'FILE'} is a file; give a folder "
          f"to write to"),

@@ -34,7 +34,8 @@ HEIGHTMAP_NAME = "heightmap.npy"
 DEFAULT_BASE = "legged_gente.envs.gente_biped.gente_biped_config:GenteBipedCfg.terrain"
 """``module:attribute.path`` of the terrain config class the emitted class subclasses."""
 MODULE_NAMES = ("Path", "SPEC_PATH", "PROVENANCE", "build")
-"""Names :data:`MODULE_TEMPLATE` binds beside the class: a class of one of them would be lost or break ``build()``."""
+"""Names :data:`MODULE_TEMPLATE` binds beside the class: a class, or a base imported, of one of them would be lost
+or break ``build()``."""
 
 
 @dataclasses.dataclass
@@ -57,6 +58,10 @@ def resolve_base(base: str) -> tuple[str, str, type]:
     dotted = lambda text: all(part.isidentifier() for part in text.split("."))  # noqa: E731
     if not sep or not attr_path or not dotted(module_name) or not dotted(attr_path):
         raise ValueError(f"base {base!r} must look like 'package.module:Class.nested'; e.g. {DEFAULT_BASE!r}.")
+    root = attr_path.split(".")[0]
+    if root in MODULE_NAMES:
+        raise ValueError(f"base {base!r} is reached through the name {root!r}, which the emitted module binds itself "
+                         f"({list(MODULE_NAMES)}); pass a class reached through another name.")
     try:
         obj = importlib.import_module(module_name)
     except ImportError as exc:
