@@ -176,6 +176,17 @@ def test_an_image_beyond_the_pixel_limit_says_so(monkeypatch):
                                "pixels; downscale it (a few megapixels are plenty) and pass it again.")
 
 
+def test_an_image_between_pillows_warning_and_its_limit_is_refused_in_one_line(monkeypatch, recwarn):
+    """Pillow only warns (two lines naming its own source file) between MAX_IMAGE_PIXELS and twice it, and decodes
+    the image, three times on the way to a spec: refused like a larger one, without Pillow's warning."""
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1000)
+    with pytest.raises(ValueError) as info:
+        plan_image(_png(np.zeros((40, 40, 3))))
+    assert str(info.value) == ("the image is too large to decode: Image size (1600 pixels) exceeds limit of 1000 "
+                               "pixels; downscale it (a few megapixels are plenty) and pass it again.")
+    assert not [w for w in recwarn if issubclass(w.category, Image.DecompressionBombWarning)]
+
+
 def test_greyscale_photo_warns():
     grey = _photo(*SKIES["blue"], GROUNDS["grass"]).mean(-1, keepdims=True).repeat(3, -1)
     assert any("greyscale photo" in w for w in plan_image(_png(grey)).warnings)

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import warnings
 from pathlib import Path
 from typing import Mapping
 
@@ -125,10 +126,12 @@ def open_image(data: bytes, source: object = None) -> Image.Image:
     file's path."""
     name = str(source) if isinstance(source, (str, Path)) else "the image"
     try:
-        image = Image.open(io.BytesIO(data))
-        image.load()
+        with warnings.catch_warnings():  # beyond MAX_IMAGE_PIXELS Pillow only warns, up to twice it: refuse as well
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            image = Image.open(io.BytesIO(data))
+            image.load()
         return image
-    except Image.DecompressionBombError as exc:  # Pillow's first clause gives the image's pixels and its limit
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:  # the first clause: pixels, limit
         raise ValueError(f"{name} is too large to decode: {str(exc).split(',')[0]}; downscale it (a few megapixels "
                          f"are plenty) and pass it again.") from None
     except MemoryError:
