@@ -132,6 +132,9 @@ def test_unreadable_and_missing_files(tmp_path):
     (tmp_path / "hm.npy").unlink()
     with pytest.raises(ValidationError, match="hm.npy does not exist"):
         TerrainSpec.load(path)
+    (tmp_path / "hm.npy").mkdir()
+    with pytest.raises(ValidationError, match="hm.npy is a folder, not a file; give a .npy path"):
+        TerrainSpec.load(path)
 
 
 def test_gente_heightmap_spec(tmp_path):

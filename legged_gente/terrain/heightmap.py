@@ -75,7 +75,8 @@ def load_heightmap(path: str | Path, vertical_scale: float, max_abs_height: floa
     """A ``.npy`` heightmap file in metres (see :func:`heightmap_heights`); never unpickles."""
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"heightmap file {str(path)[:200]} does not exist; give a .npy path (relative to the spec file)")
+        what = "is a folder, not a file" if path.is_dir() else "does not exist"
+        raise ValueError(f"heightmap file {str(path)[:200]} {what}; give a .npy path (relative to the spec file)")
     try:
         raw = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
