@@ -551,6 +551,7 @@ class TerrainForces:
         feet.friction_reference, feet.use_friction = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
         feet.use_soil = int(bool(cfg.soil))  # feet: their traction; other bodies: tan(phi) (ground_friction)
         feet.sole_area, feet.bekker_width = self.sole_area, self.bekker_width
+        feet.bulldozing_face = self.sole_length if self.sole_disc else min(self.sole_length, self.sole_width)
         feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
         feet.sink_step = float(cfg.sinkage_rate) * self.dt
         feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support

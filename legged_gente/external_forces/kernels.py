@@ -122,10 +122,14 @@ def soil_traction_fn(c: float, mu: float, area: float, normal_force: float, slip
 
 @wp.func
 def soil_friction_fn(c: float, mu: float, area: float, normal_force: float, slip: float, k: float,
-                     cap: float) -> float:
-    """The contact friction coefficient of a soil: mobilised traction / F_N, at most cap."""
+                     bulldozing: float, cap: float) -> float:
+    """The contact friction coefficient of a soil: (mobilised traction + bulldozing resistance) / F_N, at most cap.
+
+    Bulldozing (Bekker) is a rate-independent resistance, the passive failure of the soil ahead of the sunk sole,
+    as Coulomb friction is: in the friction limit MuJoCo's solver applies it implicitly (an explicit force
+    against the velocity is a stiff damper near rest and makes a foot held still chatter)."""
     fn = wp.max(normal_force, 1.0e-6)
-    return wp.min(soil_traction_fn(c, mu, area, fn, slip, k) / fn, cap)
+    return wp.min((soil_traction_fn(c, mu, area, fn, slip, k) + bulldozing) / fn, cap)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -318,6 +322,7 @@ class FootSoil:
     use_soil: int
     sole_area: float
     bekker_width: float  # Bekker's b: a rectangle's smaller side, a disc's radius
+    bulldozing_face: float  # the width of soil a sole pushes: a rectangle's smaller side, a disc's diameter
     friction_cap: float
     min_friction: float
     sink_step: float  # sinkage_rate * dt
@@ -346,8 +351,10 @@ def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, 
     if feet.use_soil != 0 and s >= 0:
         p = feet.soil_params
         if f >= 0:
+            bulldozing = bulldozing_force_fn(p[w, s, BULL_C], p[w, s, BULL_G], feet.bulldozing_face,
+                                             feet.sinkage[w, f])
             mu = wp.min(mu, soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f],
-                                             feet.slip[w, f], p[w, s, K], feet.friction_cap))
+                                             feet.slip[w, f], p[w, s, K], bulldozing, feet.friction_cap))
         else:
             mu = wp.min(mu, p[w, s, MU])
     if mu0 > 0.0:
@@ -484,8 +491,7 @@ def soil_force_kernel(
     if s >= 0 and foot_fn[w, f] > 0.0:
         face = bulldozing_width_fn(xmat[w, b], vh, sole_length, sole_width, sole_disc)
         fb = bulldozing_force_fn(soil_params[w, s, BULL_C], soil_params[w, s, BULL_G], face, foot_sinkage[w, f])
-        force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh
-        apply_force(xfrc, xipos, w, b, force, p)
+        force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh  # reported; the contacts' friction applies it
     foot_force[w, f] = force
 
 
