@@ -26,7 +26,7 @@ def _eval(
     area = x[i, 16] * x[i, 16] * 2.0
     out[i, 4] = K.shear_strength_fn(x[i, 24], x[i, 20], area, x[i, 21])
     out[i, 5] = K.soil_traction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23])
-    out[i, 6] = K.soil_friction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23], 2.0)
+    out[i, 6] = K.soil_friction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23], out[i, 3], 2.0)
 
 
 @pytest.mark.parametrize("paper", [0, 1])
@@ -51,7 +51,8 @@ def test_kernels_match_references(paper):
         models.bulldozing_force(x[:, 17], x[:, 18], x[:, 16], x[:, 19]),
         models.shear_strength(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21]),
         models.soil_traction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23]),
-        models.soil_friction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23], 2.0),
+        models.soil_friction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23], 2.0,
+                             models.bulldozing_force(x[:, 17], x[:, 18], x[:, 16], x[:, 19])),
     ], 1)
     scale = np.maximum(np.abs(ref), 1e-6 * np.abs(ref).max(0))
     # a tide near its zero crossing: float32 rounding of omega*t is relative to the amplitude, not the value

@@ -449,7 +449,6 @@ def soil_force_kernel(
     body_rootid: wp.array[int],
     xpos: wp.array2d[wp.vec3],
     xmat: wp.array2d[wp.mat33],
-    xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
     subtree_com: wp.array2d[wp.vec3],
     sole_length: float,
@@ -465,17 +464,13 @@ def soil_force_kernel(
     foot_sinkage: wp.array2d[float],
     foot_vel: wp.array2d[wp.vec3],
     foot_force: wp.array2d[wp.vec3],
-    xfrc: wp.array2d[wp.spatial_vector],
 ):
     """The soil's response to this substep's contacts, per foot. First the rut: a touching foot's deepens to what
     the contact filter found (``foot_cand``: plastic, it never rises during a stance) for this substep's forces and
     observations and the next substep's contacts; off soil there is none (lift-off: ``foot_state_kernel``). Then
-    Bekker bulldozing against the foot's horizontal velocity, at the sole's contact plane (``foot_drop`` below the
-    sole centre), where the soil acts. The shear is the contacts' friction (``ground_friction``).
-
-    The bulldozing direction is regularised, v / max(|v|, speed_reg), so it fades out linearly below
-    speed_reg instead of chattering around zero speed; its power -F |v|^2 / max(|v|, speed_reg) is never positive.
-    """
+    the sole point's horizontal velocity (slip) and, for the viewer and the observations, Bekker's bulldozing
+    resistance against it, faded below speed_reg: the contacts' friction applies the resistance
+    (``ground_friction``, with the shear), so nothing is applied here."""
     w, f = wp.tid()
     s = foot_soil[w, f]
     if s < 0:
