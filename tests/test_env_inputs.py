@@ -2,6 +2,8 @@
 being run as something else: a reversed command range, a randomised base mass that is not positive, a friction
 range that is not one, an observation term whose scale does not fit its columns."""
 
+import re
+
 import pytest
 import torch
 
@@ -67,6 +69,37 @@ def test_an_observation_scale_that_does_not_fit_its_term_names_the_term():
     with pytest.raises(ValueError, match=r"cfg.observations.policy.commands.scale has 2 values; the term has 3 "
                                          r"columns"):
         GenteBiped(cfg, device="cpu")
+
+
+@pytest.mark.parametrize("value, shape", [(lambda self: self.base_pos[:, 2], "(2,)"),
+                                          (lambda self: self.base_pos[:1, 2:], "(1, 1)")])
+def test_an_observation_term_of_the_wrong_shape_names_the_term(value, shape):
+    """A new robot's term returning one value per robot without its column, or the wrong rows: named, with the
+    shape it must have (it was an IndexError or a size mismatch deep in torch)."""
+    class Heights(GenteBiped):
+        def _obs_base_height(self):
+            return value(self)
+
+    cfg = cfg_of()
+    cfg.observations.policy.base_height = ObsTerm(fn="base_height")
+    with pytest.raises(ValueError, match=rf"^cfg.observations.policy.base_height: _obs_base_height returned shape "
+                                         rf"{re.escape(shape)}; an observation term returns \(num_envs, k\) = \(2, k\)"):
+        Heights(cfg, device="cpu")
+
+
+@pytest.mark.parametrize("value, shape", [(lambda self: self.base_pos[:, 2:], "(2, 1)"),
+                                          (lambda self: torch.tensor(1.0), "()")])
+def test_a_reward_term_of_the_wrong_shape_names_the_term(value, shape):
+    class Rewarded(GenteBiped):
+        def _reward_height(self):
+            return value(self)
+
+    cfg = cfg_of()
+    cfg.rewards.scales.height = 1.0
+    env = Rewarded(cfg, device="cpu")
+    with pytest.raises(ValueError, match=rf"^_reward_height returned shape {re.escape(shape)}; a reward term returns one value "
+                                         rf"per robot, shape \(2,\)"):
+        env.step(torch.zeros(N, env.num_actions))
 
 
 @pytest.mark.parametrize("section, field", [("commands", "resampling_time"), ("domain_rand", "push_interval_s")])

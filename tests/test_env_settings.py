@@ -195,7 +195,7 @@ def test_a_config_read_inside_the_step_is_an_error():
             return torch.ones(self.num_envs) * self.cfg.rewards.tracking_sigma
 
     env = ReadsConfig(cfg_of(), device="cpu")
-    with pytest.raises(RuntimeError, match=r"reads \['cfg.rewards.tracking_sigma'\].*env.set_param"):
+    with pytest.raises(ValueError, match=r"reads \['cfg.rewards.tracking_sigma'\].*env.set_param"):
         env.step(zeros(env))
 
 

@@ -204,3 +204,15 @@ def test_the_figures_command_reports_a_mistake_in_one_line(tmp_path, monkeypatch
         assert exit_info.value.code == 2, argv
         assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and expected in err, err
     assert not (tmp_path / "x.png").exists()
+
+
+def test_the_figures_command_keeps_third_party_output_off_the_console_unless_verbose(monkeypatch, tmp_path):
+    """As the gente-* commands: the waypoints and training figures build an env, whose Warp module loads would
+    flood the console."""
+    calls = []
+    monkeypatch.setattr(figures, "quiet_third_party", calls.append)
+    run = tmp_path / "seed.csv"
+    run.write_text("iteration,mean_reward\n0,1.0\n1,2.0\n")
+    figures.main(["reward", str(run), "--out", str(tmp_path / "a.png")])
+    figures.main(["reward", str(run), "--out", str(tmp_path / "b.png"), "--verbose"])
+    assert calls == [False, True] and (tmp_path / "a.png").is_file()

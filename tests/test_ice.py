@@ -93,7 +93,7 @@ def test_ice_is_seen_by_the_checker_and_the_scorer():
 
 
 def test_the_checker_bounds_the_heights_ice_makes():
-    def op(name, mode="set", **params):  # stacked_height_bounds takes complete parameters
+    def op(name, mode="set", **params):
         return Operation(name, ATOMIC_TERRAINS[name].check_params(params), mode=mode)
 
     ground = Part(Region(0, 0, 6, 6), [op("flat", height=0.0)])
@@ -169,3 +169,20 @@ def test_frozen_wet_soil_is_hard_ground(text):
     _, material = TerrainSpec(plan.calls, name="frozen").build()
     assert np.all(material.soil == NO_SOIL)
     assert any(c.params.get("preset") == "snow" for c in plan_text("a frozen snowy swamp").calls if c.tool == "soil")
+
+
+def test_stacked_height_bounds_fills_parameter_defaults_as_the_builder_does():
+    """docs/terrain.md's spec, written with only the parameters it changes: bounded as the builder builds it
+    (defaults filled, as spec.build() fills them), not a KeyError on the first default."""
+    partial = TileSpec(6, 6, RES, 0, [Part(Region(0, 0, 6, 6), [Operation("stairs", {"step_height": 0.12}),
+                                                                 Operation("hills", {}, mode="add"),
+                                                                 Operation("ice", {})])])
+    complete = TileSpec(6, 6, RES, 0, [Part(Region(0, 0, 6, 6), [
+        Operation("stairs", ATOMIC_TERRAINS["stairs"].check_params({"step_height": 0.12})),
+        Operation("hills", ATOMIC_TERRAINS["hills"].check_params({}), mode="add"),
+        Operation("ice", ATOMIC_TERRAINS["ice"].check_params({}))])])
+    x, y = np.array([0.5, 3.0, 5.5]), np.array([0.5, 3.0, 5.5])
+    np.testing.assert_array_equal(stacked_height_bounds(partial).at(x, y), stacked_height_bounds(complete).at(x, y))
+    heights, _ = partial.build()
+    lo, hi = stacked_height_bounds(partial).at(np.array([3.0]), np.array([3.0]))
+    assert lo[0] - 1e-6 <= heights[30, 30] <= hi[0] + 1e-6

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from legged_gente.utils.args import Parser, run_command
+from legged_gente.utils.args import Parser, add_verbose, quiet_third_party, run_command
 
 DPI = 90
 PROG = "python -m legged_gente.evaluation.figures"
@@ -247,7 +247,10 @@ def main(argv=None) -> None:
     d.add_argument("--robots_per_terrain", type=int, default=16)
     for s in sub.choices.values():
         s.add_argument("--out", required=True, help="PNG path")
-    run_command(PROG, _draw, p.parse_args(argv))
+        add_verbose(s)
+    args = p.parse_args(argv)
+    quiet_third_party(args.verbose)  # the waypoints and training figures build an env: Warp's module loads
+    run_command(PROG, _draw, args)
 
 
 def _draw(args) -> None:

@@ -288,7 +288,8 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
     it) and an ``add`` operation shifts the current range by it; in the band the builder blends old and new
     heights convexly, so the range is the union of both; a smoothing filter mixes the heights inside its rectangle,
     so there the range is that of all of them; ice raises its rectangle's cells to at least its surface, ``depth``
-    above the rectangle's lowest height. Parameters must be complete (``check_params``).
+    above the rectangle's lowest height. Parameters are checked and their defaults filled (``check_params``), as the
+    builder fills them.
     """
     registry = ATOMIC_TERRAINS if registry is None else registry
     band = SEAM_BAND
@@ -309,7 +310,7 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
             atomic = registry[op.terrain]
             if atomic.kind != "geometric":
                 continue
-            a, b = atomic.height_bounds(dict(op.params), x1 - x0 + 2 * band, y1 - y0 + 2 * band)
+            a, b = atomic.height_bounds(atomic.check_params(dict(op.params)), x1 - x0 + 2 * band, y1 - y0 + 2 * band)
             new_lo, new_hi = (np.full_like(lo, a), np.full_like(hi, b)) if op.mode == "set" else (lo + a, hi + b)
             inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
             near = (cx > x0 - band) & (cx < x1 + band) & (cy > y0 - band) & (cy < y1 + band)
@@ -325,7 +326,7 @@ def stacked_height_bounds(spec: TileSpec, registry: Mapping[str, AtomicTerrain] 
         for op in part.ops:  # ground to its surface, depth above the region's lowest ground
             inside = (cx > x0) & (cx < x1) & (cy > y0) & (cy < y1)
             if op.terrain == "ice" and inside.any():
-                depth = float(op.params["depth"])
+                depth = float(registry["ice"].check_params(dict(op.params))["depth"])
                 lo = np.where(inside, np.maximum(lo, lo[inside].min() + depth), lo)
                 hi = np.where(inside, np.maximum(hi, hi[inside].min() + depth), hi)
                 if first_beyond is None and float(hi.max()) > MAX_ABS_HEIGHT:

@@ -441,7 +441,12 @@ class LeggedRobot(VecEnv):
                 if method is None:
                     raise ValueError(f"{path}.{name}: fn={term.fn!r} but {type(self).__name__} has no _obs_{term.fn} "
                                      f"method; implement it or name an existing one.")
-                width = method().shape[1]
+                value = method()
+                if value.ndim != 2 or value.shape[0] != self.num_envs:
+                    raise ValueError(f"{path}.{name}: _obs_{term.fn} returned shape {tuple(value.shape)}; an observation "
+                                     f"term returns (num_envs, k) = ({self.num_envs}, k): keep its column dimension, "
+                                     f"e.g. x[:, None].")
+                width = value.shape[1]
                 scale = torch.as_tensor(term.scale, dtype=torch.float32, device=self.device)
                 if scale.numel() not in (1, width):
                     raise ValueError(f"{path}.{name}.scale has {scale.numel()} values; the term has {width} columns: "
@@ -597,7 +602,12 @@ class LeggedRobot(VecEnv):
         if not self.reward_functions:
             self.rew_buf = torch.zeros(self.num_envs, device=self.device)
             return
-        terms = torch.stack([fn() for _, fn in self.reward_functions], dim=1)
+        values = [fn() for _, fn in self.reward_functions]
+        for (name, _), value in zip(self.reward_functions, values):  # shapes are static: checked when traced
+            if getattr(value, "shape", None) != (self.num_envs,):
+                raise ValueError(f"_reward_{name} returned shape {tuple(getattr(value, 'shape', ()))}; a reward term "
+                                 f"returns one value per robot, shape ({self.num_envs},).")
+        terms = torch.stack(values, dim=1)
         terms = torch.nan_to_num(terms, nan=0.0, posinf=0.0, neginf=0.0) * self.reward_scale_vec
         terms = torch.where(self.diverged_buf[:, None], 0.0, terms)
         rew = torch.where(self._clipped_terms, terms, 0.0).sum(dim=1)

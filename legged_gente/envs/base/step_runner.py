@@ -60,7 +60,7 @@ def config_reads(env):
 def check_no_config_reads(env, reads: list[str]) -> None:
     if reads:
         names = sorted(set(reads))
-        raise RuntimeError(
+        raise ValueError(  # the user's env code, reported as a user error (one line, exit status 2)
             f"{type(env).__name__}'s step reads {names}: under CUDA graphs and torch.compile such a value is frozen "
             f"at the first steps. Read a fixed setting once in __init__ (self.x = cfg...), or keep a setting that "
             f"changes during training in a tensor (env.params.rewards.<name> for numbers in cfg.rewards, "
