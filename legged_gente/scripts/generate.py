@@ -95,8 +95,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--image {args.image} is not a file.")
     if args.backend == "openai" and not (args.base_url and args.model):
         parser.error("--backend openai needs --base-url and --model.")
-    if args.base_url and base_url_problem(args.base_url):
-        parser.error(f"--base-url {printable(args.base_url[:200])}: {base_url_problem(args.base_url)}.")
+    url_problem = args.base_url and base_url_problem(args.base_url)
+    if url_problem:
+        parser.error(f"--base-url {printable(args.base_url[:200])}: {url_problem}.")
     if args.backend == "planner" and (args.base_url or args.model or args.vision_model or args.two_phase
                                       or args.toolset != "ours"):
         parser.error("--base-url/--model/--vision-model/--two-phase/--toolset are for --backend openai.")

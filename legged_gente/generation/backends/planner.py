@@ -431,6 +431,7 @@ def find_cues(text: str) -> list[tuple[int, Cue]]:
 
 
 def _first_mentions(cue_mentions: list[Mention]) -> list[tuple[int, Cue]]:
+    """Each cue's first mention (position, cue), in order of first mention."""
     first: dict[str, tuple[int, Cue]] = {}
     for start, _, cue in cue_mentions:
         first.setdefault(cue.name, (start, cue))
@@ -465,10 +466,12 @@ def _bind(text: str, mod: Mention, cue_mentions: list[Mention], sentence_ends: l
             i = j
 
     distance = lambda m: min(abs(m[0] - end), abs(start - m[1]))  # noqa: E731
-    candidates = itertools.chain(following, preceding())
-    aimed = next(itertools.chain(following, preceding()), None) or min(cue_mentions, key=distance, default=None)
-    target = next((m for m in candidates if modifier.applies_to(m[2])), None) or min(
-        (m for m in cue_mentions if modifier.applies_to(m[2])), key=distance, default=None)
+    nearest = itertools.chain(following, preceding())
+    aimed = next(nearest, None)
+    target = aimed if aimed and modifier.applies_to(aimed[2]) else next(
+        (m for m in nearest if modifier.applies_to(m[2])), None)
+    aimed = aimed or min(cue_mentions, key=distance, default=None)
+    target = target or min((m for m in cue_mentions if modifier.applies_to(m[2])), key=distance, default=None)
     return (target[2] if target else None), (aimed[2] if aimed else None)
 
 
