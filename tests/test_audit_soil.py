@@ -150,7 +150,7 @@ def _soil_eval(x: wp.array2d[float], out: wp.array2d[float]):
     i = wp.tid()  # columns: p kc kphi n b | c mu A F_N j K | z
     out[i, 0] = K.bekker_sinkage_fn(x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4])
     out[i, 1] = K.soil_traction_fn(x[i, 5], x[i, 6], x[i, 7], x[i, 8], x[i, 9], x[i, 10])
-    out[i, 2] = K.soil_friction_fn(x[i, 5], x[i, 6], x[i, 7], x[i, 8], x[i, 9], x[i, 10], 0.0, 2.0)
+    out[i, 2] = K.soil_friction_fn(x[i, 5], x[i, 6], x[i, 7], x[i, 8], x[i, 9], x[i, 10], 1.0e30, 0.0, 2.0)
     out[i, 3] = K.bulldozing_force_fn(1.4e4, 2.6e5, 0.096, x[i, 11])
 
 

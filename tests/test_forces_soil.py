@@ -288,6 +288,25 @@ def test_bulldozing_adds_to_the_traction_limit():
     assert d.qvel.numpy()[0, 0] > 0.3 and d.qpos.numpy()[0, 0] - x0[0] > 0.3
 
 
+def test_bulldozing_adds_to_a_slippery_surface():
+    """Sand on a slippery surface (the cell's friction 0.2: ice under snow): the sole's shear is the surface's,
+    0.2 W, below the sand's T; bulldozing is pressure on the sunk sole's leading face, not shear, so it adds to
+    it: a push of 0.2 W + R_b / 2 is held, 1.15 (0.2 W + R_b) slides away."""
+    wp.set_device(DEV)
+    mass = 20.0
+    surface = 0.2 * mass * G  # 39.2 N, below T = 124.9 N
+    m, d, f = make(foot_world(mass), soil_map("t_sand_bull", friction=0.2), nworld=2)
+    run(m, d, f, 60)
+    z = f.foot_sinkage.numpy()[:, 0]
+    r_b = 0.09 * (1.4e4 * z + 2.6e5 * z * z)
+    assert np.all(r_b > 0.3 * surface), r_b
+    x0 = d.qpos.numpy()[:, 0].copy()
+    ramp_and_hold(m, d, f, [surface + 0.5 * r_b[0], 1.15 * (surface + r_b[1])], hold=400)
+    travel, v = d.qpos.numpy()[:, 0] - x0, d.qvel.numpy()[:, 0]
+    assert abs(v[0]) < 0.01 and travel[0] < 0.2, (travel, v, r_b)
+    assert v[1] > 0.3 and travel[1] > 0.3, (travel, v)
+
+
 def test_rft_sole_sinks_to_zeta_and_drags_with_alpha_x():
     """A 20 kg foot on an RFT medium sinks until zeta |z| A carries its weight, and dragged sideways in its rut
     the medium resists with RFT's horizontal stress on its sole plate, alpha_x(0, 0) |z| A = 0.136 zeta z A =

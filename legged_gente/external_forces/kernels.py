@@ -122,14 +122,17 @@ def soil_traction_fn(c: float, mu: float, area: float, normal_force: float, slip
 
 @wp.func
 def soil_friction_fn(c: float, mu: float, area: float, normal_force: float, slip: float, k: float,
-                     bulldozing: float, cap: float) -> float:
-    """The contact friction coefficient of a soil: (mobilised traction + bulldozing resistance) / F_N, at most cap.
+                     surface_mu: float, bulldozing: float, cap: float) -> float:
+    """The contact friction coefficient of a sole on soil: min(surface_mu, mobilised traction / F_N) plus the
+    bulldozing resistance / F_N, at most cap.
 
-    Bulldozing (Bekker) is a rate-independent resistance, the passive failure of the soil ahead of the sunk sole,
-    as Coulomb friction is: in the friction limit MuJoCo's solver applies it implicitly (an explicit force
+    The shear is the weaker of the sole's interface (the cell's friction: ice under snow) and the soil; Bekker's
+    bulldozing is the soil's passive pressure on the sunk sole's leading face, not shear, so it adds to either.
+    Both are rate-independent: in the friction limit MuJoCo's solver applies them implicitly (an explicit force
     against the velocity is a stiff damper near rest and makes a foot held still chatter)."""
     fn = wp.max(normal_force, 1.0e-6)
-    return wp.min((soil_traction_fn(c, mu, area, fn, slip, k) + bulldozing) / fn, cap)
+    shear = wp.min(surface_mu, soil_traction_fn(c, mu, area, fn, slip, k) / fn)
+    return wp.min(shear + bulldozing / fn, cap)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -353,8 +356,8 @@ def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, 
         if f >= 0:
             bulldozing = bulldozing_force_fn(p[w, s, BULL_C], p[w, s, BULL_G], feet.bulldozing_face,
                                              feet.sinkage[w, f])
-            mu = wp.min(mu, soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f],
-                                             feet.slip[w, f], p[w, s, K], bulldozing, feet.friction_cap))
+            mu = soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f], feet.slip[w, f],
+                                  p[w, s, K], mu, bulldozing, feet.friction_cap)
         else:
             mu = wp.min(mu, p[w, s, MU])
     if mu0 > 0.0:
