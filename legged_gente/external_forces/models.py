@@ -183,7 +183,7 @@ def rft_plane(normal, velocity):
 
 def rft_element_force(normal, velocity, depth, area, zeta, speed_reg):
     """Horizontal RFT force (N, 3-vector) on a sole element of ``area`` at ``depth`` below the surface:
-    -alpha_x(beta, gamma) |z| A e, faded in linearly below ``speed_reg`` (m/s) like the bulldozing direction.
+    -alpha_x(beta, gamma) |z| A e, faded in linearly below ``speed_reg`` (m/s), as the reported bulldozing is.
 
     The vertical stress is the sinkage law the contact holds the foot with (``rft_support``, ``rft_sinkage``),
     so it is not applied here as a force too.
