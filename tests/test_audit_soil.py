@@ -88,6 +88,7 @@ def _ground_friction(fr, cell_friction=1.0, soil=None, foot=0, load=400.0, slip=
     feet = K.FootSoil()
     feet.friction_reference, feet.use_friction, feet.use_soil = 1.0, 1, 1
     feet.sole_area, feet.bekker_width, feet.friction_cap, feet.min_friction, feet.sink_step = area, 0.096, 2.0, 0.01, 0.0
+    feet.bulldozing_face = 0.096
     feet.soil_params = wp.array(params, dtype=float, device=DEV)
     one = lambda v: wp.array(np.full((1, 1), v, np.float32), dtype=float, device=DEV)  # noqa: E731
     feet.load, feet.support, feet.slip, feet.sinkage = one(load), one(1.0), one(slip), one(0.0)
@@ -149,7 +150,7 @@ def _soil_eval(x: wp.array2d[float], out: wp.array2d[float]):
     i = wp.tid()  # columns: p kc kphi n b | c mu A F_N j K | z
     out[i, 0] = K.bekker_sinkage_fn(x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4])
     out[i, 1] = K.soil_traction_fn(x[i, 5], x[i, 6], x[i, 7], x[i, 8], x[i, 9], x[i, 10])
-    out[i, 2] = K.soil_friction_fn(x[i, 5], x[i, 6], x[i, 7], x[i, 8], x[i, 9], x[i, 10], 2.0)
+    out[i, 2] = K.soil_friction_fn(x[i, 5], x[i, 6], x[i, 7], x[i, 8], x[i, 9], x[i, 10], 1.0e30, 0.0, 2.0)
     out[i, 3] = K.bulldozing_force_fn(1.4e4, 2.6e5, 0.096, x[i, 11])
 
 

@@ -192,7 +192,9 @@ def test_forces_act_in_water_and_soil_only(env):
     assert on_soil[3].all() and not on_soil[[0, 1, 2, 4]].any()
     xfrc = wp.to_torch(env.sim.d.xfrc_applied).abs().sum(dim=(1, 2))
     assert xfrc[0] == 0 and xfrc[1] == 0  # rigid, dry tiles feel nothing
-    assert xfrc[3] > 0  # soil resists the feet
+    # soil acts through the feet's contacts (their rut, their friction limit), not as an applied force
+    sinkage = wp.to_torch(env.forces.foot_sinkage)
+    assert xfrc[3] == 0 and (sinkage[3] > 0).any() and not sinkage[[0, 1, 2, 4]].any()
 
 
 def test_low_friction_tiles_lower_contact_friction(env):

@@ -26,7 +26,8 @@ def _eval(
     area = x[i, 16] * x[i, 16] * 2.0
     out[i, 4] = K.shear_strength_fn(x[i, 24], x[i, 20], area, x[i, 21])
     out[i, 5] = K.soil_traction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23])
-    out[i, 6] = K.soil_friction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23], 2.0)
+    out[i, 6] = K.soil_friction_fn(x[i, 24], x[i, 20], area, x[i, 21], x[i, 22], x[i, 23], x[i, 6], out[i, 3],
+                                   2.0)  # ca's column as the surface's friction
 
 
 @pytest.mark.parametrize("paper", [0, 1])
@@ -51,7 +52,8 @@ def test_kernels_match_references(paper):
         models.bulldozing_force(x[:, 17], x[:, 18], x[:, 16], x[:, 19]),
         models.shear_strength(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21]),
         models.soil_traction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23]),
-        models.soil_friction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23], 2.0),
+        models.soil_friction(x[:, 24], x[:, 20], 2 * x[:, 16] ** 2, x[:, 21], x[:, 22], x[:, 23], 2.0,
+                             models.bulldozing_force(x[:, 17], x[:, 18], x[:, 16], x[:, 19]), surface_mu=x[:, 6]),
     ], 1)
     scale = np.maximum(np.abs(ref), 1e-6 * np.abs(ref).max(0))
     # a tide near its zero crossing: float32 rounding of omega*t is relative to the amplitude, not the value
@@ -84,6 +86,9 @@ def test_references_textbook_values():
     assert models.soil_friction(1.04e3, 0.53, 0.0198, 196.2, 1e9, 0.025, 2.0) == pytest.approx(
         0.53 + 1.04e3 * 0.0198 / 196.2)
     assert models.soil_friction(1.04e3, 0.53, 0.0198, 1.0, 1e9, 0.025, 2.0) == 2.0  # capped as F_N -> 0
+    # on ice under the sand (surface 0.2) the shear is the ice's; 30 N of bulldozing on the leading face adds to it
+    assert models.soil_friction(1.04e3, 0.53, 0.0198, 196.2, 1e9, 0.025, 2.0, bulldozing=30.0,
+                                surface_mu=0.2) == pytest.approx(0.2 + 30.0 / 196.2)
     # Bekker bulldozing: b (0.67 c K_pc z + 0.5 gamma K_pgamma z^2) with the two coefficients given
     assert models.bulldozing_force(1e4, 2e5, 0.1, 0.02) == pytest.approx(0.1 * (1e4 * 0.02 + 2e5 * 4e-4))
     with pytest.raises(ValueError, match="area"):

@@ -551,6 +551,7 @@ class TerrainForces:
         feet.friction_reference, feet.use_friction = float(cfg.friction_reference), int(bool(cfg.friction_from_map))
         feet.use_soil = int(bool(cfg.soil))  # feet: their traction; other bodies: tan(phi) (ground_friction)
         feet.sole_area, feet.bekker_width = self.sole_area, self.bekker_width
+        feet.bulldozing_face = self.sole_length if self.sole_disc else min(self.sole_length, self.sole_width)
         feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
         feet.sink_step = float(cfg.sinkage_rate) * self.dt
         feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support
@@ -653,11 +654,11 @@ class TerrainForces:
         if cfg.soil and self.nfoot:
             wp.launch(
                 K.soil_force_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
-                inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat, d.xipos,
+                inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat,
                         d.cvel, d.subtree_com, self.sole_length, self.sole_width, int(self.sole_disc),
                         float(cfg.bulldozing_speed_reg), self.soil_params,
                         self.foot_fn, self.foot_touch, self.foot_cand, self.foot_soil, self.foot_sinkage,
-                        self.foot_vel, self.foot_force, d.xfrc_applied],
+                        self.foot_vel, self.foot_force],
             )
         if cfg.soil and self.nfoot and self.has_rft:
             wp.launch(

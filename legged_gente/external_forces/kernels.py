@@ -122,10 +122,17 @@ def soil_traction_fn(c: float, mu: float, area: float, normal_force: float, slip
 
 @wp.func
 def soil_friction_fn(c: float, mu: float, area: float, normal_force: float, slip: float, k: float,
-                     cap: float) -> float:
-    """The contact friction coefficient of a soil: mobilised traction / F_N, at most cap."""
+                     surface_mu: float, bulldozing: float, cap: float) -> float:
+    """The contact friction coefficient of a sole on soil: min(surface_mu, mobilised traction / F_N) plus the
+    bulldozing resistance / F_N, at most cap.
+
+    The shear is the weaker of the sole's interface (the cell's friction: ice under snow) and the soil; Bekker's
+    bulldozing is the soil's passive pressure on the sunk sole's leading face, not shear, so it adds to either.
+    Both are rate-independent: in the friction limit MuJoCo's solver applies them implicitly (an explicit force
+    against the velocity is a stiff damper near rest and makes a foot held still chatter)."""
     fn = wp.max(normal_force, 1.0e-6)
-    return wp.min(soil_traction_fn(c, mu, area, fn, slip, k) / fn, cap)
+    shear = wp.min(surface_mu, soil_traction_fn(c, mu, area, fn, slip, k) / fn)
+    return wp.min(shear + bulldozing / fn, cap)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -318,6 +325,7 @@ class FootSoil:
     use_soil: int
     sole_area: float
     bekker_width: float  # Bekker's b: a rectangle's smaller side, a disc's radius
+    bulldozing_face: float  # the width of soil a sole pushes: a rectangle's smaller side, a disc's diameter
     friction_cap: float
     min_friction: float
     sink_step: float  # sinkage_rate * dt
@@ -346,8 +354,10 @@ def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, 
     if feet.use_soil != 0 and s >= 0:
         p = feet.soil_params
         if f >= 0:
-            mu = wp.min(mu, soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f],
-                                             feet.slip[w, f], p[w, s, K], feet.friction_cap))
+            bulldozing = bulldozing_force_fn(p[w, s, BULL_C], p[w, s, BULL_G], feet.bulldozing_face,
+                                             feet.sinkage[w, f])
+            mu = soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f], feet.slip[w, f],
+                                  p[w, s, K], mu, bulldozing, feet.friction_cap)
         else:
             mu = wp.min(mu, p[w, s, MU])
     if mu0 > 0.0:
@@ -442,7 +452,6 @@ def soil_force_kernel(
     body_rootid: wp.array[int],
     xpos: wp.array2d[wp.vec3],
     xmat: wp.array2d[wp.mat33],
-    xipos: wp.array2d[wp.vec3],
     cvel: wp.array2d[wp.spatial_vector],
     subtree_com: wp.array2d[wp.vec3],
     sole_length: float,
@@ -458,17 +467,13 @@ def soil_force_kernel(
     foot_sinkage: wp.array2d[float],
     foot_vel: wp.array2d[wp.vec3],
     foot_force: wp.array2d[wp.vec3],
-    xfrc: wp.array2d[wp.spatial_vector],
 ):
     """The soil's response to this substep's contacts, per foot. First the rut: a touching foot's deepens to what
     the contact filter found (``foot_cand``: plastic, it never rises during a stance) for this substep's forces and
     observations and the next substep's contacts; off soil there is none (lift-off: ``foot_state_kernel``). Then
-    Bekker bulldozing against the foot's horizontal velocity, at the sole's contact plane (``foot_drop`` below the
-    sole centre), where the soil acts. The shear is the contacts' friction (``ground_friction``).
-
-    The bulldozing direction is regularised, v / max(|v|, speed_reg), so it fades out linearly below
-    speed_reg instead of chattering around zero speed; its power -F |v|^2 / max(|v|, speed_reg) is never positive.
-    """
+    the sole point's horizontal velocity (slip) and, for the viewer and the observations, Bekker's bulldozing
+    resistance against it, faded below speed_reg: the contacts' friction applies the resistance
+    (``ground_friction``, with the shear), so nothing is applied here."""
     w, f = wp.tid()
     s = foot_soil[w, f]
     if s < 0:
@@ -484,8 +489,7 @@ def soil_force_kernel(
     if s >= 0 and foot_fn[w, f] > 0.0:
         face = bulldozing_width_fn(xmat[w, b], vh, sole_length, sole_width, sole_disc)
         fb = bulldozing_force_fn(soil_params[w, s, BULL_C], soil_params[w, s, BULL_G], face, foot_sinkage[w, f])
-        force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh
-        apply_force(xfrc, xipos, w, b, force, p)
+        force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh  # reported; the contacts' friction applies it
     foot_force[w, f] = force
 
 

@@ -114,15 +114,20 @@ def soil_traction(c, mu, area, normal_force, slip, K):
     return shear_strength(c, mu, area, normal_force) * (1.0 - np.exp(-j / np.asarray(K)))
 
 
-def soil_friction(c, mu, area, normal_force, slip, K, cap):
-    """Friction coefficient that makes a contact's Coulomb limit the soil's mobilised traction: the traction
-    over F_N, at most ``cap`` (the cohesion term c A / F_N grows without bound as F_N -> 0).
+def soil_friction(c, mu, area, normal_force, slip, K, cap, bulldozing=0.0, surface_mu=np.inf):
+    """Friction coefficient that makes a sole contact's Coulomb limit the soil's resistance: the shear, the
+    weaker of the sole's interface (``surface_mu``, the cell's friction: ice under snow) and the soil's mobilised
+    traction (Mohr-Coulomb, Janosi-Hanamoto), plus Bekker's bulldozing resistance, the passive pressure on the
+    sunk sole's leading face (not shear: it adds to either), over F_N, at most ``cap`` (the cohesion and
+    bulldozing terms over F_N grow without bound as F_N -> 0).
 
     Soil cells give their contacts this coefficient instead of the rigid ground's, so the soil limits the
-    traction (Mohr-Coulomb) instead of adding to it; the contact solver keeps it dissipative.
+    traction instead of adding to it; the contact solver keeps it dissipative and, unlike a force against the
+    velocity, implicit (both resistances are rate-independent): a foot held still does not chatter.
     """
     fn = np.maximum(np.asarray(normal_force, dtype=float), 1e-6)
-    return np.minimum(soil_traction(c, mu, area, fn, slip, K) / fn, cap)
+    shear = np.minimum(surface_mu, soil_traction(c, mu, area, fn, slip, K) / fn)
+    return np.minimum(shear + bulldozing / fn, cap)
 
 
 # Resistive force theory (Li, Zhang & Goldman, "A terradynamics of legged locomotion on granular media",
@@ -178,7 +183,7 @@ def rft_plane(normal, velocity):
 
 def rft_element_force(normal, velocity, depth, area, zeta, speed_reg):
     """Horizontal RFT force (N, 3-vector) on a sole element of ``area`` at ``depth`` below the surface:
-    -alpha_x(beta, gamma) |z| A e, faded in linearly below ``speed_reg`` (m/s) like the bulldozing direction.
+    -alpha_x(beta, gamma) |z| A e, faded in linearly below ``speed_reg`` (m/s), as the reported bulldozing is.
 
     The vertical stress is the sinkage law the contact holds the foot with (``rft_support``, ``rft_sinkage``),
     so it is not applied here as a force too.
