@@ -69,8 +69,8 @@ class ForcesConfig:
                           contact). Applied by the force fields' contact filter: an env without force fields
                           (forces off, or no water, soil, map friction or analytic soles) has no cap
     bulldozing_speed_reg: float  speed (m/s) below which the RFT soils' horizontal force, and the bulldozing
-                          reported to observations and the viewer, fade out linearly (Bekker's bulldozing acts
-                          through the contacts' friction limit)
+                          reported to the viewer, fade out linearly (Bekker's bulldozing acts through the
+                          contacts' friction limit)
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
     max_rut_depth: float  deepest a MuJoCo-collided foot (box soles, or sole_contact off) is shown lowered into its

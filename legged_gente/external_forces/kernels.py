@@ -471,9 +471,10 @@ def soil_force_kernel(
     """The soil's response to this substep's contacts, per foot. First the rut: a touching foot's deepens to what
     the contact filter found (``foot_cand``: plastic, it never rises during a stance) for this substep's forces and
     observations and the next substep's contacts; off soil there is none (lift-off: ``foot_state_kernel``). Then
-    the sole point's horizontal velocity (slip) and, for the viewer and the observations, Bekker's bulldozing
-    resistance against it, faded below speed_reg: the contacts' friction applies the resistance
-    (``ground_friction``, with the shear), so nothing is applied here."""
+    the sole point's horizontal velocity (slip) and, for the viewer, Bekker's bulldozing resistance against it
+    (the footprint's width across the motion), faded below speed_reg. Nothing is applied here: the contacts'
+    friction limit applies the resistance (``ground_friction``, with the shear; the sole's smaller side as its
+    width, the friction cone being isotropic)."""
     w, f = wp.tid()
     s = foot_soil[w, f]
     if s < 0:

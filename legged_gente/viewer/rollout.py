@@ -24,8 +24,8 @@ after policy step k + 1, at t = (k + 1) dt)::
                                    flow_omega, flow_phase, soil, friction) and terrain_soil_presets (S,) str
 
 Force kinds: ``buoyancy`` (Archimedes on each leg segment's submerged volume, cylinder and caps, as the kernel),
-``drag`` (the rest of the water force on the segment: drag, added mass, flow), ``soil`` (bulldozing and shear
-under each foot, at the sole).
+``drag`` (the rest of the water force on the segment: drag, added mass, flow), ``soil`` (under each foot: Bekker's
+bulldozing resistance against its motion, which the contacts' friction limit applies, or an RFT soil's forces).
 """
 
 from __future__ import annotations
