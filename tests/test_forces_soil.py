@@ -540,6 +540,60 @@ def test_a_calf_as_wide_as_its_foot_follows_it_into_its_rut():
     assert len(leg_dist) > 0
 
 
+def leg_rut(mass):
+    """Bekker's sinkage (Wong Table 2.3, the sandy loam at 32 % moisture) of the test leg lying flat, pressing
+    ``mass`` kg through its capsule's horizontal projection: 2r wide (Bekker's b), 0.14 + 2r long."""
+    pressure = mass * G / (0.04 * (0.14 + 0.04))
+    return (pressure / (0.77e3 / 0.04 + 51.91e3)) ** 2
+
+
+def test_a_rut_leg_sinks_into_soil_under_its_own_load():
+    """A leg lying flat on mud (its foot 0.2 m above it, touching nothing), 8 kg on a 0.04 m x 0.18 m projection:
+    p = 8 * 9.81 / 0.0072 = 10.9 kPa sinks z = (10.9e3 / (0.77e3 / 0.04 + 51.91e3))^2 = 2.35 cm (Bekker, b = 2r), so
+    its axis settles at r - z = -0.35 cm; 20 kg sinks 14.7 cm. On rigid ground it rests at r = 2 cm."""
+    wp.set_device(DEV)
+    flat = "-0.07 0 0 0.07 0 0"
+    slow = dict(sinkage_rate=0.1, sinkage_load_tau=0.2)
+    for mass in (8.0, 20.0):
+        z = leg_rut(mass)
+        height, foot_rut, dist, normals = settle_on(leg_world(mass, 0, leg=flat, foot_z=-0.2), soil_map("t_mud"),
+                                                    0.03, 600, rut_leg_geom_names=["leg"], **slow)
+        assert 0.02 - height == pytest.approx(z, rel=0.06), (mass, height, z)
+        assert foot_rut == 0.0  # the leg's rut is its own, not its foot's
+        assert len(dist) == 2
+        np.testing.assert_allclose(normals, [[0.0, 0.0, 1.0]] * 2, atol=1e-6)
+    height, *_ = settle_on(leg_world(8.0, 0, leg=flat, foot_z=-0.2), soil_map(), 0.03, 600,
+                           rut_leg_geom_names=["leg"], **slow)
+    assert height == pytest.approx(0.02, abs=0.002)
+
+
+def test_a_rut_legs_rut_is_forgotten_after_lift_off():
+    """Lifted out of its rut and held clear for longer than liftoff_time, the leg meets the undisturbed surface
+    again: dropped on it, it sinks the same Bekker depth afresh (not twice)."""
+    wp.set_device(DEV)
+    flat = "-0.07 0 0 0.07 0 0"
+    mjm = leg_world(8.0, 0, leg=flat, foot_z=-0.2)
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=1, nconmax=16, njmax=64)
+    cfg = type("C", (Cfg,), {"foot_geom_names": ["sole"], "rut_leg_geom_names": ["leg"], "sinkage_rate": 0.1,
+                             "sinkage_load_tau": 0.2})()
+    f = TerrainForces(mjm, m, d, np.zeros(SHAPE, np.float32), ORIGIN, RES, soil_map("t_mud"), cfg, seed=1)
+    f.install()
+    z = leg_rut(8.0)
+    for _ in range(2):
+        qpos, qvel = d.qpos.numpy(), d.qvel.numpy()
+        qpos[0, 0], qvel[0, 0] = 0.03 - 0.3, 0.0
+        d.qpos.assign(qpos), d.qvel.assign(qvel)
+        run(m, d, f, 600)
+        assert 0.02 - (0.3 + d.qpos.numpy()[0, 0]) == pytest.approx(z, rel=0.06)
+        assert f.leg_sinkage.numpy()[0, 0] == pytest.approx(z, rel=0.06)
+        qpos = d.qpos.numpy()
+        qpos[0, 0] = 0.3 - 0.3  # lifted 30 cm clear
+        d.qpos.assign(qpos)
+        run(m, d, f, int(2 * cfg.liftoff_time / 0.005) + 1, push=0.0)
+        assert f.leg_sinkage.numpy()[0, 0] == 0.0
+
+
 def test_a_rut_leg_lying_on_rigid_ground_touches_with_its_two_ends():
     """A leg lying flat (along x, 0.14 m of axis, r 2 cm) on rigid ground rests on its end spheres, as MuJoCo's
     capsule against a plane: its axis r above the ground, two contacts with vertical normals, none from the inner

@@ -31,9 +31,10 @@ class ForcesConfig:
                            foot (a box sole, or e.g. the spheres at its corners)
     rut_leg_geom_names: list[str]  capsule geoms of the legs, each above one foot and no wider than its sole (the
                            quadruped's calves, as wide as their foot balls), that follow their foot down the hole it
-                           presses into soil: with the analytic sole contacts (``sole_contact``) they touch the terrain
-                           through the same kernel, over soil against the surface lowered by their foot's rut, instead
-                           of MuJoCo's collision (the model must not collide them: ``contact.exclude_sole_collisions``)
+                           presses into soil and press ruts of their own under their own load: with the analytic sole
+                           contacts (``sole_contact``) they touch the terrain through the same kernel, over soil
+                           against the surface lowered by the deeper of their own rut and their foot's, instead of
+                           MuJoCo's collision (the model must not collide them: ``contact.exclude_sole_collisions``)
     foot_water_geom_names: list[str] | None  sphere or box geoms of the feet that feel water (buoyancy, drag);
                            None: the foot_geom_names
     sole_length, sole_width: float | None  a rectangular sole's size (m) along the foot body's x and y axes (both or

@@ -17,9 +17,11 @@ A foot's soil rut lowers the surface under it: the sphere is tested ``rut`` high
 vertically lowered by the rut), so the foot sits in its full Bekker rut with the contact's usual stiffness.
 
 A leg segment no wider than its foot (``ForcesConfig.rut_leg_geom_names``: the quadruped's calves, as wide as their
-foot balls) follows the foot down the hole the foot pressed: its capsule, a chain of spheres along its axis
-(``leg_points``), touches the terrain through the same contacts, over soil against the surface lowered by its
-foot's rut. It does not load the rut, and on soil its friction is ``tan phi`` (``kernels.ground_friction``).
+foot balls) follows the foot down the hole the foot pressed, and presses a rut of its own where it bears on soil
+itself (a calf swinging low into the undisturbed soil ahead of its foot's rut): its capsule, a chain of spheres along
+its axis (``leg_points``), touches the terrain through the same contacts, over soil against the surface lowered by
+the deeper of the two ruts. Its own rut follows Bekker under its own load as a foot's does (``kernels.LegSoil``); on
+soil its friction is ``tan phi`` (``kernels.ground_friction``).
 
 ``numpy`` references of every function sit beside their Warp twins (``*_fn``) and are tested against them.
 """
@@ -33,7 +35,7 @@ from mujoco_warp._src.collision_core import contact_material_params, write_conta
 from mujoco_warp._src.math import make_frame
 from mujoco_warp._src.types import vec5
 
-from legged_gente.external_forces.kernels import FootSoil, SoilMap, cell_of, ground_friction, rut_sinkage_fn
+from legged_gente.external_forces.kernels import FootSoil, LegSoil, SoilMap, cell_of, ground_friction, rut_sinkage_fn
 
 SOLE_TYPES = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))
 
@@ -295,6 +297,7 @@ def _sole_contact_kernel(with_legs: bool):
         pt_end: wp.array[float],
         pt_foot: wp.array[int],
         pt_leg_step: wp.array[float],
+        pt_leg: wp.array[int],
         terrain_geom: int,
         # model
         geom_condim: wp.array[int],
@@ -321,6 +324,7 @@ def _sole_contact_kernel(with_legs: bool):
         hf_res: float,
         soilmap: SoilMap,
         feet: FootSoil,
+        legs: LegSoil,
         max_depth: float,
         naconmax: int,
         # out
@@ -346,14 +350,17 @@ def _sole_contact_kernel(with_legs: bool):
     ):
         """One contact per sole point and world against the heightfield lowered by its foot's rut; the contact's
         material as MuJoCo mixes it for the (terrain, sole) pair, its friction the cell's (``ground_friction``). A leg
-        point (``pt_leg_step`` > 0: its spacing along the capsule, in ``pt_end``'s units) sees its foot's rut only over
-        a soil cell and leaves the rut's state alone. Of a leg's chain the two end spheres touch, as MuJoCo's capsule
-        against a plane, and an inner sphere only where it lies deeper than its neighbours (a step's edge between the
-        ends), so a calf lying on flat ground makes two contacts, not one per sphere.
+        point (``pt_leg`` >= 0, its leg; ``pt_leg_step``: its spacing along the capsule, in ``pt_end``'s units) sees,
+        over a soil cell only, the deeper of its leg's own rut and its foot's. Of a leg's chain the two end spheres
+        touch, as MuJoCo's capsule against a plane, and an inner sphere only where it lies deeper than its neighbours
+        (a step's edge between the ends), so a calf lying on flat ground makes two contacts, not one per sphere.
 
-        The rut deepens towards Bekker's z(F_N / sole area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at
-        most sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``). The
-        solver sees at most ``max_depth`` of penetration (``ForcesConfig.sole_contact_max_depth`` says why).
+        A rut deepens towards Bekker's z(F_N / area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at most
+        sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``): a foot's under
+        its load over the sole, a leg's under its own load over its capsule's horizontal projection, 2r wide
+        (Bekker's b) and 2r + its axis's horizontal length long (exact for a leg lying in the soil; a leg striking
+        with its end alone presses a smaller patch, so it sinks at least this much). The solver sees at most
+        ``max_depth`` of penetration (``ForcesConfig.sole_contact_max_depth`` says why).
         """
         w, k = wp.tid()
         g = pt_geom[k]
@@ -364,18 +371,21 @@ def _sole_contact_kernel(with_legs: bool):
         axis = size[1] * wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
         centre = geom_xpos[w, g] + pt_end[k] * axis
         s_foot = feet.soil[w, f]
-        leg = int(0)
-        if wp.static(with_legs):
-            if pt_leg_step[k] > 0.0:
-                leg = 1
+        leg = int(-1)
+        s_leg = int(-1)  # the soil under a leg point
         rut = float(0.0)
-        if s_foot >= 0:
-            rut = feet.sinkage[w, f]
-            if wp.static(with_legs) and leg != 0:
-                under = cell_of(centre, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0],
-                                soilmap.soil.shape[1])
-                if soilmap.soil[under[0], under[1]] < 0:
-                    rut = 0.0  # the foot's hole is in the soil, not in the rock beside it
+        if wp.static(with_legs):
+            leg = pt_leg[k]
+        if leg < 0:
+            if s_foot >= 0:
+                rut = feet.sinkage[w, f]
+        elif feet.use_soil != 0:
+            under = cell_of(centre, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
+            s_leg = soilmap.soil[under[0], under[1]]
+            if s_leg >= 0:  # ruts are in the soil, not in the rock beside it
+                rut = legs.sinkage[w, leg]
+                if s_foot >= 0:
+                    rut = wp.max(rut, feet.sinkage[w, f])
         geoms = wp.vec2i(terrain_geom, g)
         mid = w % geom_margin.shape[0]
         gid = w % geom_gap.shape[0]
@@ -394,7 +404,7 @@ def _sole_contact_kernel(with_legs: bool):
             # point (one call site of sphere_contact_fn: inlined once)
             step = pt_leg_step[k]
             tests = int(1)
-            if leg != 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:
+            if leg >= 0 and wp.abs(pt_end[k]) < 1.0 - 1.0e-6:
                 tests = 3
             res = wp.vec4(0.0)
             touches = int(1)
@@ -407,8 +417,11 @@ def _sole_contact_kernel(with_legs: bool):
                 r = sphere_contact_fn(heights, hf_origin, hf_res, centre + shift * axis, radius, rut, reach, max_depth)
                 if j == 0:
                     res = r
-                    if r[3] - rut < margin and rut > 0.0 and leg == 0:
-                        foot_inrut[w, f] = 1
+                    if r[3] - rut < margin and rut > 0.0:
+                        if leg < 0:
+                            foot_inrut[w, f] = 1
+                        else:
+                            legs.inrut[w, leg] = 1
                     if r[3] >= margin + gap:
                         touches = 0
                 elif (j == 1 and not res[3] < r[3]) or (j == 2 and not res[3] <= r[3]):
@@ -419,19 +432,26 @@ def _sole_contact_kernel(with_legs: bool):
                 return
         dist = res[3]
         normal = wp.vec3(res[0], res[1], res[2])
-        if s_foot >= 0 and leg == 0:
+        if s_foot >= 0 and leg < 0:
             z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
                                feet.support[w, f])
             # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
             wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + feet.sink_step))
             foot_touch[w, f] = 1
+        if wp.static(with_legs):
+            if s_leg >= 0:
+                across = wp.sqrt(axis[0] * axis[0] + axis[1] * axis[1])  # half the axis's horizontal length
+                area = 2.0 * radius * (2.0 * across + 2.0 * radius)
+                z = rut_sinkage_fn(legs.load[w, leg] / area, feet.soil_params, w, s_leg, 2.0 * radius, 1.0)
+                wp.atomic_max(legs.cand, w, leg, wp.min(z, rut - dist + feet.sink_step))
+                legs.touch[w, leg] = 1
         pos = centre - (radius + 0.5 * dist) * normal
         condim, friction, solref, solreffriction, solimp, adhesion = contact_material_params(
             geom_condim, geom_priority, geom_solmix, geom_solref, geom_solimp, geom_friction, geom_adhesion,
             pair_dim, pair_solref, pair_solreffriction, pair_solimp, pair_adhesion, pair_friction, geoms, -1, w)
         cell = cell_of(pos, soilmap.origin, soilmap.resolution, soilmap.soil.shape[0], soilmap.soil.shape[1])
         traction_of = f  # a foot's soil traction; a leg's tan(phi)
-        if leg != 0:
+        if leg >= 0:
             traction_of = -1
         friction = ground_friction(friction, cell, traction_of, w, soilmap, feet)
         if friction[0] < feet.min_friction:
@@ -468,21 +488,22 @@ def sole_points(mjm: mujoco.MjModel, foot_groups) -> tuple[np.ndarray, np.ndarra
     return np.asarray(geoms, np.int32), np.asarray(ends, np.float32), np.asarray(feet, np.int32)
 
 
-def leg_points(mjm: mujoco.MjModel, leg_geoms, leg_feet) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The contact points of the leg capsules that follow their feet into the ruts: (geom, end, foot, step) per
+def leg_points(mjm: mujoco.MjModel, leg_geoms, leg_feet) -> tuple[np.ndarray, ...]:
+    """The contact points of the leg capsules that follow their feet into the ruts: (geom, end, foot, step, leg) per
     point, spheres of the capsule's radius along its axis (ends -1 ... +1), ``step`` apart in the ends' units and at
     most one radius apart in metres, so the chain's surface stays within r (1 - cos 30 deg) = 0.13 r of the capsule's
-    between two points and matches it at each."""
-    geoms, ends, feet, steps = [], [], [], []
-    for g, f in zip(leg_geoms, leg_feet):
+    between two points and matches it at each; ``leg`` the capsule's index in ``leg_geoms``."""
+    geoms, ends, feet, steps, legs = [], [], [], [], []
+    for leg, (g, f) in enumerate(zip(leg_geoms, leg_feet)):
         radius, half = float(mjm.geom_size[g, 0]), float(mjm.geom_size[g, 1])
         count = max(int(np.ceil(2.0 * half / radius - 1e-6)) + 1, 2)
         geoms += [g] * count
         ends += list(np.linspace(-1.0, 1.0, count))
         feet += [f] * count
         steps += [2.0 / (count - 1)] * count
+        legs += [leg] * count
     return (np.asarray(geoms, np.int32), np.asarray(ends, np.float32), np.asarray(feet, np.int32),
-            np.asarray(steps, np.float32))
+            np.asarray(steps, np.float32), np.asarray(legs, np.int32))
 
 
 def exclude_sole_collisions(spec: mujoco.MjSpec, names) -> None:

@@ -375,6 +375,14 @@ class TerrainForces:
         self.foot_support = z((n, nf), float)
         self.foot_support.fill_(1.0)
         self.foot_force = z((n, nf), wp.vec3)
+        # each rut leg's own soil state (kernels.LegSoil) and its normal force, time in the air
+        nl = max(self.nleg, 1)
+        self.leg_fn, self.leg_air = z((n, nl), float), z((n, nl), float)
+        self.leg_load, self.leg_sinkage, self.leg_cand = z((n, nl), float), z((n, nl), float), z((n, nl), float)
+        self.leg_touch, self.leg_inrut = z((n, nl), int), z((n, nl), int)
+        self.legs = K.LegSoil()
+        self.legs.load, self.legs.sinkage, self.legs.cand = self.leg_load, self.leg_sinkage, self.leg_cand
+        self.legs.touch, self.legs.inrut = self.leg_touch, self.leg_inrut
         self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
         # the passive kernels' second and third branches (``_in_parallel``)
@@ -426,7 +434,8 @@ class TerrainForces:
         so do the legs of ``rut_leg_geom_names``; MuJoCo must then not collide them with the terrain (the geoms on
         the world body that collide: a heightfield's pieces, which share their collision settings; the contacts made
         here name the first)."""
-        self.npt, self.has_rut_legs = 0, False
+        self.npt, self.has_rut_legs, self.nleg = 0, False, 0
+        self.geom_leg = wp.array(np.full(mjm.ngeom, -1, np.int32), dtype=int, device=self.device)
         legs = list(self.cfg.rut_leg_geom_names)
         if legs and not (self.cfg.sole_contact and groups):
             raise ValueError(f"forces.rut_leg_geom_names {legs} follow their feet's analytic sole contacts, but "
@@ -441,9 +450,12 @@ class TerrainForces:
                 raise ValueError(f"forces.rut_leg_geom_names {legs}: the feet have no sphere or capsule soles, whose "
                                  f"analytic contacts a leg follows; list no legs for box soles.")
             return
-        leg_geoms, leg_ends, leg_feet, leg_steps = C.leg_points(mjm, *self._rut_legs(mjm, legs, groups))
-        geoms, ends, feet, steps = (np.concatenate(p) for p in (
-            (geoms, leg_geoms), (ends, leg_ends), (feet, leg_feet), (np.zeros(len(geoms), np.float32), leg_steps)))
+        leg_geom_ids, leg_foot = self._rut_legs(mjm, legs, groups)
+        leg_geoms, leg_ends, leg_feet, leg_steps, leg_index = C.leg_points(mjm, leg_geom_ids, leg_foot)
+        sole_leg = np.full(len(geoms), -1, np.int32)  # a sole point belongs to no leg
+        geoms, ends, feet, steps, pt_leg = (np.concatenate(p) for p in (
+            (geoms, leg_geoms), (ends, leg_ends), (feet, leg_feet), (np.zeros(len(geoms), np.float32), leg_steps),
+            (sole_leg, leg_index)))
         if not ground:
             raise ValueError("forces.sole_contact needs a colliding terrain geom on the world body, found none; set "
                              "forces.sole_contact=False for such scenes.")
@@ -455,12 +467,16 @@ class TerrainForces:
             raise ValueError(f"forces.sole_contact: sole or rut leg geoms {clash} still collide with the terrain in "
                              f"MuJoCo; build the model with external_forces.contact.exclude_sole_collisions(spec, "
                              f"names) (contype = conaffinity = 0) or set forces.sole_contact=False.")
-        self.npt, self.has_rut_legs = len(geoms), len(leg_geoms) > 0
+        self.npt, self.has_rut_legs, self.nleg = len(geoms), len(leg_geoms) > 0, len(leg_geom_ids)
         dev = self.device
         self.pt_geom = wp.array(geoms, dtype=int, device=dev)
         self.pt_end = wp.array(ends, dtype=float, device=dev)
         self.pt_foot = wp.array(feet, dtype=int, device=dev)
         self.pt_leg_step = wp.array(steps, dtype=float, device=dev)
+        self.pt_leg = wp.array(pt_leg, dtype=int, device=dev)
+        geom_leg = np.full(mjm.ngeom, -1, np.int32)
+        geom_leg[np.asarray(leg_geom_ids, int)] = np.arange(self.nleg)
+        self.geom_leg = wp.array(geom_leg, dtype=int, device=dev)
 
     def _rut_legs(self, mjm, names, groups) -> tuple[np.ndarray, list[int]]:
         """The geoms of ``rut_leg_geom_names`` and the foot each follows: the one foot whose body is the geom's body
@@ -572,11 +588,13 @@ class TerrainForces:
             launches.append(wp.launch(
                 C.sole_and_leg_contact_kernel if self.has_rut_legs else C.sole_contact_kernel,
                 dim=(self.nworld, self.npt), device=dev, block_dim=LIMB_BLOCK_DIM,
-                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.pt_leg_step, self.terrain_geom, m.geom_condim,
+                inputs=[self.pt_geom, self.pt_end, self.pt_foot, self.pt_leg_step, self.pt_leg, self.terrain_geom,
+                        m.geom_condim,
                         m.geom_priority, m.geom_solmix, m.geom_solref, m.geom_solimp, m.geom_friction, m.geom_adhesion,
                         m.geom_margin, m.geom_gap, m.geom_size, m.pair_dim, m.pair_solref, m.pair_solreffriction,
                         m.pair_solimp, m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights,
-                        self.hf_origin, self.hf_res, self.soilmap, feet, float(cfg.sole_contact_max_depth), d.naconmax,
+                        self.hf_origin, self.hf_res, self.soilmap, feet, self.legs, float(cfg.sole_contact_max_depth),
+                        d.naconmax,
                         self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
@@ -677,20 +695,27 @@ class TerrainForces:
         self.counter.zero_()
 
     def after_substep(self):
-        """After each ``mjw.step``: sum the feet's normal forces, update slip since touchdown, write obs."""
+        """After each ``mjw.step``: sum the feet's (and rut legs') normal forces, update slip since touchdown and the
+        rut legs' ruts, write obs."""
         if not self.nfoot:
             return
         m, d, dev = self.m, self.d, self.device
-        self.foot_fn.zero_()
         c = d.contact
-        wp.launch(
-            K.foot_normal_kernel, dim=d.naconmax, device=dev,
-            inputs=[int(m.opt.cone), d.nacon, self.geom_foot, c.frame, c.friction, c.dim, c.efc_address,
-                    c.adhesion, c.geom, c.worldid, d.efc.force, d.njmax, self.foot_fn],
-        )
+        load_alpha = min(self.dt / float(self.cfg.sinkage_load_tau), 1.0)
+        for geom_limb, limb_fn in ((self.geom_foot, self.foot_fn), (self.geom_leg, self.leg_fn))[:1 + self.has_rut_legs]:
+            limb_fn.zero_()
+            wp.launch(
+                K.normal_force_kernel, dim=d.naconmax, device=dev,
+                inputs=[int(m.opt.cone), d.nacon, geom_limb, c.frame, c.friction, c.dim, c.efc_address,
+                        c.adhesion, c.geom, c.worldid, d.efc.force, d.njmax, limb_fn],
+            )
+        if self.has_rut_legs:
+            wp.launch(K.leg_state_kernel, dim=(self.nworld, self.nleg), device=dev,
+                      inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha, float(self.cfg.liftoff_time),
+                              self.leg_fn, self.legs, self.leg_air])
         wp.launch(
             K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
-            inputs=[self.dt, float(self.cfg.contact_threshold), min(self.dt / float(self.cfg.sinkage_load_tau), 1.0),
+            inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha,
                     self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights,
                     d.time, self.water, self.xi, self.soil_params, self.foot_fn,
                     self.foot_vel, self.foot_sinkage, self.foot_soil, float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip,
@@ -699,11 +724,13 @@ class TerrainForces:
 
     def reset(self, mask):
         """Redraw eps ~ N(1, noise_std) and the soil parameters of the envs in ``mask`` (wp bool, nworld);
-        forget their foot slip. Device-only: safe inside a captured graph."""
+        forget their feet's and rut legs' soil state (slip, ruts, loads). Device-only: safe inside a captured graph."""
         wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
                   inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
                           self.soil_params, self.foot_slip, self.foot_air, self.foot_sinkage,
                           self.foot_load, self.foot_support])
+        if self.has_rut_legs:
+            wp.launch(K.leg_reset_kernel, dim=self.nworld, device=self.device, inputs=[mask, self.legs, self.leg_air])
         wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])
 
     def new_policy_step(self):

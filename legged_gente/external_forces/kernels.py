@@ -337,6 +337,20 @@ class FootSoil:
     soil: wp.array2d[int]  # the soil under the foot: an index into soil_params, -1 off soil
 
 
+@wp.struct
+class LegSoil:
+    """Each rut leg's own soil state (per world and leg; ``ForcesConfig.rut_leg_geom_names``): its rut, pressed by
+    its own contacts' low-passed load, and what this substep's sole contacts found for it (its deepest rut
+    candidate, whether it touched soil, whether it is still below the unlowered surface), which
+    ``leg_state_kernel`` takes in and clears after the step."""
+
+    load: wp.array2d[float]
+    sinkage: wp.array2d[float]
+    cand: wp.array2d[float]
+    touch: wp.array2d[int]
+    inrut: wp.array2d[int]
+
+
 @wp.func
 def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, feet: FootSoil) -> vec5:
     """Tangential friction of a ground contact in ``cell``: the rigid friction scaled by the cell's map friction;
@@ -499,10 +513,10 @@ def soil_force_kernel(
 
 
 @wp.kernel
-def foot_normal_kernel(
+def normal_force_kernel(
     opt_cone: int,
     nacon: wp.array[int],
-    geom_foot: wp.array[int],
+    geom_limb: wp.array[int],
     contact_frame: wp.array[wp.mat33],
     contact_friction: wp.array[vec5],
     contact_dim: wp.array[int],
@@ -512,16 +526,17 @@ def foot_normal_kernel(
     contact_worldid: wp.array[int],
     efc_force: wp.array2d[float],
     njmax: int,
-    foot_fn: wp.array2d[float],
+    limb_fn: wp.array2d[float],
 ):
-    """Sum each foot's contact normal forces (N) from the solver's constraint forces."""
+    """Sum each limb's (a foot's, or a rut leg's: ``geom_limb`` maps a geom to its index, else -1) contact normal
+    forces (N) from the solver's constraint forces."""
     i = wp.tid()
     if i >= nacon[0]:
         return
     g = contact_geom[i]
-    f = geom_foot[g[0]]
+    f = geom_limb[g[0]]
     if f < 0:
-        f = geom_foot[g[1]]
+        f = geom_limb[g[1]]
     if f < 0:
         return
     w = contact_worldid[i]
@@ -529,7 +544,7 @@ def foot_normal_kernel(
         opt_cone, contact_frame, contact_friction, contact_dim, contact_efc_address, contact_adhesion,
         efc_force, njmax, nacon, w, i, False,
     )
-    wp.atomic_add(foot_fn, w, f, wp.max(frc[0], 0.0))
+    wp.atomic_add(limb_fn, w, f, wp.max(frc[0], 0.0))
 
 
 @wp.kernel
@@ -601,3 +616,45 @@ def foot_state_kernel(
         obs[w, o + 9] = soil_params[w, s, COH] / 1.0e4
         obs[w, o + 10] = soil_params[w, s, MU]
         obs[w, o + 11] = soil_params[w, s, K] * 100.0
+
+
+@wp.kernel
+def leg_state_kernel(
+    dt: float,
+    contact_threshold: float,
+    load_alpha: float,
+    liftoff_time: float,
+    leg_fn: wp.array2d[float],
+    legs: LegSoil,
+    leg_air: wp.array2d[float],
+):
+    """A rut leg's soil state after the step, by its foot's rules (``soil_force_kernel``, ``foot_state_kernel``):
+    the rut deepens to what this substep's contacts found and never rises while the leg bears on it (plastic
+    sinkage); the load is low-passed; once the leg's normal force has stayed at or below contact_threshold for
+    liftoff_time and it is out of its rut, the rut is forgotten (the leg meets the undisturbed surface again).
+    The substep's findings are cleared for the next."""
+    w, k = wp.tid()
+    legs.load[w, k] = legs.load[w, k] + load_alpha * (leg_fn[w, k] - legs.load[w, k])
+    if legs.touch[w, k] != 0:
+        legs.sinkage[w, k] = wp.max(legs.sinkage[w, k], legs.cand[w, k])
+    if leg_fn[w, k] > contact_threshold:
+        leg_air[w, k] = 0.0
+    else:
+        leg_air[w, k] = leg_air[w, k] + dt
+        if leg_air[w, k] >= liftoff_time and legs.inrut[w, k] == 0:
+            legs.sinkage[w, k] = 0.0
+    legs.cand[w, k] = 0.0
+    legs.touch[w, k] = 0
+    legs.inrut[w, k] = 0
+
+
+@wp.kernel
+def leg_reset_kernel(mask: wp.array[bool], legs: LegSoil, leg_air: wp.array2d[float]):
+    """A reset robot's rut legs start out of any rut, unloaded, in the air."""
+    w = wp.tid()
+    if not mask[w]:
+        return
+    for k in range(leg_air.shape[1]):
+        legs.load[w, k] = 0.0
+        legs.sinkage[w, k] = 0.0
+        leg_air[w, k] = 1.0e6
