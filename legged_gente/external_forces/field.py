@@ -375,11 +375,12 @@ class TerrainForces:
         self.foot_support = z((n, nf), float)
         self.foot_support.fill_(1.0)
         self.foot_force = z((n, nf), wp.vec3)
-        # each rut leg's own soil state (kernels.LegSoil) and its normal force, time in the air
-        nl = max(self.nleg, 1)
-        self.leg_fn, self.leg_air = z((n, nl), float), z((n, nl), float)
-        self.leg_load, self.leg_sinkage, self.leg_cand = z((n, nl), float), z((n, nl), float), z((n, nl), float)
-        self.leg_touch, self.leg_inrut = z((n, nl), int), z((n, nl), int)
+        # each rut leg's own soil state (kernels.LegSoil) and its normal force, time in the air; without rut legs
+        # one-element placeholders for the sole kernel's arguments, which are no per-world state to carry
+        legs = (n, self.nleg) if self.has_rut_legs else (1, 1)
+        self.leg_fn, self.leg_air = z(legs, float), z(legs, float)
+        self.leg_load, self.leg_sinkage, self.leg_cand = z(legs, float), z(legs, float), z(legs, float)
+        self.leg_touch, self.leg_inrut = z(legs, int), z(legs, int)
         self.legs = K.LegSoil()
         self.legs.load, self.legs.sinkage, self.legs.cand = self.leg_load, self.leg_sinkage, self.leg_cand
         self.legs.touch, self.legs.inrut = self.leg_touch, self.leg_inrut
