@@ -1,5 +1,5 @@
-"""How much a shipped policy's robot stands on bodies other than its feet on soil (the soil model acts on the feet
-only; any other body meets the soil as rigid ground, docs/forces.md): ROBOTS robots per tile walking straight ahead
+"""How much a shipped policy's robot stands on bodies other than its feet on soil (the soil sinks under the feet and,
+since b6e845c, the rut legs, the quadruped's calves; any other body meets the soil as rigid ground, docs/forces.md): ROBOTS robots per tile walking straight ahead
 at 0.5 m/s (their spawn heading held) on flat ground and on the whole-tile soils mud, snow and dry sand, in the
 evaluation's env (observation noise, pushes, friction and mass randomisation); from 0.5 s to 3 s, per robot-step,
 whether such a body has a contact force over 1 N, and their vertical contact force as a fraction of the robot's
