@@ -435,7 +435,7 @@ class TerrainForces:
         so do the legs of ``rut_leg_geom_names``; MuJoCo must then not collide them with the terrain (the geoms on
         the world body that collide: a heightfield's pieces, which share their collision settings; the contacts made
         here name the first)."""
-        self.npt, self.has_rut_legs, self.nleg = 0, False, 0
+        self.npt, self.nleg = 0, 0
         self.geom_leg = wp.array(np.full(mjm.ngeom, -1, np.int32), dtype=int, device=self.device)
         legs = list(self.cfg.rut_leg_geom_names)
         if legs and not (self.cfg.sole_contact and groups):
@@ -468,7 +468,7 @@ class TerrainForces:
             raise ValueError(f"forces.sole_contact: sole or rut leg geoms {clash} still collide with the terrain in "
                              f"MuJoCo; build the model with external_forces.contact.exclude_sole_collisions(spec, "
                              f"names) (contype = conaffinity = 0) or set forces.sole_contact=False.")
-        self.npt, self.has_rut_legs, self.nleg = len(geoms), len(leg_geoms) > 0, len(leg_geom_ids)
+        self.npt, self.nleg = len(geoms), len(leg_geom_ids)
         dev = self.device
         self.pt_geom = wp.array(geoms, dtype=int, device=dev)
         self.pt_end = wp.array(ends, dtype=float, device=dev)
@@ -478,6 +478,10 @@ class TerrainForces:
         geom_leg = np.full(mjm.ngeom, -1, np.int32)
         geom_leg[np.asarray(leg_geom_ids, int)] = np.arange(self.nleg)
         self.geom_leg = wp.array(geom_leg, dtype=int, device=dev)
+
+    @property
+    def has_rut_legs(self) -> bool:
+        return self.nleg > 0
 
     def _rut_legs(self, mjm, names, groups) -> tuple[np.ndarray, list[int]]:
         """The geoms of ``rut_leg_geom_names`` and the foot each follows: the one foot whose body is the geom's body
