@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import socket
 import socketserver
 import threading
@@ -16,6 +17,28 @@ from legged_gente.generation.backends import openai_backend
 from legged_gente.generation.backends.openai_backend import OpenAIBackend
 
 
+def _read_request(sock, limit=1 << 20):
+    """Reads one whole HTTP request (headers and its Content-Length body), so that closing the socket sends FIN.
+
+    A socket closed with unread bytes sends RST instead (RFC 1122, 4.2.2.13), and a client still reading the reply
+    then fails with "connection reset" before it has parsed what it was sent.
+    """
+    data = b""
+    while b"\r\n\r\n" not in data and len(data) < limit:
+        chunk = sock.recv(65536)
+        if not chunk:
+            return
+        data += chunk
+    head, _, body = data.partition(b"\r\n\r\n")
+    length = re.search(rb"(?im)^content-length:\s*(\d+)", head)
+    missing = int(length.group(1)) - len(body) if length else 0
+    while 0 < missing:
+        chunk = sock.recv(min(missing, 65536))
+        if not chunk:
+            return
+        missing -= len(chunk)
+
+
 class RawServer:
     """Answers every connection with ``respond(write, stop)``: raw bytes, at the pace the test wants."""
 
@@ -25,7 +48,7 @@ class RawServer:
 
         class Handler(socketserver.BaseRequestHandler):
             def handle(self):
-                self.request.recv(65536)  # the request (small: the tests send short prompts)
+                _read_request(self.request)
                 try:
                     respond(self.request.sendall, outer.stop)
                 except OSError:  # the client gave up and closed the connection
@@ -171,3 +194,25 @@ def test_a_redirect_is_not_followed(monkeypatch, status):
                                f"are not followed (they would carry the API key to another address): point --base-url "
                                f"at the final address.")
     assert seen == []
+
+
+def test_the_raw_server_reads_the_whole_request_so_its_reply_arrives_whole():
+    """A request whose body comes in a second segment and a reply larger than the socket buffers: all of it arrives.
+
+    Closed with the body unread, the server's socket would reset the connection and drop the reply's unsent tail.
+    """
+    reply = b"HTTP/1.1 200 OK\r\nX-a: " + b"b" * 8_000_000 + b"\r\n\r\n{}"
+
+    def respond(write, stop):
+        time.sleep(0.3)  # the body arrives meanwhile
+        write(reply)
+
+    with RawServer(respond) as srv:
+        with socket.create_connection(("127.0.0.1", srv.server.server_address[1]), timeout=5.0) as sock:
+            sock.sendall(b"POST /v1/chat/completions HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\n\r\n")
+            time.sleep(0.1)  # the server has read the headers
+            sock.sendall(b"{}")
+            received = b""
+            while chunk := sock.recv(1 << 20):
+                received += chunk
+    assert received == reply
