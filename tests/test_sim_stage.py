@@ -154,3 +154,19 @@ def test_what_the_two_stage_substep_does_not_run_is_refused_with_the_fix():
         "<option ", '<option><flag energy="enable"/></option>\n  <option '))
     with pytest.raises(ValueError, match="energy or sleep flag.*remove <flag energy"):
         Simulation(mjm, 1, "cpu", SIM_CFG, batch_model=False)
+
+
+def test_after_step_hooks_run_once_per_step_after_the_last_substeps_hooks_and_in_the_forward():
+    """A step of DECIMATION substeps runs the after_substep hooks DECIMATION times, then the after_step hooks once,
+    at the state of its end (the time after its last substep); the forward runs each once."""
+    sim, _, _ = _pair("Euler")
+    calls = []
+    sim.after_substep.append(lambda: calls.append(("substep", float(sim.time[0]))))
+    sim.after_step.append(lambda: calls.append(("step", float(sim.time[0]))))
+    sim.step(DECIMATION)
+    dt = 0.005
+    assert [c[0] for c in calls] == ["substep"] * DECIMATION + ["step"]
+    assert calls[-1][1] == pytest.approx(DECIMATION * dt) and calls[-2][1] == calls[-1][1]
+    calls.clear()
+    sim.forward(torch.ones(WORLDS, dtype=torch.bool))
+    assert [c[0] for c in calls] == ["substep", "step"]

@@ -94,6 +94,9 @@ class Simulation:
             raise ValueError("Simulation: the model enables MuJoCo's energy or sleep flag, which the two-stage substep "
                              "does not run; remove <flag energy=.../> and <flag sleep=.../> from the robot's MJCF option")
         self.after_substep: list[Callable[[], None]] = []
+        # once after a step's last substep's hooks (and in the forward): work that only the step's end reads, such as
+        # observations, so the substeps before it skip it
+        self.after_step: list[Callable[[], None]] = []
         self.after_reset: list[Callable[[torch.Tensor], None]] = []  # called with the reset mask (torch bool)
         self._graph = None
         self._make_views()
@@ -195,8 +198,9 @@ class Simulation:
         mjw.sensor_acc(m, d, skip_rne_postconstraint=True)
 
     def _substeps(self, decimation: int) -> None:
-        """``decimation`` substeps, each ``mjw.step`` in two halves then the after_substep hooks; the first
-        substep's first half is the stage computed ahead (``ensure_stage`` ran before)."""
+        """``decimation`` substeps, each ``mjw.step`` in two halves then the after_substep hooks, then the
+        after_step hooks once; the first substep's first half is the stage computed ahead (``ensure_stage`` ran
+        before)."""
         m, d = self.m, self.d
         self._use_stage()
         for substep in range(decimation):
@@ -209,6 +213,8 @@ class Simulation:
                 mjw.implicit(m, d)
             for hook in self.after_substep:
                 hook()
+        for hook in self.after_step:
+            hook()
         self._contact_forces()
 
     def _contact_forces(self) -> None:
@@ -265,8 +271,8 @@ class Simulation:
     def forward(self, mask: torch.Tensor) -> None:
         """Recompute what derives from qpos/qvel/ctrl without advancing time, as a substep sees it: bodies,
         contacts (the force fields' contact filter included: ground friction, soil, analytic sole contacts),
-        passive forces, constraint forces; then the ``after_substep`` hooks (the force fields' observation) and
-        the per-body contact forces. The worlds in ``mask`` take the new values of every ``observed`` tensor; the
+        passive forces, constraint forces; then the ``after_substep`` and ``after_step`` hooks (the force fields'
+        state and observation) and the per-body contact forces. The worlds in ``mask`` take the new values of every ``observed`` tensor; the
         others keep their last substep's. Only the masked worlds' constraints are solved, so what derives from the
         solve in ``d`` (qacc, constraint forces, acceleration sensors) is the forward's in those worlds only: a
         subclass that observes such a value registers its tensor in ``observed``.
@@ -295,10 +301,10 @@ class Simulation:
 
     def recompute(self, mask: torch.Tensor) -> None:
         """The Warp work of :meth:`forward`: the next substep's first half in every world, computed ahead and kept
-        for it (with the force fields' callbacks); the second half of MuJoCo's forward, the ``after_substep``
-        hooks and the per-body contact forces, with the constraints solved in the worlds in ``mask`` only (the
-        others' constraint forces are not observed: they keep their last substep's). ``substep_state`` is left as
-        it was."""
+        for it (with the force fields' callbacks); the second half of MuJoCo's forward, the ``after_substep`` and
+        ``after_step`` hooks and the per-body contact forces, with the constraints solved in the worlds in ``mask``
+        only (the others' constraint forces are not observed: they keep their last substep's). ``substep_state`` is
+        left as it was."""
         with wp.ScopedDevice(self.wp_device):
             self._stage()  # leaves the substep state as the stage integrated it, as the second half expects
             # no rows, no solver work: the solver's iterations and line searches run per constraint row. The row
@@ -308,6 +314,8 @@ class Simulation:
             self._acceleration()
             wp.copy(self.d.nefc, self._nefc_kept)
             for hook in self.after_substep:
+                hook()
+            for hook in self.after_step:
                 hook()
             self._contact_forces()
             self._put_back()
