@@ -70,7 +70,7 @@ def test_raw_physics_measures_from_and_returns_to_the_settled_state():
     benchmark.settle(env)
     qpos, qvel = env.sim.qpos.clone(), env.sim.qvel.clone()
     assert (qpos[:, 2] > 0.8).all()  # landed and standing, not lying on the ground
-    assert benchmark.raw_physics(env, 3 * benchmark.RESTORE_EVERY) > 0.0
+    assert benchmark.raw_physics(env, benchmark.RESTORE_EVERY * env.cfg.control.decimation, with_forces=True) > 0.0
     assert torch.equal(env.sim.qpos, qpos) and torch.equal(env.sim.qvel, qvel)
 
 

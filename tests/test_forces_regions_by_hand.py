@@ -212,6 +212,7 @@ def place(terrain, times, z=None):
     mjw.forward(m, d)  # callbacks not installed: kinematics only, no forces
     f.contact_filter(m, d)
     f.after_substep()
+    f.observe()
     return m, d, f
 
 
@@ -316,6 +317,7 @@ def test_a_reset_world_starts_the_tide_at_its_phase(terrain):
     d.qpos.assign(qpos)
     mjw.forward(m, d)
     f.after_substep()
+    f.observe()
     u = TIDE["speed"] * math.cos(TIDE["phase"])
     assert float(by_name(f, 1)["tide_10"][0]) == pytest.approx(u * math.cos(TIDE["direction"]), abs=1e-6)
     assert float(by_name(f, 2)["tide_10"][0]) == pytest.approx(u * math.sin(TIDE["direction"]), abs=1e-6)

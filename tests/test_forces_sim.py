@@ -130,6 +130,7 @@ def test_tide_follows_cos_morison_and_paper_flow_term():
         morison = 0.5 * 1000.0 * cfg.drag_coefficient * 2 * R * L * abs(u) * u + 2.0 * 1000.0 * np.pi * R**2 * L * du
         np.testing.assert_allclose(f.seg_force.numpy()[:, 0, 0], morison + u, rtol=1e-3, atol=1e-4)
     f.after_substep()  # no feet: nothing to do, must not fail
+    f.observe()
 
 
 def test_paper_flow_term_acts_whole_on_a_partly_wet_segment():
@@ -224,6 +225,7 @@ def settle(mat, nworld=2, steps=150):
     for _ in range(steps):
         mjw.step(m, d)
         f.after_substep()
+    f.observe()
     return mjm, d, f
 
 

@@ -3,7 +3,8 @@ of it, on the device given (made for the CPU, where the torch profiler does not 
 
 The env is built and settled as gente-benchmark does; then, from the same standing state each time (restored
 before each block of substeps), the minimum over interleaved repetitions of:
-  step, forces on:   mjw.step with the force callbacks and the after-substep kernels
+  step, forces on:   mjw.step with the force callbacks and the after-substep kernels (and their observation
+                     once per policy step: after every decimation-th substep)
   step, forces off:  mjw.step without them (the contact filter kept where it makes the soles' contacts)
   collision:         mjw.collision alone (broad- and narrow-phase and the contact filter)
   ... no terrain:    the same on a copy of the model whose terrain geom collides with nothing (contype =
@@ -63,10 +64,16 @@ def main(argv=None):
         wp.synchronize()
         return (time.perf_counter() - start) / args.block
 
+    substeps_on = [0]
+
     def step_on():
         mjw.step(m, d)
         for hook in sim.after_substep:
             hook()
+        substeps_on[0] += 1
+        if substeps_on[0] % env.cfg.control.decimation == 0:
+            for hook in sim.after_step:
+                hook()
 
     def set_filter(on):
         m.callback.passive = callbacks[0] if on else None

@@ -1,5 +1,6 @@
-"""GPU time of each terrain force kernel, of a whole substep and of the post-reset forward (torch profiler over
-eager launches, after the robots have landed): where ``gente-benchmark``'s "forces" and "soles" shares go.
+"""GPU time of each terrain force kernel, of a policy step's substeps and of the post-reset forward (torch
+profiler over eager launches, after the robots have landed): where ``gente-benchmark``'s "forces" and "soles" shares
+go.
 
     python tools/profile_force_kernels.py --task gente_biped --num_envs 8192
 
@@ -68,18 +69,21 @@ def main() -> None:
     sim, forces = env.sim, env.forces
     nacon = wp.clone(sim.d.nacon)
 
-    def substep():
-        mjw.step(sim.m, sim.d)
-        forces.after_substep()
+    def policy_step():
+        for _ in range(env.cfg.control.decimation):
+            mjw.step(sim.m, sim.d)
+            forces.after_substep()
+        forces.observe()
 
     with wp.ScopedDevice(sim.wp_device), sim.substep_state_kept():
-        force_total = show("force kernels (one pass)", *kernel_times(force_pass(env), args.calls), top=20)
+        force_total = show("force kernels (a policy step's passes)", *kernel_times(force_pass(env), args.calls),
+                           top=20)
         wp.copy(sim.d.nacon, nacon)
-        substep_total = show("substep with forces", *kernel_times(substep, args.calls), top=30)
+        substep_total = show("policy step's substeps with forces", *kernel_times(policy_step, args.calls), top=30)
         reset = typical_resets(env)
         show(f"post-reset forward (Simulation.recompute, {RESET_SHARE:.0%} of the worlds reset)",
              *kernel_times(lambda: sim.recompute(reset), args.calls), top=25)
-    print(f"force kernels: {force_total / substep_total:.1%} of the substep's kernel time ({args.num_envs} robots, "
+    print(f"force kernels: {force_total / substep_total:.1%} of the substeps' kernel time ({args.num_envs} robots, "
           f"{torch.cuda.get_device_name()})")
 
 

@@ -1,9 +1,10 @@
 """Share of ``mjw.step`` time spent in the terrain force kernels.
 
 ``forces_share(m, d, forces, steps)`` times ``steps`` substeps with the callbacks installed (plus
-``after_substep``) and without, with ``wp.synchronize`` around each timing, and returns both times and
-the share. ``gente-benchmark`` calls it on the env's model; ``python -m legged_gente.external_forces.benchmark``
-runs it on a small built-in wading/soil scene.
+``after_substep``, and ``observe`` once per policy step of ``decimation`` substeps) and without, with
+``wp.synchronize`` around each timing, and returns both times and the share.
+``python -m legged_gente.external_forces.benchmark`` runs it on a small built-in wading/soil scene; ``gente-benchmark``
+times the env's force kernels its own way (captured, in the env's state).
 """
 
 from __future__ import annotations
@@ -17,18 +18,20 @@ import numpy as np
 import warp as wp
 
 
-def _time_steps(m, d, steps: int, after=None) -> float:
+def _time_steps(m, d, steps: int, forces=None, decimation: int = 1) -> float:
     wp.synchronize()
     t0 = time.perf_counter()
-    for _ in range(steps):
+    for k in range(steps):
         mjw.step(m, d)
-        if after is not None:
-            after()
+        if forces is not None:
+            forces.after_substep()
+            if (k + 1) % decimation == 0:
+                forces.observe()
     wp.synchronize()
     return time.perf_counter() - t0
 
 
-def forces_share(m, d, forces, steps: int = 100, warmup: int = 5) -> dict:
+def forces_share(m, d, forces, steps: int = 100, warmup: int = 5, decimation: int = 4) -> dict:
     """Seconds per substep with and without the force callbacks, and the forces' share of the step.
 
     ``forces`` is an installed or not-yet-installed ``TerrainForces`` on (m, d); the model's callbacks are
@@ -42,8 +45,8 @@ def forces_share(m, d, forces, steps: int = 100, warmup: int = 5) -> dict:
     _time_steps(m, d, warmup)
     base = _time_steps(m, d, steps)
     forces.install()
-    _time_steps(m, d, warmup, forces.after_substep)
-    with_forces = _time_steps(m, d, steps, forces.after_substep)
+    _time_steps(m, d, warmup, forces, decimation)
+    with_forces = _time_steps(m, d, steps, forces, decimation)
     if saved != (None, None):
         m.callback.passive, m.callback.contactfilter = saved
     return {

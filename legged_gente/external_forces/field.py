@@ -700,8 +700,8 @@ class TerrainForces:
         self.counter.zero_()
 
     def after_substep(self):
-        """After each ``mjw.step``: sum the feet's (and rut legs') normal forces, update slip since touchdown and the
-        rut legs' ruts, write obs."""
+        """After each ``mjw.step``: sum the feet's (and rut legs') normal forces, low-pass their loads, update slip
+        since touchdown and lift-off (the feet's and the rut legs' ruts)."""
         if not self.nfoot:
             return
         m, d, dev = self.m, self.d, self.device
@@ -720,11 +720,21 @@ class TerrainForces:
                               self.leg_fn, self.legs, self.leg_air])
         wp.launch(
             K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
-            inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha,
-                    self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights,
-                    d.time, self.water, self.xi, self.soil_params, self.foot_fn,
-                    self.foot_vel, self.foot_sinkage, self.foot_soil, float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip,
-                    self.foot_air, self.foot_load, self.obs],
+            inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha, self.foot_fn, self.foot_vel,
+                    float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip, self.foot_air, self.foot_load,
+                    self.foot_sinkage],
+        )
+
+    def observe(self):
+        """After a step's last substep (its ``after_substep``): the privileged observation of its state. Once per
+        policy step, not per substep: only the step's end is observed."""
+        if not self.nfoot:
+            return
+        d = self.d
+        wp.launch(
+            K.foot_obs_kernel, dim=(self.nworld, self.nfoot), device=self.device, block_dim=LIMB_BLOCK_DIM,
+            inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.heights, d.time, self.water, self.xi,
+                    self.soil_params, self.foot_fn, self.foot_sinkage, self.foot_soil, self.obs],
         )
 
     def reset(self, mask):
@@ -746,5 +756,6 @@ class TerrainForces:
 
     def privileged_obs(self):
         """Torch view (nworld, n_feet * 12), per foot: water depth (m), flow vx, vy (m/s), on-soil flag,
-        sinkage (m), normal force / 100 N, kc/1e4, kphi/1e6, n, cohesion c/1e4 (Pa), mu = tan(phi), K (cm)."""
+        sinkage (m), normal force / 100 N, kc/1e4, kphi/1e6, n, cohesion c/1e4 (Pa), mu = tan(phi), K (cm); written by
+        ``observe``."""
         return wp.to_torch(self.obs)

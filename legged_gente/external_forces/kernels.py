@@ -509,7 +509,7 @@ def soil_force_kernel(
 
 
 # --------------------------------------------------------------------------------------------------------
-# After each mjw.step: foot normal forces and slip for the next substep, privileged observations
+# After each mjw.step: foot normal forces, loads and slip for the next substep; after a step: privileged observations
 
 
 @wp.kernel
@@ -552,27 +552,16 @@ def foot_state_kernel(
     dt: float,
     contact_threshold: float,
     load_alpha: float,
-    foot_body: wp.array[int],
-    foot_offset: wp.array[wp.vec3],
-    xpos: wp.array2d[wp.vec3],
-    xmat: wp.array2d[wp.mat33],
-    heights: wp.array2d[float],
-    time: wp.array[float],
-    water: WaterMap,
-    xi: wp.array[float],
-    soil_params: wp.array3d[float],
     foot_fn: wp.array2d[float],
     foot_vel: wp.array2d[wp.vec3],
-    foot_sinkage: wp.array2d[float],
-    foot_soil: wp.array2d[int],
     liftoff_time: float,
     foot_inrut: wp.array2d[int],
     foot_slip: wp.array2d[float],
     foot_air: wp.array2d[float],
     foot_load: wp.array2d[float],
-    obs: wp.array2d[float],
+    foot_sinkage: wp.array2d[float],
 ):
-    """Accumulate the distance slid since touchdown, low-pass the sinkage load, detect lift-off, write the obs.
+    """Accumulate the distance slid since touchdown, low-pass the sinkage load, detect lift-off.
 
     foot_load is F_N through a first-order low-pass (load_alpha = dt / tau): the sinkage follows the
     sustained load, not the solver's single-substep impact spikes. A foot has lifted off once its F_N has
@@ -591,6 +580,27 @@ def foot_state_kernel(
         if foot_air[w, f] >= liftoff_time and foot_inrut[w, f] == 0:
             foot_slip[w, f] = 0.0
             foot_sinkage[w, f] = 0.0
+
+
+@wp.kernel
+def foot_obs_kernel(
+    foot_body: wp.array[int],
+    foot_offset: wp.array[wp.vec3],
+    xpos: wp.array2d[wp.vec3],
+    xmat: wp.array2d[wp.mat33],
+    heights: wp.array2d[float],
+    time: wp.array[float],
+    water: WaterMap,
+    xi: wp.array[float],
+    soil_params: wp.array3d[float],
+    foot_fn: wp.array2d[float],
+    foot_sinkage: wp.array2d[float],
+    foot_soil: wp.array2d[int],
+    obs: wp.array2d[float],
+):
+    """Each foot's privileged observation (``TerrainForces.privileged_obs``) of the last substep: the water at its
+    sole, its soil and rut, its normal force."""
+    w, f = wp.tid()
     p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
     cell = water_cell(water, p)  # heights and the water layer share the grid
     depth = wp.max(water.surface[cell[0], cell[1]] - heights[cell[0], cell[1]], 0.0)

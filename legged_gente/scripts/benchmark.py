@@ -3,7 +3,7 @@
     gente-benchmark --task gente_biped_flat --num_envs 1024 4096 8192 [--device cuda]
 
 Raw physics is ``mjw.step`` of the very model the env compiles (captured in a CUDA graph on GPU), from the
-robots standing after landing (restored every RESTORE_EVERY substeps, so they never lie fallen), reported as
+robots standing after landing (restored every RESTORE_EVERY policy steps, so they never lie fallen), reported as
 substeps/s summed over worlds; env steps/s is policy steps/s summed over worlds; PPO is rsl-rl's
 collection + learning. ``env/raw`` compares env steps against the raw ceiling (raw substeps / decimation); the
 CSV's last column is the task's decimation.
@@ -67,15 +67,15 @@ def settle(env, seconds: float = 0.5) -> None:
         env.step(actions)
 
 
-RESTORE_EVERY = 10  # substeps between returns to the start state (0.05 s at the biped's 5 ms)
+RESTORE_EVERY = 3  # policy steps between returns to the start state (12 substeps, 0.06 s, for the biped)
 
 
 def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
     """Substeps/s (all worlds) of mjw.step on the env's model and data; no env logic. ``with_forces`` keeps the
-    terrain force callbacks and their after-substep kernel in the loop; without, the contact filter stays where
-    it makes the soles' terrain contacts (``forces.sole_contact``).
+    terrain force callbacks and their after-substep kernels in the loop (and their observation once per policy
+    step); without, the contact filter stays where it makes the soles' terrain contacts (``forces.sole_contact``).
 
-    Every RESTORE_EVERY substeps the worlds go back to the state the measurement began in (two device
+    Every RESTORE_EVERY policy steps the worlds go back to the state the measurement began in (two device
     copies; ``settle`` makes that a standing state), and the env gets that state back at the end: without it
     the unactuated robots fall over within a second, and a fallen robot's many contacts make the "ceiling"
     slower than the env, which resets them.
@@ -89,7 +89,8 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
         sim.m.callback.passive = None
         if env.forces is None or not env.forces.npt:  # analytic sole contacts are the feet's collision: kept
             sim.m.callback.contactfilter = None
-    hooks = sim.after_substep if with_forces else []
+    hooks, step_hooks = (sim.after_substep, sim.after_step) if with_forces else ([], [])
+    decimation = env.cfg.control.decimation
 
     def restore():
         wp.copy(sim.d.qpos, start_qpos)
@@ -98,13 +99,16 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
     def substeps_from_start():
         restore()
         for _ in range(RESTORE_EVERY):
-            mjw.step(sim.m, sim.d)
-            for hook in hooks:
+            for _ in range(decimation):
+                mjw.step(sim.m, sim.d)
+                for hook in hooks:
+                    hook()
+            for hook in step_hooks:
                 hook()
 
     try:
-        blocks = max(1, substeps // RESTORE_EVERY)
-        return _timed_calls(env, substeps_from_start, blocks) * RESTORE_EVERY * env.num_envs
+        block = RESTORE_EVERY * decimation
+        return _timed_calls(env, substeps_from_start, max(1, substeps // block)) * block * env.num_envs
     finally:
         sim.m.callback.passive, sim.m.callback.contactfilter = callbacks
         restore()
@@ -112,33 +116,38 @@ def raw_physics(env, substeps: int, with_forces: bool = False) -> float:
 
 
 def force_pass(env, only_sole_contacts: bool = False):
-    """A callable launching one pass of the force kernels with no physics around them: the callbacks' and the
-    after-substep kernels on the current contacts and state (the analytic sole contacts included), or the sole
-    contacts alone (the feet's terrain collision, which the raw physics has too). Each pass starts from the
-    contact count of now: the sole contacts append theirs."""
+    """A callable launching a policy step's force kernels with no physics around them: ``decimation`` passes of
+    the callbacks' and the after-substep kernels on the current contacts and state (the analytic sole contacts
+    included), then the observation once; or ``decimation`` passes of the sole contacts alone (the feet's terrain
+    collision, which the raw physics has too). Each pass starts from the contact count of now: the sole contacts
+    append theirs."""
     forces, sim = env.forces, env.sim
     nacon = wp.clone(sim.d.nacon)
 
     def kernels():
-        wp.copy(sim.d.nacon, nacon)
-        if only_sole_contacts:
-            forces.sole_contacts(sim.m, sim.d)
-            return
-        forces.contact_filter(sim.m, sim.d)
-        forces.passive(sim.m, sim.d)
-        forces.after_substep()
+        for _ in range(env.cfg.control.decimation):
+            wp.copy(sim.d.nacon, nacon)
+            if only_sole_contacts:
+                forces.sole_contacts(sim.m, sim.d)
+                continue
+            forces.contact_filter(sim.m, sim.d)
+            forces.passive(sim.m, sim.d)
+            forces.after_substep()
+        if not only_sole_contacts:
+            forces.observe()
 
     return kernels
 
 
-def force_kernels_per_s(env, steps: int, only_sole_contacts: bool = False) -> float:
-    """Passes/s (all worlds) of ``force_pass``; the contact count and what the kernels integrate are put back
-    afterwards."""
-    sim = env.sim
+def force_kernels_per_s(env, substeps: int, only_sole_contacts: bool = False) -> float:
+    """Substep passes/s (all worlds) of ``force_pass``, timed over ``substeps`` of them (whole policy steps); the
+    contact count and what the kernels integrate are put back afterwards."""
+    sim, decimation = env.sim, env.cfg.control.decimation
     nacon = wp.clone(sim.d.nacon)
     with sim.substep_state_kept():
         try:
-            return _timed_calls(env, force_pass(env, only_sole_contacts), steps) * env.num_envs
+            steps = max(1, substeps // decimation)
+            return _timed_calls(env, force_pass(env, only_sole_contacts), steps) * decimation * env.num_envs
         finally:
             wp.copy(sim.d.nacon, nacon)
             sim.drop_stage()

@@ -215,6 +215,7 @@ class LeggedRobot(VecEnv):
                                seed=int(torch.randint(0, 2**31 - 1, ()).item()))  # follows torch's (per-rank) seed
         forces.install()
         self.sim.after_substep.append(forces.after_substep)
+        self.sim.after_step.append(forces.observe)
         self.sim.after_reset.append(self._reset_forces)
         self._force_obs = forces.privileged_obs()
         # the post-reset forward runs the fields' callbacks and hooks: their observation is refreshed for the
