@@ -390,6 +390,8 @@ def _plain_substeps(sim, decimation):
         mjw.step(sim.m, sim.d)
         for hook in sim.after_substep:
             hook()
+    for hook in sim.after_step:
+        hook()
     sim._contact_forces()
 
 
@@ -398,6 +400,8 @@ def _plain_recompute(sim, mask):
     with sim.substep_state_kept():
         mjw.forward(sim.m, sim.d)
         for hook in sim.after_substep:
+            hook()
+        for hook in sim.after_step:
             hook()
         sim._contact_forces()
 
