@@ -336,7 +336,11 @@ def test_a_reset_leaves_the_critics_force_observation_fresh(env):
         env.step(torch.zeros(env.num_envs, env.num_actions))
         state = [t.clone() for t in env.sim.substep_state]
         observed = [t.clone() for t in env.sim.observed]
-        assert len(state) >= 8 and len(observed) == 3  # contact forces, actuator forces, force observation
+        assert len(observed) == 3  # contact forces, actuator forces, force observation
+        (buffer,) = env.forces.per_world_state()  # the fields' ruts, slip, loads, ... in one allocation
+        assert [t.data_ptr() for t in env.sim.substep_state] == [buffer.ptr]
+        assert all(buffer.ptr <= a.ptr < buffer.ptr + 4 * buffer.size
+                   for a in (env.forces.foot_sinkage, env.forces.foot_slip, env.forces.foot_load, env.forces.xi))
         env.sim.forward(torch.tensor([False, False, False, True, False]))
         assert all(torch.equal(a, b) for a, b in zip(state, env.sim.substep_state))
         assert all(torch.equal(a[[0, 1, 2, 4]], b[[0, 1, 2, 4]]) for a, b in zip(observed, env.sim.observed))

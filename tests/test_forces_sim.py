@@ -426,3 +426,24 @@ def test_sphere_sole_sinks_as_a_circular_plate(custom_soil):
     z_hand = (p / (kc / r + kphi)) ** (1.0 / n)
     assert abs(z_hand - 0.0218) < 5e-5
     np.testing.assert_allclose(f.foot_sinkage.numpy()[0, 0], z_hand, rtol=0.02)
+
+
+def test_packed_arrays_are_disjoint_typed_views_of_one_buffer():
+    """Each array a view of its own words of one int32 buffer, in the order given: 6 floats, 3 ints, 6 vec3s
+    (18 words) = 27 words; writing one leaves the others, and copying the buffer back restores them all."""
+    from legged_gente.external_forces.field import PackedArrays
+
+    packed = PackedArrays({"a": ((3, 2), float), "b": (3, int), "c": ((3, 2), wp.vec3)}, DEV)
+    a, b, c = (packed.arrays[k] for k in "abc")
+    assert packed.buffer.shape == (27,) and packed.buffer.dtype == wp.int32
+    assert (a.ptr, b.ptr, c.ptr) == (packed.buffer.ptr, packed.buffer.ptr + 24, packed.buffer.ptr + 36)
+    assert (a.shape, b.shape, c.shape) == ((3, 2), (3,), (3, 2)) and c.dtype == wp.vec3
+    a.fill_(1.5)
+    b.fill_(-1)
+    c.fill_(wp.vec3(2.0, 3.0, 4.0))
+    saved = wp.clone(packed.buffer)
+    assert np.all(a.numpy() == 1.5) and np.all(b.numpy() == -1) and np.all(c.numpy() == [2.0, 3.0, 4.0])
+    b.zero_()
+    assert np.all(a.numpy() == 1.5) and np.all(c.numpy() == [2.0, 3.0, 4.0])
+    wp.copy(packed.buffer, saved)
+    assert np.all(b.numpy() == -1)

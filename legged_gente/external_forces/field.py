@@ -215,6 +215,22 @@ def privileged_obs_size(mjm: mujoco.MjModel, cfg) -> int:
     return len(foot_groups(mjm, cfg.foot_geom_names)[0]) * K.OBS_PER_FOOT
 
 
+class PackedArrays:
+    """Warp arrays carved from one allocation, in the order given: whoever copies them all (the physics-neutral
+    forward, three times a policy step) copies one buffer instead of one array at a time. The buffer is int32 so
+    that comparing two copies compares bits (a float view would hold NaN patterns)."""
+
+    def __init__(self, layout: dict[str, tuple[int | tuple[int, ...], type]], device):
+        sizes = {name: math.prod(np.atleast_1d(shape).tolist()) * wp.types.type_size_in_bytes(dtype)
+                 for name, (shape, dtype) in layout.items()}
+        self.buffer = wp.zeros(sum(sizes.values()) // 4, dtype=wp.int32, device=device)
+        self.arrays: dict[str, wp.array] = {}
+        offset = 0
+        for name, (shape, dtype) in layout.items():
+            self.arrays[name] = wp.array(ptr=self.buffer.ptr + offset, dtype=dtype, shape=shape, device=device)
+            offset += sizes[name]
+
+
 class TerrainForces:
     """Terrain force fields for ``nworld`` robots on one terrain (see the module docstring for the calls).
 
@@ -344,11 +360,6 @@ class TerrainForces:
         n, nf, ns = self.nworld, max(self.nfoot, 1), max(self.nseg, 1)
         z = lambda shape, dtype: wp.zeros(shape, dtype=dtype, device=dev)  # noqa: E731
         self.counter = z(1, int)
-        self.eps = z(n, float)
-        self.xi = z(n, float)
-        self.soil_params = z((n, npreset, K.NSOILPARAM), float)
-        self.seg_force = z((n, ns), wp.vec3)
-        self.foot_water_force = z((n, max(len(self.foot_water_geom), 1)), wp.vec3)
         # the water points that carry added mass (each leg slice's Gauss point, then each foot): their geoms, their
         # added masses along the geom's axes (per kg of a slice: across its axis; a wholly wet foot's), the dofs
         # moving each; every substep the water kernels write each point's scale and offset from the tree's centre
@@ -360,31 +371,35 @@ class TerrainForces:
         self.point_dofs = arr(_dof_chains(mjm, mjm.geom_bodyid[point_geom]), int)
         self.point_mass = z((self.point_dofs.shape[0], n), float)
         self.point_offset = z((self.point_dofs.shape[0], n), wp.vec3)
-        self.foot_fn = z((n, nf), float)
-        self.foot_vel = z((n, nf), wp.vec3)
-        self.foot_slip = z((n, nf), float)
-        self.foot_air = z((n, nf), float)
-        self.foot_sinkage = z((n, nf), float)
-        self.foot_soil = z((n, nf), int)
-        self.foot_soil.fill_(-1)
-        self.foot_touch = z((n, nf), int)
-        self.foot_cand = z((n, nf), float)
-        self.foot_inrut = z((n, nf), int)
-        self.foot_load = z((n, nf), float)
-        # RFT's vertical stress under each sole's motion, in units of zeta (rft_force_kernel; 1: at rest)
-        self.foot_support = z((n, nf), float)
-        self.foot_support.fill_(1.0)
-        self.foot_force = z((n, nf), wp.vec3)
-        # each rut leg's own soil state (kernels.LegSoil) and its normal force, time in the air; without rut legs
+        self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
+        # what the callbacks and hooks carry from one substep to the next, per world (``per_world_state``)
+        state = {
+            "eps": (n, float), "xi": (n, float),  # drag and flow noise
+            "soil_params": ((n, npreset, K.NSOILPARAM), float),
+            "seg_force": ((n, ns), wp.vec3), "foot_water_force": ((n, max(len(self.foot_water_geom), 1)), wp.vec3),
+            "foot_fn": ((n, nf), float), "foot_vel": ((n, nf), wp.vec3), "foot_slip": ((n, nf), float),
+            "foot_air": ((n, nf), float), "foot_sinkage": ((n, nf), float), "foot_soil": ((n, nf), int),
+            "foot_touch": ((n, nf), int), "foot_cand": ((n, nf), float), "foot_inrut": ((n, nf), int),
+            "foot_load": ((n, nf), float),
+            # RFT's vertical stress under each sole's motion, in units of zeta (rft_force_kernel; 1: at rest)
+            "foot_support": ((n, nf), float),
+            "foot_force": ((n, nf), wp.vec3),
+        }
+        # each rut leg's own soil state (kernels.LegSoil), its normal force and time in the air; without rut legs
         # one-element placeholders for the sole kernel's arguments, which are no per-world state to carry
-        legs = (n, self.nleg) if self.has_rut_legs else (1, 1)
-        self.leg_fn, self.leg_air = z(legs, float), z(legs, float)
-        self.leg_load, self.leg_sinkage, self.leg_cand = z(legs, float), z(legs, float), z(legs, float)
-        self.leg_touch, self.leg_inrut = z(legs, int), z(legs, int)
+        legs = {"leg_fn": float, "leg_air": float, "leg_load": float, "leg_sinkage": float, "leg_cand": float,
+                "leg_touch": int, "leg_inrut": int}
+        if self.has_rut_legs:
+            state.update({name: ((n, self.nleg), dtype) for name, dtype in legs.items()})
+        else:
+            vars(self).update({name: z((1, 1), dtype) for name, dtype in legs.items()})
+        self._state = PackedArrays(state, dev)
+        vars(self).update(self._state.arrays)
+        self.foot_soil.fill_(-1)
+        self.foot_support.fill_(1.0)
         self.legs = K.LegSoil()
         self.legs.load, self.legs.sinkage, self.legs.cand = self.leg_load, self.leg_sinkage, self.leg_cand
         self.legs.touch, self.legs.inrut = self.leg_touch, self.leg_inrut
-        self.obs = z((n, self.nfoot * K.OBS_PER_FOOT), float)
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
         # the passive kernels' second and third branches (``_in_parallel``)
         self._side_streams = [wp.Stream(dev) for _ in range(2)] if dev.is_cuda and cfg.parallel_kernels else []
@@ -392,12 +407,10 @@ class TerrainForces:
         self.new_policy_step()
 
     def per_world_state(self) -> list[wp.array]:
-        """Every per-world array of the fields but the observation and the added-mass points (written afresh by each
-        substep's passive callback before they are read): what the callbacks and hooks carry from one substep to
-        the next (ruts, slip, loads, forces, ...), which a physics-neutral forward puts back."""
-        scratch = {self.obs.ptr, self.point_mass.ptr, self.point_offset.ptr}
-        return [a for a in vars(self).values()
-                if isinstance(a, wp.array) and a.shape[0] == self.nworld and a.ptr not in scratch]
+        """What the callbacks and hooks carry from one substep to the next (ruts, slip, loads, forces, noise, soil
+        draws: every per-world array but the observation and the added-mass points, written afresh before they are
+        read), which a physics-neutral forward puts back: one array, the allocation they are all views of."""
+        return [self._state.buffer]
 
     # ------------------------------------------------------------------ setup helpers
     def _check_diagonal_mass(self, mjm, geoms):
