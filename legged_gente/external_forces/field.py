@@ -593,7 +593,7 @@ class TerrainForces:
         launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev, block_dim=LIMB_BLOCK_DIM,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
                           int(feet.use_soil and self.nfoot > 0), self.foot_soil, self.foot_touch, self.foot_cand,
-                          self.foot_inrut],
+                          self.foot_inrut, self.foot_fn],
                   record_cmd=True))
         c = d.contact
         launches.append(wp.launch(
@@ -693,7 +693,7 @@ class TerrainForces:
                 inputs=[self.foot_body, self.foot_offset, self.foot_drop, m.body_rootid, d.xpos, d.xmat,
                         d.cvel, d.subtree_com, self.sole_length, self.sole_width, int(self.sole_disc),
                         float(cfg.bulldozing_speed_reg), self.soil_params,
-                        self.foot_fn, self.foot_touch, self.foot_cand, self.foot_soil, self.foot_sinkage,
+                        self.foot_touch, self.foot_cand, self.foot_soil, self.foot_sinkage,
                         self.foot_vel, self.foot_force],
             )
         if cfg.soil and self.nfoot and self.has_rft:
@@ -720,8 +720,8 @@ class TerrainForces:
         m, d, dev = self.m, self.d, self.device
         c = d.contact
         load_alpha = min(self.dt / float(self.cfg.sinkage_load_tau), 1.0)
+        # summed into arrays cleared before: the feet's at the substep's start, the rut legs' once read
         for geom_limb, limb_fn in ((self.geom_foot, self.foot_fn), (self.geom_leg, self.leg_fn))[:1 + self.has_rut_legs]:
-            limb_fn.zero_()
             wp.launch(
                 K.normal_force_kernel, dim=d.naconmax, device=dev,
                 inputs=[int(m.opt.cone), d.nacon, geom_limb, c.frame, c.friction, c.dim, c.efc_address,

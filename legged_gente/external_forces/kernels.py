@@ -291,12 +291,16 @@ def foot_cell_kernel(
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
     foot_inrut: wp.array2d[int],
+    foot_fn: wp.array2d[float],
 ):
-    """Each foot's soil: the cell under its sole centre (one writer per foot: deterministic at soil borders)."""
+    """Each foot's soil: the cell under its sole centre (one writer per foot: deterministic at soil borders). The
+    substep's findings start cleared: contact and rut flags, the rut's candidate depth, and the normal force that
+    ``normal_force_kernel`` sums after the step (the last substep's stays readable until the next begins)."""
     w, f = wp.tid()
     foot_touch[w, f] = 0
     foot_cand[w, f] = 0.0
     foot_inrut[w, f] = 0
+    foot_fn[w, f] = 0.0
     s = int(-1)
     if use_soil != 0:
         p = sole_point(xpos, xmat, w, foot_body[f], foot_offset[f])
@@ -473,7 +477,6 @@ def soil_force_kernel(
     sole_disc: int,
     speed_reg: float,
     soil_params: wp.array3d[float],
-    foot_fn: wp.array2d[float],
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
     foot_soil: wp.array2d[int],
@@ -486,7 +489,7 @@ def soil_force_kernel(
     the contact filter found (``foot_cand``: plastic, it never rises during a stance) for this substep's forces and
     observations and the next substep's contacts; off soil there is none (lift-off: ``foot_state_kernel``). Then
     the sole point's horizontal velocity (slip) and, for the viewer, Bekker's bulldozing resistance against it
-    (the footprint's width across the motion), faded below speed_reg. Nothing is applied here: the contacts'
+    (the footprint's width across the motion) while the foot touches the soil, faded below speed_reg. Nothing is applied here: the contacts'
     friction limit applies the resistance (``ground_friction``, with the shear; the sole's smaller side as its
     width, the friction cone being isotropic)."""
     w, f = wp.tid()
@@ -501,7 +504,7 @@ def soil_force_kernel(
     vh = wp.vec3(v[0], v[1], 0.0)
     foot_vel[w, f] = vh
     force = wp.vec3(0.0)
-    if s >= 0 and foot_fn[w, f] > 0.0:
+    if s >= 0 and foot_touch[w, f] != 0:
         face = bulldozing_width_fn(xmat[w, b], vh, sole_length, sole_width, sole_disc)
         fb = bulldozing_force_fn(soil_params[w, s, BULL_C], soil_params[w, s, BULL_G], face, foot_sinkage[w, f])
         force = -(fb / wp.max(wp.length(vh), speed_reg)) * vh  # reported; the contacts' friction applies it
@@ -529,7 +532,8 @@ def normal_force_kernel(
     limb_fn: wp.array2d[float],
 ):
     """Sum each limb's (a foot's, or a rut leg's: ``geom_limb`` maps a geom to its index, else -1) contact normal
-    forces (N) from the solver's constraint forces."""
+    forces (N) from the solver's constraint forces, into ``limb_fn`` cleared before: the feet's by
+    ``foot_cell_kernel`` at the substep's start, the rut legs' by ``leg_state_kernel`` once it has read them."""
     i = wp.tid()
     if i >= nacon[0]:
         return
@@ -642,7 +646,7 @@ def leg_state_kernel(
     the rut deepens to what this substep's contacts found and never rises while the leg bears on it (plastic
     sinkage); the load is low-passed; once the leg's normal force has stayed at or below contact_threshold for
     liftoff_time and it is out of its rut, the rut is forgotten (the leg meets the undisturbed surface again).
-    The substep's findings are cleared for the next."""
+    The substep's findings (contact flags, candidate depth, normal force) are cleared for the next."""
     w, k = wp.tid()
     legs.load[w, k] = legs.load[w, k] + load_alpha * (leg_fn[w, k] - legs.load[w, k])
     if legs.touch[w, k] != 0:
@@ -656,6 +660,7 @@ def leg_state_kernel(
     legs.cand[w, k] = 0.0
     legs.touch[w, k] = 0
     legs.inrut[w, k] = 0
+    leg_fn[w, k] = 0.0
 
 
 @wp.kernel
