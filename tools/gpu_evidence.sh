@@ -6,10 +6,12 @@
 #                  "--resume --load_run <path of a run folder brought from elsewhere>"); the
 #                  latest checkpoint and the run's scalars CSV go to $OUT_DIR after every chunk
 #   phase report:  benchmark (+ sync check, CSV), play (tracking plot + exports), scalars CSV -> $OUT_DIR
+#   phase bench:   benchmark (+ sync check, CSV) at $BENCH_ENVS (default 8192) and the force kernels' profile
+#                  (tools/profile_force_kernels.py) -> $OUT_DIR; needs no run
 #   phase eval:    gente-evaluate the latest $TASK run on gente100 -> $OUT_DIR/eval; with FIG_ITEMS="id id id"
 #                  also figure (d), success over training on those items -> $OUT_DIR
 set -uo pipefail
-phase=${1:?usage: gpu_evidence.sh train|report|eval}
+phase=${1:?usage: gpu_evidence.sh train|report|bench|eval}
 export GENTE_LOG_ROOT=${GENTE_LOG_ROOT:-/tmp/gente_logs}
 OUT_DIR=${OUT_DIR:-gpu_evidence}
 mkdir -p "$OUT_DIR"
@@ -36,6 +38,12 @@ case "$phase" in
     python3 -m legged_gente.utils.tb_export "$(latest_run)" "$OUT_DIR/${task}_scalars.csv"
     cp "$(ls -td "$GENTE_LOG_ROOT/$task"/20*/exported | head -1)/velocity_tracking.png" "$OUT_DIR/${task}_velocity_tracking.png"
     ls -t "$(latest_run)"/model_*.pt | head -1 | xargs -I{} cp {} "$OUT_DIR/${task}_last.pt" ;;
+  bench)
+    envs=${BENCH_ENVS:-8192}
+    python3 -m legged_gente.scripts.benchmark --task "$task" --num_envs $envs --check_sync \
+      --csv "$OUT_DIR/${task}_benchmark.csv" 2>&1 | grep -v "^Module" | tee "$OUT_DIR/${task}_benchmark.log" | tail -12
+    python3 tools/profile_force_kernels.py --task "$task" --num_envs "${envs%% *}" 2>&1 | grep -v "^Module" \
+      > "$OUT_DIR/${task}_force_kernels_profile.log"; tail -3 "$OUT_DIR/${task}_force_kernels_profile.log" ;;
   eval)
     python3 -m legged_gente.scripts.evaluate --task "$task" --checkpoint "$(latest_run)" --benchmark gente100 \
       --robots_per_terrain "${ROBOTS:-16}" --out "$OUT_DIR/eval" --device cuda --no_progress 2>&1 | grep -v "^Module" | tail -12
@@ -44,5 +52,5 @@ case "$phase" in
       python3 -m legged_gente.evaluation.figures training --task "$task" --run "$GENTE_LOG_ROOT/$task"/20* \
         --items $FIG_ITEMS --device cuda --out "$OUT_DIR/${task}_success_over_training.png" 2>&1 | grep -v "^Module" | tail -3
     fi ;;
-  *) echo "unknown phase $phase: use train, report or eval" >&2; exit 2 ;;
+  *) echo "unknown phase $phase: use train, report, bench or eval" >&2; exit 2 ;;
 esac
