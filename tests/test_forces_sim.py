@@ -431,6 +431,9 @@ def test_sphere_sole_sinks_as_a_circular_plate(custom_soil):
 def test_packed_arrays_are_disjoint_typed_views_of_one_buffer():
     """Each array a view of its own words of one int32 buffer, in the order given: 6 floats, 3 ints, 6 vec3s
     (18 words) = 27 words; writing one leaves the others, and copying the buffer back restores them all."""
+    import gc
+    import weakref
+
     from legged_gente.external_forces.field import PackedArrays
 
     packed = PackedArrays({"a": ((3, 2), float), "b": (3, int), "c": ((3, 2), wp.vec3)}, DEV)
@@ -447,3 +450,10 @@ def test_packed_arrays_are_disjoint_typed_views_of_one_buffer():
     assert np.all(a.numpy() == 1.5) and np.all(c.numpy() == [2.0, 3.0, 4.0])
     wp.copy(packed.buffer, saved)
     assert np.all(b.numpy() == -1)
+    buffer = weakref.ref(packed.buffer)
+    del packed, a, c, saved
+    gc.collect()
+    assert buffer() is not None and np.all(b.numpy() == -1)  # a view alone keeps the buffer alive
+    del b
+    gc.collect()
+    assert buffer() is None

@@ -227,7 +227,9 @@ class PackedArrays:
         self.arrays: dict[str, wp.array] = {}
         offset = 0
         for name, (shape, dtype) in layout.items():
-            self.arrays[name] = wp.array(ptr=self.buffer.ptr + offset, dtype=dtype, shape=shape, device=device)
+            view = wp.array(ptr=self.buffer.ptr + offset, dtype=dtype, shape=shape, device=device)
+            view._ref = self.buffer  # as Warp's own views: the buffer lives as long as any view of it
+            self.arrays[name] = view
             offset += sizes[name]
 
 
