@@ -53,7 +53,8 @@ def compare(path_a: str, path_b: str) -> bool:
         print(f"different contents: {sorted(a.files)} against {sorted(b.files)}")
     for key in sorted(set(a.files) & set(b.files)):
         equal = a[key].shape == b[key].shape and np.array_equal(a[key], b[key], equal_nan=True)
-        diff = "" if equal or a[key].shape != b[key].shape else f", max |difference| {np.nanmax(np.abs(a[key] - b[key])):.3g}"
+        diff = "" if equal or a[key].shape != b[key].shape else \
+            f", max |difference| {np.nanmax(np.abs(a[key] - b[key])):.3g}"
         print(f"{key}: {'bitwise equal' if equal else 'DIFFERENT'}{diff}")
         same &= equal
     return same

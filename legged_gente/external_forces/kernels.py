@@ -489,9 +489,9 @@ def soil_force_kernel(
     the contact filter found (``foot_cand``: plastic, it never rises during a stance) for this substep's forces and
     observations and the next substep's contacts; off soil there is none (lift-off: ``foot_state_kernel``). Then
     the sole point's horizontal velocity (slip) and, for the viewer, Bekker's bulldozing resistance against it
-    (the footprint's width across the motion) while the foot touches the soil, faded below speed_reg. Nothing is applied here: the contacts'
-    friction limit applies the resistance (``ground_friction``, with the shear; the sole's smaller side as its
-    width, the friction cone being isotropic)."""
+    (the footprint's width across the motion) while the foot touches the soil, faded below speed_reg. Nothing is
+    applied here: the contacts' friction limit applies the resistance (``ground_friction``, with the shear; the
+    sole's smaller side as its width, the friction cone being isotropic)."""
     w, f = wp.tid()
     s = foot_soil[w, f]
     if s < 0:

@@ -272,10 +272,10 @@ class Simulation:
         """Recompute what derives from qpos/qvel/ctrl without advancing time, as a substep sees it: bodies,
         contacts (the force fields' contact filter included: ground friction, soil, analytic sole contacts),
         passive forces, constraint forces; then the ``after_substep`` and ``after_step`` hooks (the force fields'
-        state and observation) and the per-body contact forces. The worlds in ``mask`` take the new values of every ``observed`` tensor; the
-        others keep their last substep's. Only the masked worlds' constraints are solved, so what derives from the
-        solve in ``d`` (qacc, constraint forces, acceleration sensors) is the forward's in those worlds only: a
-        subclass that observes such a value registers its tensor in ``observed``.
+        state and observation) and the per-body contact forces. The worlds in ``mask`` take the new values of every
+        ``observed`` tensor; the others keep their last substep's. Only the masked worlds' constraints are solved,
+        so what derives from the solve in ``d`` (qacc, constraint forces, acceleration sensors) is the forward's in
+        those worlds only: a subclass that observes such a value registers its tensor in ``observed``.
 
         Physics-neutral: the solver's warm start and everything in ``substep_state`` (what the callbacks and
         hooks integrate once per substep, e.g. soil ruts, slip) stay as they were, in every world. Its first

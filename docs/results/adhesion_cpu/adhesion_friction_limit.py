@@ -47,4 +47,5 @@ for adhesion, kind, force in CASES:
                                              np.float32))
             mjw.step(m_w, d_w)
     print(f"adhesion {adhesion:5.0f} N per contact, {kind} {force:5.1f} N: MuJoCo moved {d.qpos[dof]:8.4f} m "
-          f"({d.qvel[dof]:6.3f} m/s), MuJoCo-Warp {d_w.qpos.numpy()[0, dof]:8.4f} m ({d_w.qvel.numpy()[0, dof]:6.3f} m/s)")
+          f"({d.qvel[dof]:6.3f} m/s), MuJoCo-Warp {d_w.qpos.numpy()[0, dof]:8.4f} m "
+          f"({d_w.qvel.numpy()[0, dof]:6.3f} m/s)")
