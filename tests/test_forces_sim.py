@@ -457,3 +457,10 @@ def test_packed_arrays_are_disjoint_typed_views_of_one_buffer():
     del b
     gc.collect()
     assert buffer() is None
+
+
+def test_packed_arrays_refuse_elements_that_are_not_whole_words():
+    from legged_gente.external_forces.field import PackedArrays
+
+    with pytest.raises(ValueError, match=r"\['mask'\] have elements that are not whole 4-byte words"):
+        PackedArrays({"a": (3, float), "mask": (3, wp.bool)}, DEV)

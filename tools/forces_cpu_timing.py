@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import itertools
 import time
 
 import mujoco_warp as mjw
@@ -64,14 +65,13 @@ def main(argv=None):
         wp.synchronize()
         return (time.perf_counter() - start) / args.block
 
-    substeps_on = [0]
+    substeps_on = itertools.count(1)
 
     def step_on():
         mjw.step(m, d)
         for hook in sim.after_substep:
             hook()
-        substeps_on[0] += 1
-        if substeps_on[0] % env.cfg.control.decimation == 0:
+        if next(substeps_on) % env.cfg.control.decimation == 0:
             for hook in sim.after_step:
                 hook()
 

@@ -216,13 +216,18 @@ def privileged_obs_size(mjm: mujoco.MjModel, cfg) -> int:
 
 
 class PackedArrays:
-    """Warp arrays carved from one allocation, in the order given: whoever copies them all (the physics-neutral
-    forward, three times a policy step) copies one buffer instead of one array at a time. The buffer is int32 so
-    that comparing two copies compares bits (a float view would hold NaN patterns)."""
+    """Warp arrays carved from one allocation, in the order given: whoever copies them all (the stage and the
+    physics-neutral forward, four times a policy step) copies one buffer instead of one array at a time. The buffer
+    is int32 so that comparing two copies compares bits (a float view would hold NaN patterns); every array's
+    element is a whole number of its 4-byte words."""
 
     def __init__(self, layout: dict[str, tuple[int | tuple[int, ...], type]], device):
         sizes = {name: math.prod(np.atleast_1d(shape).tolist()) * wp.types.type_size_in_bytes(dtype)
                  for name, (shape, dtype) in layout.items()}
+        odd = [name for name, (_, dtype) in layout.items() if wp.types.type_size_in_bytes(dtype) % 4]
+        if odd:
+            raise ValueError(f"PackedArrays: {odd} have elements that are not whole 4-byte words; keep such arrays "
+                             f"(bool, int8, float16) out of the packed state.")
         self.buffer = wp.zeros(sum(sizes.values()) // 4, dtype=wp.int32, device=device)
         self.arrays: dict[str, wp.array] = {}
         offset = 0
