@@ -92,3 +92,23 @@ def test_the_critic_warmup_check_runs(tool):
     """The GPU check's critic warm-up part on the CPU: two held updates leave the actor and the learning rate
     alone, the third moves the actor."""
     assert tool.check_critic_warmup("cpu", 64)
+
+
+@pytest.mark.parametrize("flag, runs, skipped", [
+    ("--env_only", {"env_steps", "evaluation_agrees"}, {"check_ppo", "check_critic_warmup"}),
+    ("--ppo_only", {"check_ppo", "check_critic_warmup"}, {"env_steps", "evaluation_agrees"}),
+])
+def test_only_flags_run_their_checks_alone(tool, monkeypatch, capsys, flag, runs, skipped):
+    called = set()
+    for name in runs | skipped:
+        monkeypatch.setattr(tool, name, lambda *args, name=name, **kwargs: called.add(name) or True)
+    monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--device", "cpu", flag])
+    tool.main()
+    assert called == runs and "all checks agree" in capsys.readouterr().out
+
+
+def test_only_flags_exclude_each_other(tool, monkeypatch):
+    monkeypatch.setattr(sys, "argv", ["check_cuda_graphs.py", "--env_only", "--ppo_only"])
+    with pytest.raises(SystemExit) as exit_info:
+        tool.main()
+    assert exit_info.value.code == 2

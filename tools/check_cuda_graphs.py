@@ -1,6 +1,6 @@
 """GPU check: the CUDA graphs compute what plain launches compute.
 
-    python tools/check_cuda_graphs.py [--task gente_biped] [--num_envs 512] [--steps 300]
+    python tools/check_cuda_graphs.py [--task gente_biped] [--num_envs 512] [--steps 300] [--env_only]
     NCCL_NVLS_ENABLE=0 torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only
     torchrun --standalone --nproc_per_node=2 tools/check_cuda_graphs.py --ppo_only --device cpu --ppo_envs 64
 
@@ -219,24 +219,28 @@ def main() -> None:
                         help="largest accepted parameter and relative loss difference of the PPO updates")
     parser.add_argument("--bf16_tolerance", type=float, default=1e-2,
                         help="the same, for the updates in bf16 (on CUDA)")
-    parser.add_argument("--ppo_only", action="store_true", help="check the PPO update only (what torchrun runs)")
+    only = parser.add_mutually_exclusive_group()
+    only.add_argument("--ppo_only", action="store_true", help="check the PPO update only (what torchrun runs)")
+    only.add_argument("--env_only", action="store_true", help="check the env step and the evaluation only")
     args = parser.parse_args()
     launch = torchrun_launch()
     device = args.device
     if launch is not None:
         device = rank_device(args.device, launch)
         init_process_group(launch, device)
-    agree = check_ppo(device, args.ppo_envs, args.tolerance)
-    if device.startswith("cuda"):
-        agree &= check_ppo(device, args.ppo_envs, args.bf16_tolerance, mixed_precision=True)
-    agree &= check_critic_warmup(device, args.ppo_envs)
-    if device.startswith("cuda") and launch is None:
-        agree &= check_act(device, args.ppo_envs)
-    if agree:
-        print("GentePPO agrees with rsl-rl's PPO")
-    else:
-        print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance} (fp32) or "
-              f"--bf16_tolerance {args.bf16_tolerance} (bf16), or its critic warm-up did not hold the actor")
+    agree = True
+    if not args.env_only:
+        agree = check_ppo(device, args.ppo_envs, args.tolerance)
+        if device.startswith("cuda"):
+            agree &= check_ppo(device, args.ppo_envs, args.bf16_tolerance, mixed_precision=True)
+        agree &= check_critic_warmup(device, args.ppo_envs)
+        if device.startswith("cuda") and launch is None:
+            agree &= check_act(device, args.ppo_envs)
+        if agree:
+            print("GentePPO agrees with rsl-rl's PPO")
+        else:
+            print(f"MISMATCH: GentePPO differs from rsl-rl's PPO by more than --tolerance {args.tolerance} (fp32) or "
+                  f"--bf16_tolerance {args.bf16_tolerance} (bf16), or its critic warm-up did not hold the actor")
     if not args.ppo_only:
         if env_steps(args.task, args.num_envs, args.steps, args.seed, device):
             print("the env step agrees across graph and compile modes")
