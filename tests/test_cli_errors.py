@@ -169,7 +169,7 @@ FLAT_SPEC = BENCHMARKS / "flat" / "specs" / "flat.json"
 @pytest.mark.parametrize("change, message", [
     ("{not json", "is not valid JSON (Expecting property name"),
     ({"version": 99}, "terrain spec format version 99; this code reads version 1"),
-    ({"size_x": -5.0}, "size_x -5, size_y 20 and resolution 0.1 must be > 0 m"),
+    ({"size_x": -5.0}, "not a terrain spec document: spec: field 'size_x': -5.0 is less than the minimum of 1.0."),
     ({"calls": [{"tool": "flat", "region": "upper_half_ish", "params": {}}]},
      "region 'upper_half_ish' is none of the named regions (full, "),
 ])

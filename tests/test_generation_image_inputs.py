@@ -129,3 +129,15 @@ def test_running_out_of_memory_while_decoding_is_not_called_an_unreadable_file(m
     monkeypatch.setattr(image_module.Image, "open", out_of_memory)
     with pytest.raises(MemoryError):
         image_module.open_image(b"\x89PNG\r\n\x1a\n", "big.png")
+
+
+@pytest.mark.parametrize("fmt", ["PNG", "JPEG"])
+def test_a_truncated_image_is_refused_saying_so(fmt):
+    """A PNG or JPEG cut short (an interrupted copy) was refused as '(OSError); pass a PNG or JPEG file', which it
+    is: Pillow's own reason, that the file is truncated, was dropped."""
+    from legged_gente.generation.backends.image import open_image
+
+    data = _encode(Image.fromarray(_photo()), fmt)
+    with pytest.raises(ValueError) as refused:
+        open_image(data[: len(data) // 2], "photo")
+    assert str(refused.value).startswith("photo could not be read as an image (OSError: image file is truncated")

@@ -16,7 +16,8 @@ from PIL import Image
 from legged_gente.generation.backends.image import LEGEND, OBSTACLE_HEIGHT, plan_image
 from legged_gente.generation.pipeline import generate_spec
 from legged_gente.generation.spec import TerrainSpec
-from legged_gente.generation.validation import MAX_CALLS, ValidationError
+from legged_gente.generation.validation import ValidationError
+from legged_gente.terrain.composition import MAX_CALLS
 from legged_gente.terrain.composition import SEAM_BAND
 
 N, SIZE, RES = 96, 20.0, 0.1

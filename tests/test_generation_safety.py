@@ -10,13 +10,12 @@ from legged_gente.terrain.soil import SOIL_PRESETS
 from legged_gente.generation.emit import emit, load_module
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.generation.validation import (
-    MAX_CALLS,
     MAX_MESSAGE_CHARS,
     ToolCall,
     ValidationError,
     validate_call,
 )
-from legged_gente.terrain.composition import MAX_ABS_HEIGHT
+from legged_gente.terrain.composition import MAX_ABS_HEIGHT, MAX_CALLS
 
 
 # ------------------------------------------------------------------------------------------- code injection

@@ -21,12 +21,14 @@ def _doc(calls):
 
 @pytest.mark.parametrize("key", ["mode", "region"])
 def test_layout_arguments_inside_params_are_refused(key, tmp_path):
-    # Training reads a spec file with tile_spec_from_document: the params go to the terrain function as they are,
-    # so a 'mode' or 'region' among them does not build there, whatever the validator makes of it.
+    # Training reads a spec file with tile_spec_from_document: the params would go to the terrain function as they
+    # are, where a 'mode' or 'region' among them does not build; both readers refuse it with the same advice.
     call = {"tool": "flat", "region": "back", "params": {"height": 0.2, key: "add" if key == "mode" else "front"}}
     doc = _doc([{"tool": "flat", "region": "full", "params": {"height": 0.5}}, call])
-    with pytest.raises(ValueError, match="unknown parameter"):
-        tile_spec_from_document(doc).build()
+    with pytest.raises(ValueError) as refused:
+        tile_spec_from_document(doc)
+    assert str(refused.value) == (f"terrain spec: calls[1]: 'params' holds the layout argument(s) ['{key}']; put "
+                                  f"'region' and 'mode' beside 'params', not in it")
     path = tmp_path / "spec.json"
     path.write_text(json.dumps(doc))
     with pytest.raises(ValidationError) as info:

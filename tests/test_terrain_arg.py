@@ -107,3 +107,21 @@ def test_a_border_that_is_not_finite_is_refused_in_one_line(emitted):
     cfg.terrain.border_size = float("inf")
     with pytest.raises(ValueError, match=r"terrain.border_size=inf m must be a finite number of metres"):
         apply_terrain_arg(str(emitted / "spec.json"), cfg)
+
+
+@pytest.mark.parametrize("change, problem", [
+    ({"calls": {}}, "spec: field 'calls': {} is not of type 'array'."),
+    ({"colour": "red"}, "spec: field '(document)': Additional properties are not allowed ('colour' was unexpected)."),
+    ({"smothing": []}, "spec: field '(document)': Additional properties are not allowed ('smothing' was unexpected)."),
+    ({"resolution": "0.1"}, "spec: field 'resolution': '0.1' is not of type 'number'."),
+])
+def test_a_spec_json_that_departs_from_the_format_is_refused(emitted, tmp_path, change, problem):
+    """Training read spec.json loosely: calls {} trained on a flat tile, a misspelt or extra field was dropped
+    unseen, a quoted number was read as one, where TerrainSpec.load refuses all of them."""
+    document = {**json.loads((emitted / "spec.json").read_text()), **change}
+    path = tmp_path / "spec.json"
+    path.write_text(json.dumps(document))
+    with pytest.raises(ValueError) as refused:
+        apply_terrain_arg(str(path), GenteBipedCfg())
+    assert str(refused.value) == (f"--terrain {path}: not a terrain spec document: {problem} Fix the file, or pass a "
+                                  f"spec.json written by gente-generate")

@@ -269,7 +269,8 @@ def test_generated_mode(tmp_path):
     with pytest.raises(ValueError, match="needs cfg.generated_specs"):
         Terrain(cfg(mode="generated"), 1)
     (tmp_path / "bad.json").write_text('{"size_x": 4.0, "calls": []}')
-    with pytest.raises(ValueError, match=r"bad.json: not a terrain spec document \(KeyError: 'size_y'\)"):
+    with pytest.raises(ValueError, match=r"bad.json: not a terrain spec document: spec: field '\(document\)': "
+                                         r"'size_y' is a required property\. .*'seed' is a required property\."):
         Terrain(cfg(mode="generated", num_rows=1, num_cols=1, generated_specs=[str(tmp_path / "bad.json")]), 1)
     with pytest.raises(ValueError, match="has \\(40, 40\\) cells, the grid needs \\(80, 80\\)"):
         Terrain(cfg(mode="generated", num_rows=1, num_cols=1, generated_specs=paths[:1],

@@ -35,13 +35,12 @@ import numpy as np
 
 from legged_gente.generation.validation import (
     MAX_SPEC_BYTES,
-    SPEC_SCHEMA,
-    SPEC_VERSION,
     ToolCall,
     ValidationError,
     parse_json,
     validate_spec_dict,
 )
+from legged_gente.terrain.composition import SPEC_SCHEMA, SPEC_VERSION
 from legged_gente.terrain.materials import MaterialMap
 
 

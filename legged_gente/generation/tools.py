@@ -15,11 +15,9 @@ from __future__ import annotations
 import copy
 from typing import Any, Mapping
 
-from legged_gente.terrain.composition import named_regions
+from legged_gente.terrain.composition import LAYOUT_ARGS, named_regions
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain, Param
 
-LAYOUT_ARGS = ("region", "mode")
-"""Argument names reserved for layout; no terrain may declare a parameter with one of these names."""
 
 MODES = ("set", "add")
 

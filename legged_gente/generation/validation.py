@@ -30,16 +30,18 @@ from legged_gente.generation.tools import LAYOUT_ARGS, arguments_schema, named_r
 from legged_gente.terrain import atomic
 from legged_gente.terrain.composition import (
     MAX_ABS_HEIGHT,
-    MAX_SMOOTHING_SIGMA,
+    SPEC_SCHEMA,
     Operation,
     Part,
-    SPEC_VERSION,
     Region,
     SEAM_BAND,
     TileSpec,
+    clip_text,
     document_region,
     height_advice,
     heightmap_ground,
+    schema_size_problem,
+    spec_document_problems,
     stacked_height_bounds,
     tile_spec_from_document,
 )
@@ -48,8 +50,6 @@ from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 Rect = tuple[float, float, float, float]
 
 # Input limits: everything a model or a spec file sends is bounded before it is parsed or built.
-MAX_CALLS = 64
-"""Most tool calls in one spec (GenTe's prompts ask for 3-20)."""
 MAX_CELLS = 4_000_000
 """Most heightfield cells of one tile: 200 m x 200 m at 0.1 m, or 40 m x 40 m at 0.02 m (~1 s to build)."""
 MAX_ARGUMENT_CHARS = 16_000
@@ -66,13 +66,6 @@ MAX_MESSAGES = 20
 MAX_MESSAGE_CHARS = 400
 
 
-def _clip_text(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
-    if len(text) <= limit:
-        return text
-    tail = f"... ({len(text)} characters in all)"
-    return text[: max(limit - len(tail), 0)] + tail
-
-
 def printable(text: str) -> str:
     """``text`` with each non-printable character (newline, ESC, other controls, bidi overrides) escaped as in a
     repr: one line that cannot move a terminal's cursor or restyle it, for model and server text."""
@@ -87,7 +80,7 @@ class ValidationError(ValueError):
     """
 
     def __init__(self, messages: Iterable[str]):
-        messages = [_clip_text(str(m)) for m in messages]
+        messages = [clip_text(str(m), MAX_MESSAGE_CHARS) for m in messages]
         if len(messages) > MAX_MESSAGES:
             messages = messages[:MAX_MESSAGES] + [f"... and {len(messages) - MAX_MESSAGES} more problem(s)."]
         self.messages = messages
@@ -107,7 +100,7 @@ def parse_json(text: str | bytes, what: str, limit: int) -> Any:
     except RecursionError:
         raise ValidationError([f"{what} are nested too deeply to parse; the limit is {MAX_DEPTH} levels."]) from None
     except ValueError as exc:  # JSONDecodeError, NaN/Infinity, integers with too many digits, bad UTF-8
-        raise ValidationError([f"{what} are not valid JSON ({_clip_text(str(exc), 160)}); send a JSON object."]) from None
+        raise ValidationError([f"{what} are not valid JSON ({clip_text(str(exc), 160)}); send a JSON object."]) from None
 
 
 def plain_json_problem(value: Any, max_depth: int = MAX_DEPTH) -> str | None:
@@ -130,7 +123,7 @@ def plain_json_problem(value: Any, max_depth: int = MAX_DEPTH) -> str | None:
                 return f"{at} is nested more than {max_depth} levels deep"
             for k, v in node.items():
                 if not isinstance(k, str):
-                    return f"{at} has a non-string key {_clip_text(repr(k), 40)}"
+                    return f"{at} has a non-string key {clip_text(repr(k), 40)}"
                 stack.append((v, f"{where}.{k[:40]}" if where else k[:40], depth + 1))
         elif isinstance(node, (list, tuple)):
             if depth >= max_depth:
@@ -422,61 +415,6 @@ def calls_tile(calls: list[ToolCall], size_x: float, size_y: float, resolution: 
     return TileSpec(size_x, size_y, resolution, seed, parts, base)
 
 
-SPEC_SCHEMA: dict[str, Any] = {
-    "type": "object",
-    "properties": {
-        "version": {"const": SPEC_VERSION, "description": f"spec format version; this code reads {SPEC_VERSION}"},
-        "name": {"type": "string", "pattern": r"^[A-Za-z][A-Za-z0-9_]*\Z", "maxLength": 64,
-                 "description": "a letter, then letters, digits or underscores, e.g. forest_trail"},
-        "size_x": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile length along x [m]"},
-        "size_y": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile width along y [m]"},
-        "resolution": {"type": "number", "minimum": 0.02, "maximum": 1.0, "description": "cell size [m]"},
-        "seed": {"type": "integer", "minimum": 0, "maximum": 2**32 - 1},
-        "calls": {
-            "type": "array",
-            "maxItems": MAX_CALLS,
-            "items": {
-                "type": "object",
-                "properties": {
-                    "tool": {"type": "string"},
-                    "region": {},
-                    "mode": {"type": "string"},
-                    "params": {"type": "object"},
-                },
-                "required": ["tool", "region", "params"],
-                "additionalProperties": False,
-            },
-        },
-        "source": {"type": "object", "maxProperties": 16},
-        "backend": {"type": "string", "maxLength": 256},
-        "model": {"type": ["string", "null"], "maxLength": 256},
-        "smoothing": {
-            "type": "array",
-            "maxItems": 16,
-            "description": "Gaussian filters of the heights after the geometric calls, in order",
-            "items": {
-                "type": "object",
-                "properties": {"region": {}, "axis": {"enum": ["x", "y"]},
-                               "sigma": {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_SMOOTHING_SIGMA}},
-                "required": ["region", "axis", "sigma"],
-                "additionalProperties": False,
-            },
-        },
-        "heightmap": {
-            "type": "object",
-            "description": "ground under the calls: a .npy array (relative to the spec file), one value per cell "
-                           "of `resolution` m, times vertical_scale metres",
-            "properties": {"file": {"type": "string", "maxLength": 1000},
-                           "vertical_scale": {"type": "number", "exclusiveMinimum": 0, "maximum": 1.0}},
-            "required": ["file", "vertical_scale"],
-            "additionalProperties": False,
-        },
-    },
-    "required": ["version", "name", "size_x", "size_y", "resolution", "seed", "calls", "source", "backend", "model"],
-    "additionalProperties": False,
-}
-
-
 def tile_problem(size_x: float, size_y: float, resolution: float) -> str | None:
     """Why the builder cannot make a tile of this size and resolution (None if it can)."""
     n = (size_x / resolution, size_y / resolution)
@@ -497,30 +435,12 @@ def spec_field_problem(field: str, value: Any) -> str | None:
     error = next(Draft202012Validator(rule).iter_errors(value), None)
     if error is None:
         return None
-    too_long = _too_long(error)
+    too_long = schema_size_problem(error)
     if too_long:
         return too_long
     if error.validator in ("minimum", "maximum"):
         return f"must be in [{rule['minimum']:g}, {rule['maximum']:g}]"
     return f"must be {rule['description']}"
-
-
-def _too_long(err: jsonschema.ValidationError) -> str | None:
-    """'has N items; at most M are allowed' for a list, string or object over its schema's size limit, else None."""
-    limits = {"maxItems": "items", "maxLength": "characters", "maxProperties": "entries"}
-    if err.validator not in limits:
-        return None
-    return f"has {len(err.instance)} {limits[err.validator]}; at most {err.validator_value} are allowed"
-
-
-def _describe_spec_error(err: jsonschema.ValidationError) -> str:
-    field = ".".join(map(str, err.absolute_path))[:60] or "(document)"
-    too_long = _too_long(err)
-    if too_long:
-        return f"spec: field {field!r} {too_long}."
-    if err.validator == "pattern" and "description" in err.schema:  # what it must be, not the regular expression
-        return f"spec: field {field!r}: {_clip_text(repr(err.instance), 80)} is not {err.schema['description']}."
-    return f"spec: field {field!r}: {_clip_text(err.message, 160)}."
 
 
 def validate_spec_dict(
@@ -535,9 +455,9 @@ def validate_spec_dict(
     problem = plain_json_problem(data)
     if problem:
         raise ValidationError([f"spec: {problem}."])
-    errors = sorted(Draft202012Validator(SPEC_SCHEMA).iter_errors(data), key=lambda e: list(map(str, e.absolute_path)))
-    if errors:
-        raise ValidationError([_describe_spec_error(e) for e in errors[:MAX_MESSAGES]])
+    problems = spec_document_problems(data, most=MAX_MESSAGES)
+    if problems:
+        raise ValidationError(problems)
     problem = tile_problem(data["size_x"], data["size_y"], data["resolution"])
     if problem:
         raise ValidationError([f"spec: {problem}."])

@@ -21,7 +21,9 @@ import math
 from pathlib import Path
 from typing import Any, Callable, Literal, Mapping
 
+import jsonschema
 import numpy as np
+from jsonschema import Draft202012Validator
 from scipy import ndimage
 
 from .atomic import river_course
@@ -126,6 +128,102 @@ class Part:
 MAX_SMOOTHING_SIGMA = 2.0
 """Largest standard deviation (m) of a smoothing filter."""
 
+MAX_CALLS = 64
+"""Most tool calls in one spec (GenTe's prompts ask for 3-20)."""
+LAYOUT_ARGS = ("region", "mode")
+"""A call's layout, beside its ``params``; no terrain may declare a parameter with one of these names."""
+
+SPEC_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "version": {"const": SPEC_VERSION, "description": f"spec format version; this code reads {SPEC_VERSION}"},
+        "name": {"type": "string", "pattern": r"^[A-Za-z][A-Za-z0-9_]*\Z", "maxLength": 64,
+                 "description": "a letter, then letters, digits or underscores, e.g. forest_trail"},
+        "size_x": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile length along x [m]"},
+        "size_y": {"type": "number", "minimum": 1.0, "maximum": 200.0, "description": "tile width along y [m]"},
+        "resolution": {"type": "number", "minimum": 0.02, "maximum": 1.0, "description": "cell size [m]"},
+        "seed": {"type": "integer", "minimum": 0, "maximum": 2**32 - 1},
+        "calls": {
+            "type": "array",
+            "maxItems": MAX_CALLS,
+            "items": {
+                "type": "object",
+                "properties": {
+                    "tool": {"type": "string"},
+                    "region": {},
+                    "mode": {"type": "string"},
+                    "params": {"type": "object"},
+                },
+                "required": ["tool", "region", "params"],
+                "additionalProperties": False,
+            },
+        },
+        "source": {"type": "object", "maxProperties": 16},
+        "backend": {"type": "string", "maxLength": 256},
+        "model": {"type": ["string", "null"], "maxLength": 256},
+        "smoothing": {
+            "type": "array",
+            "maxItems": 16,
+            "description": "Gaussian filters of the heights after the geometric calls, in order",
+            "items": {
+                "type": "object",
+                "properties": {"region": {}, "axis": {"enum": ["x", "y"]},
+                               "sigma": {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_SMOOTHING_SIGMA}},
+                "required": ["region", "axis", "sigma"],
+                "additionalProperties": False,
+            },
+        },
+        "heightmap": {
+            "type": "object",
+            "description": "ground under the calls: a .npy array (relative to the spec file), one value per cell "
+                           "of `resolution` m, times vertical_scale metres",
+            "properties": {"file": {"type": "string", "maxLength": 1000},
+                           "vertical_scale": {"type": "number", "exclusiveMinimum": 0, "maximum": 1.0}},
+            "required": ["file", "vertical_scale"],
+            "additionalProperties": False,
+        },
+    },
+    "required": ["version", "name", "size_x", "size_y", "resolution", "seed", "calls", "source", "backend", "model"],
+    "additionalProperties": False,
+}
+TILE_FIELDS = ("size_x", "size_y", "resolution", "seed", "calls")
+"""What a spec document needs to be built; the other required fields are gente-generate's records (version, name,
+provenance), which a hand-written spec may leave out."""
+
+
+def clip_text(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters, saying how long it was: a huge input is never echoed whole."""
+    if len(text) <= limit:
+        return text
+    tail = f"... ({len(text)} characters in all)"
+    return text[: max(limit - len(tail), 0)] + tail
+
+
+def schema_size_problem(err: jsonschema.ValidationError) -> str | None:
+    """'has N items; at most M are allowed' for a list, string or object over its schema's size limit, else None."""
+    limits = {"maxItems": "items", "maxLength": "characters", "maxProperties": "entries"}
+    if err.validator not in limits:
+        return None
+    return f"has {len(err.instance)} {limits[err.validator]}; at most {err.validator_value} are allowed"
+
+
+def _describe_spec_error(err: jsonschema.ValidationError) -> str:
+    field = ".".join(map(str, err.absolute_path))[:60] or "(document)"
+    too_long = schema_size_problem(err)
+    if too_long:
+        return f"spec: field {field!r} {too_long}."
+    if err.validator == "pattern" and "description" in err.schema:  # what it must be, not the regular expression
+        return f"spec: field {field!r}: {clip_text(repr(err.instance), 80)} is not {err.schema['description']}."
+    return f"spec: field {field!r}: {clip_text(err.message, 160)}."
+
+
+def spec_document_problems(data: Any, tile_only: bool = False, most: int = 20) -> list[str]:
+    """Where ``data`` departs from :data:`SPEC_SCHEMA` (a field of the wrong type or range, one unknown or missing),
+    one sentence each, at most ``most``. ``tile_only`` requires only :data:`TILE_FIELDS`."""
+    schema = {**SPEC_SCHEMA, "required": list(TILE_FIELDS)} if tile_only else SPEC_SCHEMA
+    errors = sorted(Draft202012Validator(schema).iter_errors(data), key=lambda e: list(map(str, e.absolute_path)))
+    return [_describe_spec_error(e) for e in errors[:most]]
+
 
 @dataclasses.dataclass
 class Smoothing:
@@ -206,8 +304,10 @@ class TileSpec:
 def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> TileSpec:
     """The tile of a terrain spec document, the ``spec.json`` that gente-generate writes: ``size_x``, ``size_y``,
     ``resolution``, ``seed`` and ``calls`` of ``{"tool", "region" (a named region or {x0, y0, x1, y1}), "params",
-    "mode"}`` applied in order. The parameters and regions are checked when the tile is built; the generation
-    package validates whole documents (``TerrainSpec.load``) and builds its tiles through this function.
+    "mode"}`` applied in order. The document's fields are checked against :data:`SPEC_SCHEMA` (of gente-generate's
+    records only the version, if given), the parameters and regions when the tile is built; the generation package
+    validates whole documents (``TerrainSpec.load``: every call against its tool) and builds its tiles through this
+    function.
 
     An optional ``"heightmap": {"file": "map.npy", "vertical_scale": 0.005}`` makes the array in ``file`` (a path
     relative to ``base_dir``, the spec file's folder) the ground under the calls: one value per ``resolution``
@@ -217,34 +317,27 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
     if isinstance(data, dict) and data.get("version", SPEC_VERSION) != SPEC_VERSION:
         raise ValueError(f"terrain spec format version {data['version']!r}; this code reads version {SPEC_VERSION}: "
                          f"generate the spec again")
-    try:
-        size_x, size_y = float(data["size_x"]), float(data["size_y"])
-        resolution = float(data["resolution"])
-        regions = named_regions(size_x, size_y)
-        calls = [(call["region"], Operation(call["tool"], dict(call["params"]), call.get("mode") or "set"))
-                 for call in data["calls"]]
-        seed, heightmap = data["seed"], data.get("heightmap")
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError(f"not a terrain spec document ({type(exc).__name__}: {exc}); pass a spec.json written by "
-                         f"gente-generate") from None
-    if not all(0 < v < math.inf for v in (size_x, size_y, resolution)):
+    problems = spec_document_problems(data, tile_only=True, most=3)
+    if problems:  # a misspelt field would otherwise be left out unseen, a quoted number read as one
+        raise ValueError(f"not a terrain spec document: {' '.join(problems)} Fix the file, or pass a spec.json "
+                         f"written by gente-generate")
+    size_x, size_y, resolution = (float(data[k]) for k in ("size_x", "size_y", "resolution"))
+    if not all(math.isfinite(v) for v in (size_x, size_y, resolution)):  # JSON's NaN passes the schema's bounds
         raise ValueError(f"terrain spec: size_x {size_x:g}, size_y {size_y:g} and resolution {resolution:g} must be "
-                         f"> 0 m and finite")
-    if isinstance(seed, float) and seed.is_integer():
-        seed = int(seed)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:  # int() would truncate 2.7 to 2 silently
-        raise ValueError(f"terrain spec: seed {seed!r} must be a whole number >= 0; set \"seed\" to one (it seeds "
-                         f"every call's random draws)")
-    parts = [Part(document_region(region, regions), [operation]) for region, operation in calls]
-    smoothing = []
-    for entry in data.get("smoothing", []):
-        try:
-            smoothing.append(Smoothing(document_region(entry["region"], regions), entry["axis"], float(entry["sigma"])))
-        except (KeyError, TypeError) as exc:
-            raise ValueError(f"terrain spec: smoothing {entry!r} is not {{\"region\", \"axis\", \"sigma\"}} "
-                             f"({type(exc).__name__}: {exc})") from None
+                         f"finite numbers of metres")
+    for i, call in enumerate(data["calls"]):
+        layout = sorted(set(call["params"]) & set(LAYOUT_ARGS))
+        if layout:
+            raise ValueError(f"terrain spec: calls[{i}]: 'params' holds the layout argument(s) {layout}; put "
+                             f"'region' and 'mode' beside 'params', not in it")
+    regions = named_regions(size_x, size_y)
+    parts = [Part(document_region(call["region"], regions),
+                  [Operation(call["tool"], dict(call["params"]), call.get("mode") or "set")]) for call in data["calls"]]
+    smoothing = [Smoothing(document_region(entry["region"], regions), entry["axis"], float(entry["sigma"]))
+                 for entry in data.get("smoothing", [])]
+    heightmap = data.get("heightmap")
     base = None if heightmap is None else heightmap_ground(heightmap, size_x, size_y, resolution, base_dir)
-    return TileSpec(size_x, size_y, resolution, seed, parts, base, smoothing)
+    return TileSpec(size_x, size_y, resolution, int(data["seed"]), parts, base, smoothing)
 
 
 def document_region(region: Any, regions: Mapping[str, tuple[float, float, float, float]]) -> Region:

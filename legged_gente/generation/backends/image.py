@@ -42,15 +42,15 @@ from pathlib import Path
 from typing import Mapping
 
 import numpy as np
-from PIL import Image, ImageOps
+from PIL import Image, ImageOps, UnidentifiedImageError
 from scipy import ndimage
 
 from legged_gente.generation.backends import GenerationResult
 from legged_gente.generation.backends.planner import FREEBOARD, KNEE_HEIGHT, WATER_MARGIN, Step, keep_off_seams
 from legged_gente.generation.tools import named_regions
-from legged_gente.generation.validation import MAX_CALLS as SPEC_MAX_CALLS
-from legged_gente.generation.validation import ToolCall, ValidationError, validate_call
-from legged_gente.terrain.composition import SEAM_BAND
+from legged_gente.generation.validation import ToolCall, ValidationError, printable, validate_call
+from legged_gente.terrain.composition import MAX_CALLS as SPEC_MAX_CALLS
+from legged_gente.terrain.composition import SEAM_BAND, clip_text
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 
@@ -136,9 +136,11 @@ def open_image(data: bytes, source: object = None) -> Image.Image:
                          f"are plenty) and pass it again.") from None
     except MemoryError:
         raise  # the machine is out of memory, not the file unreadable
-    except Exception as exc:  # Pillow raises several types for unreadable data; its text names only a buffer
-        raise ValueError(f"{name} could not be read as an image ({type(exc).__name__}); pass a PNG or JPEG "
-                         f"file.") from None
+    except Exception as exc:  # Pillow raises several types for unreadable data
+        # an unknown format's text names only a buffer; a truncated or broken file's says what is wrong with it
+        why = type(exc).__name__ if isinstance(exc, UnidentifiedImageError) else \
+            f"{type(exc).__name__}: {clip_text(printable(str(exc)), 120)}"
+        raise ValueError(f"{name} could not be read as an image ({why}); pass a PNG or JPEG file.") from None
 
 
 EXIF_ORIENTATION = 0x0112

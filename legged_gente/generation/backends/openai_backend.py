@@ -49,13 +49,13 @@ from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, Generatio
 from legged_gente.generation.backends.image import EXIF_ORIENTATION, open_image, upright
 from legged_gente.generation.tools import named_regions, tool_schemas
 from legged_gente.generation.validation import (
-    MAX_CALLS,
     ToolCall,
     ValidationError,
     check_height_stack,
     printable,
     validate_call,
 )
+from legged_gente.terrain.composition import MAX_CALLS
 from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 
 DEFAULT_API_KEY_ENV = "GENTE_API_KEY"
@@ -66,7 +66,7 @@ MAX_DESCRIPTION_CHARS = 4000
 TOOLSETS = ("ours", "gente")
 """``ours``: the registry's tools; ``gente``: GenTe's original tool list, translated (see gente_compat)."""
 MAX_TOOL_CALLS_PER_ANSWER = 64
-"""Most tool calls one answer may carry (a spec holds at most ``validation.MAX_CALLS``)."""
+"""Most tool calls one answer may carry (a spec holds at most ``composition.MAX_CALLS``)."""
 CUT = ("the server stopped the answer at its token limit (finish_reason 'length'); raise the server's limit on "
        "generated tokens (or its context length)")
 """What an answer whose choice ends with finish_reason "length" lacks (its last tool call, or those after it), and the fix."""
