@@ -40,7 +40,10 @@ def test_emitted_module_imports_and_rebuilds_identically(tmp_path):
 
 
 def test_emit_with_a_stand_in_base_and_bad_bases(tmp_path, monkeypatch):
-    (tmp_path / "standin_cfg.py").write_text("class Task:\n    class terrain:\n        mode = 'plane'\n        resolution = 0.1\n")
+    (tmp_path / "standin_cfg.py").write_text(
+        "from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg\n"
+        "class Task:\n    class terrain(LeggedRobotCfg.terrain):\n        mode = 'plane'\n        resolution = 0.1\n"
+        "    class env:\n        num_envs = 2\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     spec, _ = generate_spec("stairs", size_x=4.0, size_y=4.0)
     out = emit(spec, tmp_path / "o", base="standin_cfg:Task.terrain", class_name="StairsCfg")
@@ -50,6 +53,8 @@ def test_emit_with_a_stand_in_base_and_bad_bases(tmp_path, monkeypatch):
         emit(spec, tmp_path / "p", base="no_such_module_xyz:Cfg")
     with pytest.raises(ValueError, match="has no attribute 'nope'"):
         emit(spec, tmp_path / "p", base="standin_cfg:Task.nope")
+    with pytest.raises(ValueError, match="is not a terrain config"):  # training would refuse the emitted class
+        emit(spec, tmp_path / "p", base="standin_cfg:Task.env")
     assert class_name_for("forest_trail") == "ForestTrailTerrainCfg"
 
 
@@ -185,7 +190,8 @@ def test_a_failed_emit_leaves_no_partial_file(tmp_path, monkeypatch, failing):
 
 
 def test_bad_input_is_refused_before_any_request(tmp_path, capsys):
-    """An unreadable image, a bad --base and an --out below a file: exit 2, one line, and the model is never asked."""
+    """An unreadable image, a bad --base and an --out that cannot be written: exit 2, one line, and the model is never
+    asked."""
     image = tmp_path / "photo.png"
     image.write_text("not an image")
     (tmp_path / "FILE").write_text("")
@@ -205,6 +211,16 @@ def test_bad_input_is_refused_before_any_request(tmp_path, capsys):
         (["--text", "x", "--out", str(tmp_path / "FILE" / "o")],
          f"gente-generate: error: --out {tmp_path / 'FILE' / 'o'}: {tmp_path / 'FILE'} is a file; give a folder "
          f"to write to"),
+        # as a path "" is the current folder, whose files the emitted ones would replace
+        (["--text", "x", "--out", ""], "gente-generate: error: --out is empty; give a folder"),
+        # /proc's permission bits let root write, yet nothing can be made there: refused before, not after, asking
+        (["--text", "x", "--out", "/proc/gente_terrain"],
+         "gente-generate: error: --out /proc/gente_terrain: nothing can be created in /proc (No such file or "
+         "directory); give a folder you can write to"),
+        (["--text", "x", "--base", "legged_gente.envs.gente_biped.gente_biped_config:GenteBipedCfg.env"],
+         "gente-generate: error: --base: base 'legged_gente.envs.gente_biped.gente_biped_config:GenteBipedCfg.env' "
+         f"is not a terrain config (a subclass of LeggedRobotCfg.terrain); pass a task's terrain class, e.g. "
+         f"{DEFAULT_BASE!r}."),
     ]
     for flags, message in cases:
         with FakeServer([]) as srv:

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
 from legged_gente.generation.spec import TerrainSpec
 from legged_gente.terrain.terrain import whole_cells
 
@@ -72,6 +73,9 @@ def resolve_base(base: str) -> tuple[str, str, type]:
         obj = getattr(obj, part)
     if not isinstance(obj, type):
         raise ValueError(f"base {base!r} is not a class.")
+    if not issubclass(obj, LeggedRobotCfg.terrain):  # the emitted class sets a terrain config's fields
+        raise ValueError(f"base {base!r} is not a terrain config (a subclass of LeggedRobotCfg.terrain); pass a "
+                         f"task's terrain class, e.g. {DEFAULT_BASE!r}.")
     return module_name, attr_path, obj
 
 

@@ -64,7 +64,7 @@ def build_parser() -> Parser:
     src = p.add_argument_group("input (at least one)")
     src.add_argument("--text", help="scene description, e.g. 'a knee-deep river in a forest'")
     src.add_argument("--image", type=Path, help="photo or colour-coded sketch map (PNG/JPEG); see docs/generation.md")
-    p.add_argument("--out", type=Path, required=True, help="output directory (terrain_cfg.py, spec.json, preview.png)")
+    p.add_argument("--out", required=True, help="output directory (terrain_cfg.py, spec.json, preview.png)")
     p.add_argument("--backend", choices=BACKENDS, default="planner", help="planner (offline, default) or openai")
     p.add_argument(*flag("--base-url"), help="OpenAI-compatible server, e.g. http://localhost:8000/v1 (openai backend)")
     p.add_argument(*flag("--model"), help="model name on that server (openai backend)")

@@ -9,6 +9,7 @@ import logging
 import math
 import os
 import sys
+import tempfile
 import types
 import typing
 import warnings
@@ -179,8 +180,11 @@ def error_text(error: BaseException) -> str:
 
 def check_output(path, name: str, folder: bool = True) -> None:
     """Refuse, before any work, an output folder (or with ``folder=False`` a file) that cannot be made or written:
-    one under a file, or under a folder without write permission. ``name``: the flag or variable that gave it.
-    Makes nothing."""
+    one under a file, or under a folder without write permission or where nothing can be created (a read-only or
+    virtual file system, which the permission bits do not show: a probe folder is made there and removed at once).
+    ``name``: the flag or variable that gave it. An empty string is refused: as a path it is the current folder."""
+    if isinstance(path, str) and not path.strip():
+        raise ValueError(f"{name} is empty; give a {'folder' if folder else 'file name'}")
     path = Path(path)
     if not folder and path.is_dir():
         raise ValueError(f"{name} {path} is a folder; give a file name")
@@ -190,6 +194,11 @@ def check_output(path, name: str, folder: bool = True) -> None:
         raise ValueError(f"{name} {path}: {existing} is a file; give a folder to write to")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise ValueError(f"{name} {path}: {existing} is not writable; give a folder you can write to")
+    try:
+        tempfile.TemporaryDirectory(dir=existing).cleanup()
+    except OSError as exc:
+        raise ValueError(f"{name} {path}: nothing can be created in {existing} ({exc.strerror}); give a folder you "
+                         f"can write to") from None
 
 
 def check_log_root(given: str | None, default: Path) -> None:
