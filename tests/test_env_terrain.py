@@ -232,6 +232,7 @@ def test_checkpoints_keep_the_terrain_curriculum(env, tmp_path):
     train_cfg.actor.hidden_dims = [8]
     train_cfg.critic.hidden_dims = [8]
     runner = GenteOnPolicyRunner(env, rsl_rl_train_cfg(train_cfg), log_dir=None, device="cpu")
+    runner.task_name = "gente_biped"  # as the task registry sets it
     saved = torch.tensor([2, 0, 1, 2, 1])
     env.terrain_levels = saved.clone()
     runner.save(str(tmp_path / "model_0.pt"))
@@ -250,6 +251,14 @@ def test_checkpoints_keep_the_terrain_curriculum(env, tmp_path):
     # levels saved for another number of robots leave the curriculum as it is, and say so
     message = env.load_curriculum_state({"terrain_levels": torch.zeros(7, dtype=torch.long)})
     assert "restarts" in message and torch.equal(env.terrain_levels, saved)
+    # a checkpoint of another task whose networks fit (a task subclassed from this one): its weights load, its
+    # levels (another grid's) do not, and the message names both tasks; before, it loaded silently, levels too
+    runner.task_name = "mud_biped"
+    env.terrain_levels = torch.zeros_like(saved)
+    runner.load(str(tmp_path / "model_0.pt"))
+    assert torch.equal(env.terrain_levels, torch.zeros_like(saved))
+    assert runner.curriculum_message == ("the checkpoint is of task gente_biped, this task is mud_biped: its weights "
+                                         "are loaded (the networks fit), the terrain curriculum restarts")
 
 
 def test_critic_keeps_its_width_on_a_terrain_without_materials(env):

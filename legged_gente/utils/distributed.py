@@ -191,7 +191,8 @@ class GenteOnPolicyRunner(OnPolicyRunner):
 
     def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
         """rsl-rl's load, but safe (``torch.load(weights_only=True)``) and with a one-line error for a checkpoint
-        of another task; also restores the env's curriculum when the checkpoint has one that fits
+        of another task whose networks do not fit (one whose networks fit, e.g. the task a user's task subclasses,
+        is loaded and named); also restores the env's curriculum when the checkpoint has one of this task that fits
         (``self.curriculum_message`` says what happened). The tensors go to ``map_location``, by default the
         runner's device: a run trained on a GPU continues on the CPU, or on cuda:1 from cuda:0."""
         from legged_gente.utils.checkpoints import (CheckpointError, check_checkpoint_fits, check_state_fits,
@@ -219,6 +220,13 @@ class GenteOnPolicyRunner(OnPolicyRunner):
             self.current_learning_iteration = loaded["iter"]
             # rsl-rl's logger counts from 0 in every run: a resumed run's "Total steps" go on from the checkpoint's
             self.logger.tot_timesteps = int((infos or {}).get("total_steps", 0))
-        self.curriculum_message = (self.env.load_curriculum_state(infos["curriculum"])
-                                   if infos and "curriculum" in infos else "the checkpoint has no curriculum state")
+        saved_task = (infos or {}).get("task")
+        if saved_task and self.task_name and saved_task != self.task_name:
+            # its networks fit (check_checkpoint_fits refuses those that do not), but its levels are another grid's
+            self.curriculum_message = (f"the checkpoint is of task {saved_task}, this task is {self.task_name}: its "
+                                       f"weights are loaded (the networks fit), the terrain curriculum restarts")
+        elif infos and "curriculum" in infos:
+            self.curriculum_message = self.env.load_curriculum_state(infos["curriculum"])
+        else:
+            self.curriculum_message = "the checkpoint has no curriculum state"
         return infos
