@@ -136,3 +136,18 @@ def test_a_set_terrain_agrees_with_is_taken():
     env_cfg = with_terrain(FLAT_SPEC, ["terrain.resolution=0.1", "terrain.solved_top_level=stay"])
     assert env_cfg.terrain.resolution == 0.1 and env_cfg.terrain.solved_top_level == "stay"
     assert env_cfg.terrain.terrain_length == 20.0  # the spec's size_x, m
+
+
+@pytest.mark.parametrize("flags, field", [
+    (["--experiment_name", "../../escape"], "experiment_name"),
+    (["--experiment_name", ""], "experiment_name"),
+    (["--experiment_name", ".."], "experiment_name"),
+    (["--set", "runner.run_name=x/../../y"], "run_name"),
+    (["--set", "runner.experiment_name=a/b"], "experiment_name"),
+])
+def test_run_folder_names_are_one_folder_each(capsys, no_env, flags, field):
+    """--experiment_name ../../escape logged a run two folders above the log root, an empty one made the log root
+    itself the experiment (and --resume then took a run from it), and --set runner.run_name=x/../../y passed the
+    --run_name flag's check; each is now refused before anything is built or written."""
+    line = one_line_error(capsys, [*CPU, *flags])
+    assert line.startswith(f"gente-train: error: runner.{field}=") and "give a name without '/'" in line

@@ -40,6 +40,19 @@ PPO_RANGES = (
 PPO_SCHEDULES = ("adaptive", "fixed")
 
 
+def check_run_folder_names(runner_cfg) -> None:
+    """``runner.experiment_name`` and ``runner.run_name`` (if any) each name one folder of
+    ``<log root>/<experiment_name>/<date>_<run_name>/``: a '/', '.' or '..' would put a run outside the log root
+    or where ``--resume`` never looks, and an empty experiment name would make the log root itself the experiment."""
+    for field, value in (("experiment_name", runner_cfg.experiment_name), ("run_name", runner_cfg.run_name)):
+        if field == "run_name" and not value:
+            continue
+        if not isinstance(value, str) or value in ("", ".", "..") or "/" in value or os.sep in value:
+            raise ValueError(f"runner.{field}={value!r}: runs are written to <log root>/<experiment_name>/"
+                             f"<date>_<run_name>/, one folder each; give a name without '/' that is not empty, '.' or "
+                             f"'..' (--{field} or --set runner.{field}=...)")
+
+
 def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO | None) -> None:
     """The settings that divide or count (a zero would crash deep in the env or rsl-rl) and PPO's ranges, checked
     up front."""
@@ -226,6 +239,7 @@ class TaskRegistry:
             if args is not None:
                 apply_args(args, None, train_cfg)
         runner_cfg = train_cfg.runner
+        check_run_folder_names(runner_cfg)
         if log_root == "default":
             log_root = default_log_root()
         experiment_root = Path(log_root).absolute() / runner_cfg.experiment_name if log_root is not None else None

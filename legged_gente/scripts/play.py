@@ -17,7 +17,7 @@ from legged_gente.utils.args import (
 
 import_mujoco("gente-play")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
-from legged_gente.envs.task_registry import apply_args, default_log_root, task_registry
+from legged_gente.envs.task_registry import apply_args, check_run_folder_names, default_log_root, task_registry
 from legged_gente.utils.checkpoints import pretrained_policy
 from legged_gente.utils.export import deployment_metadata, export_onnx
 
@@ -81,6 +81,7 @@ def play(args) -> dict:
         check_log_root(args.log_root, default_log_root())  # its exports go there
     env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, 16)
     apply_args(args, env_cfg, train_cfg)
+    check_run_folder_names(train_cfg.runner)  # before building: --pretrained's exports go there too
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
     log_root = Path(args.log_root) if getattr(args, "log_root", None) else default_log_root()
     if getattr(args, "pretrained", False):

@@ -18,7 +18,7 @@ from legged_gente.utils.args import (
 import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
 from legged_gente.envs.base.base_config import class_to_dict
-from legged_gente.envs.task_registry import default_log_root, task_registry
+from legged_gente.envs.task_registry import apply_args, check_run_folder_names, default_log_root, task_registry
 from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
 
 
@@ -89,6 +89,9 @@ def _stop_after_the_iteration(logger):
 def train(args) -> Path | None:
     started = time.monotonic()  # --max_minutes counts the env's build too, as a job's time limit does
     check_log_root(None, default_log_root())
+    _, named = task_registry.get_cfgs(args.task)  # the run's folder names, checked before the env is built
+    apply_args(args, None, named)
+    check_run_folder_names(named.runner)
     env, env_cfg = task_registry.make_env(args.task, args)
     runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
     if log_dir is not None:
