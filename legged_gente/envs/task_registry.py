@@ -40,6 +40,11 @@ PPO_RANGES = (
 PPO_SCHEDULES = ("adaptive", "fixed")
 
 
+def is_one_folder_name(value) -> bool:
+    """A name that makes one folder inside another: a non-empty string, not '.' or '..', without a path separator."""
+    return isinstance(value, str) and value not in ("", ".", "..") and "/" not in value and os.sep not in value
+
+
 def check_run_folder_names(runner_cfg) -> None:
     """``runner.experiment_name`` and ``runner.run_name`` (if any) each name one folder of
     ``<log root>/<experiment_name>/<date>_<run_name>/``: a '/', '.' or '..' would put a run outside the log root
@@ -47,7 +52,7 @@ def check_run_folder_names(runner_cfg) -> None:
     for field, value in (("experiment_name", runner_cfg.experiment_name), ("run_name", runner_cfg.run_name)):
         if field == "run_name" and not value:
             continue
-        if not isinstance(value, str) or value in ("", ".", "..") or "/" in value or os.sep in value:
+        if not is_one_folder_name(value):
             raise ValueError(f"runner.{field}={value!r}: runs are written to <log root>/<experiment_name>/"
                              f"<date>_<run_name>/, one folder each; give a name without '/' that is not empty, '.' or "
                              f"'..' (--{field} or --set runner.{field}=...)")

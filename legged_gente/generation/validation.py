@@ -40,6 +40,7 @@ from legged_gente.terrain.composition import (
     document_region,
     height_advice,
     heightmap_ground,
+    params_layout_problem,
     schema_size_problem,
     spec_document_problems,
     stacked_height_bounds,
@@ -469,10 +470,9 @@ def validate_spec_dict(
             raise ValidationError([f"spec: {exc}."]) from None
     calls, messages = [], []
     for i, c in enumerate(data["calls"]):
-        layout = sorted(set(c["params"]) & set(LAYOUT_ARGS))
-        if layout:  # training passes params to the terrain as they are: layout there would not build
-            messages.append(f"spec: calls[{i}]: 'params' holds the layout argument(s) {layout}; put 'region' and "
-                            f"'mode' beside 'params', not in it.")
+        problem = params_layout_problem(c["params"])
+        if problem:  # training passes params to the terrain as they are: layout there would not build
+            messages.append(f"spec: calls[{i}]: {problem}.")
             continue
         args = {**c["params"], "region": c["region"]}
         if "mode" in c:

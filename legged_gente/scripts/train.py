@@ -18,7 +18,8 @@ from legged_gente.utils.args import (
 import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
 from legged_gente.envs.base.base_config import class_to_dict
-from legged_gente.envs.task_registry import apply_args, check_run_folder_names, default_log_root, task_registry
+from legged_gente.envs.task_registry import (
+    apply_args, check_run_folder_names, default_log_root, is_one_folder_name, task_registry)
 from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
 
 
@@ -164,7 +165,7 @@ def main(argv=None) -> None:
     if not resumes and picked:
         parser.error("--load_run/--checkpoint pick the checkpoint to resume from: add --resume (without it "
                      "training starts from scratch)")
-    if args.run_name and ("/" in args.run_name or os.sep in args.run_name):
+    if args.run_name and not is_one_folder_name(args.run_name):
         parser.error(f"--run_name {args.run_name!r}: a run is one folder under logs/<experiment>/ (--resume looks "
                      f"for it there); give a name without '/'")
     if args.pretrained and args.resume:

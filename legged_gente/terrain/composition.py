@@ -186,6 +186,14 @@ SPEC_SCHEMA: dict[str, Any] = {
     "required": ["version", "name", "size_x", "size_y", "resolution", "seed", "calls", "source", "backend", "model"],
     "additionalProperties": False,
 }
+def params_layout_problem(params: Mapping[str, Any]) -> str | None:
+    """Why a call's ``params`` cannot go to its terrain as they are (None if they can): a layout argument among them,
+    which the terrain function would refuse as unknown."""
+    layout = sorted(set(params) & set(LAYOUT_ARGS))
+    return (f"'params' holds the layout argument(s) {layout}; put 'region' and 'mode' beside 'params', not in it"
+            if layout else None)
+
+
 TILE_FIELDS = ("size_x", "size_y", "resolution", "seed", "calls")
 """What a spec document needs to be built; the other required fields are gente-generate's records (version, name,
 provenance), which a hand-written spec may leave out."""
@@ -326,10 +334,9 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
         raise ValueError(f"terrain spec: size_x {size_x:g}, size_y {size_y:g} and resolution {resolution:g} must be "
                          f"finite numbers of metres")
     for i, call in enumerate(data["calls"]):
-        layout = sorted(set(call["params"]) & set(LAYOUT_ARGS))
-        if layout:
-            raise ValueError(f"terrain spec: calls[{i}]: 'params' holds the layout argument(s) {layout}; put "
-                             f"'region' and 'mode' beside 'params', not in it")
+        problem = params_layout_problem(call["params"])
+        if problem:
+            raise ValueError(f"terrain spec: calls[{i}]: {problem}")
     regions = named_regions(size_x, size_y)
     parts = [Part(document_region(call["region"], regions),
                   [Operation(call["tool"], dict(call["params"]), call.get("mode") or "set")]) for call in data["calls"]]
