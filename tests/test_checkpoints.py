@@ -110,6 +110,10 @@ def test_resume_falls_back_to_the_newest_readable_checkpoint(runner, tmp_path, c
     assert "model_9.pt is unreadable" in out and "skipped model_9.pt" in out
     (newer / "model_8.pt").write_bytes(b"")
     assert load_newest_readable(runner, root) == older / "model_7.pt"  # then the earlier run
+    (older / "model_7.pt").write_bytes(b"")
+    with pytest.raises(CheckpointError, match="no readable checkpoint under .* \\(tried model_9.pt, model_8.pt, "
+                                              "model_7.pt: each truncated or corrupt\\); pick another run, or train"):
+        load_newest_readable(runner, root)
     # a checkpoint named explicitly is loaded or refused, never replaced by another
     with pytest.raises(UnreadableCheckpoint):
         load_newest_readable(runner, root, load_run=newer.name, checkpoint=9)

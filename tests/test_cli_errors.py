@@ -385,6 +385,28 @@ def test_a_checkpoint_without_config_json_is_evaluated_with_set(capsys, tmp_path
     assert (tmp_path / "out" / "report.json").is_file()
 
 
+def test_evaluating_a_run_folder_skips_its_unreadable_newest_checkpoint_as_play_does(capsys, tmp_path):
+    """A run folder's newest checkpoint cut short (a run killed while saving): the newest readable one is evaluated,
+    the skip is said, and the report names the file evaluated; a checkpoint file named alone is still refused."""
+    runner = small_runner("gente_biped_flat")
+    run = tmp_path / "run"
+    run.mkdir()
+    for iteration in (3, 4):
+        runner.current_learning_iteration = iteration
+        runner.save(str(run / f"model_{iteration}.pt"))
+    newest = run / "model_4.pt"
+    newest.write_bytes(newest.read_bytes()[:1000])
+    flags = ["--task", "gente_biped_flat", "--benchmark", "flat", "--robots_per_terrain", "1", "--episode_s", "0.1",
+             "--settle_s", "0", "--device", "cpu", "--no_progress", "--out", str(tmp_path / "out"), "--set",
+             "actor.hidden_dims=[8]"]
+    report = evaluate_script.evaluate(evaluate_script.build_parser().parse_args([*flags, "--checkpoint", str(run)]))
+    assert report["meta"]["policy_file"] == str((run / "model_3.pt").resolve())
+    out = capsys.readouterr().out
+    assert "model_4.pt is unreadable" in out and "skipped model_4.pt" in out
+    line = one_line_error(capsys, evaluate_script.main, [*flags, "--checkpoint", str(newest)])
+    assert "model_4.pt is unreadable" in line
+
+
 @pytest.mark.parametrize("flags, message", [
     (["--baseline", "zero", "--set", "actor.hidden_dims=[8]"], "--set sets the network sizes of a --checkpoint"),
     (["--checkpoint", "CKPT", "--set", "terrain.num_rows=2"],

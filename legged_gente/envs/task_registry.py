@@ -337,26 +337,12 @@ def network_sizes_from(checkpoint: Path, train_cfg: LeggedRobotCfgPPO) -> bool:
 
 
 def load_newest_readable(runner, experiment_root, load_run=-1, checkpoint=-1, load_cfg: dict | None = None) -> Path:
-    """Load the newest checkpoint that reads (a truncated or corrupt newer one is skipped, and said so);
-    a checkpoint of another task is an error, not skipped. ``load_cfg``: the parts to load, as rsl-rl's (None:
-    all). The path loaded."""
-    from legged_gente.utils.checkpoints import CheckpointError, UnreadableCheckpoint, checkpoint_candidates
+    """Load the newest checkpoint that reads (see ``load_newest_readable_of``). ``load_cfg``: the parts to load, as
+    rsl-rl's (None: all). The path loaded."""
+    from legged_gente.utils.checkpoints import checkpoint_candidates, load_newest_readable_of
 
     candidates = checkpoint_candidates(experiment_root, load_run, checkpoint)
-    skipped = []
-    for path in candidates:
-        try:
-            runner.load(str(path), load_cfg)
-        except UnreadableCheckpoint as error:
-            if len(candidates) == 1:
-                raise
-            print(f"[legged_gente] {error} Trying the next newest.")
-            skipped.append(path.name)
-            continue
-        print(f"Loaded model from {path}" + (f" (newest readable; skipped {', '.join(skipped)})" if skipped else ""))
-        return path
-    raise CheckpointError(f"no readable checkpoint under {experiment_root} (tried {', '.join(skipped)}); train "
-                          f"anew without --resume.")
+    return load_newest_readable_of(candidates, lambda path: runner.load(str(path), load_cfg), experiment_root)[0]
 
 
 task_registry = TaskRegistry()

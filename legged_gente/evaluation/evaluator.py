@@ -360,15 +360,17 @@ def load_policy_and_file(evaluation, checkpoint: str | None = None, exported: st
 
         return OnnxPolicy(exported, env.get_observations(), env.num_actions), Path(exported).resolve()
     from legged_gente.envs.task_registry import task_registry
-    from legged_gente.utils.checkpoints import find_checkpoint
+    from legged_gente.utils.checkpoints import checkpoint_candidates, load_newest_readable_of
 
     if pretrained:
         runner, path = task_registry.make_pretrained_runner(env, evaluation.task_name, evaluation.train_cfg)
         return runner.get_inference_policy(device=env.device), path
     path = Path(checkpoint)
-    if path.is_dir():
-        path = find_checkpoint(path.parent, path.name)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"--checkpoint {checkpoint}: no such file or run folder.")
-    runner = task_registry.make_policy_runner(env, evaluation.task_name, path, evaluation.train_cfg)
+    # a run folder: its newest readable checkpoint, as gente-play takes it; a file: that file or an error
+    candidates = checkpoint_candidates(path.parent, path.name) if path.is_dir() else [path]
+    path, runner = load_newest_readable_of(
+        candidates, lambda path: task_registry.make_policy_runner(env, evaluation.task_name, path, evaluation.train_cfg),
+        path)
     return runner.get_inference_policy(device=env.device), path.resolve()

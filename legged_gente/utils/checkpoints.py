@@ -86,6 +86,27 @@ def checkpoint_candidates(experiment_root: Path | None, load_run=-1, checkpoint=
     return candidates
 
 
+def load_newest_readable_of(candidates: list[Path], load, where) -> tuple[Path, object]:
+    """(path, ``load(path)``) for the first of ``candidates`` (newest first) that reads: a truncated or corrupt newer
+    one is skipped, and said so; a lone candidate (a checkpoint named explicitly) is loaded or refused, never
+    replaced. Any other error (a checkpoint of another task) is raised, not skipped. ``where``: the folder the
+    candidates came from, for the error when none reads."""
+    skipped = []
+    for path in candidates:
+        try:
+            loaded = load(path)
+        except UnreadableCheckpoint as error:
+            if len(candidates) == 1:
+                raise
+            print(f"[legged_gente] {error} Trying the next newest.")
+            skipped.append(path.name)
+            continue
+        print(f"Loaded model from {path}" + (f" (newest readable; skipped {', '.join(skipped)})" if skipped else ""))
+        return path, loaded
+    raise CheckpointError(f"no readable checkpoint under {where} (tried {', '.join(skipped)}: each truncated or "
+                          f"corrupt); pick another run, or train anew (without --resume).")
+
+
 def _names_nothing(name: str) -> bool:
     """Whether ``name`` (module.attribute, as a pickle's GLOBAL) is no dotted Python name or is missing from a module
     already imported; a name whose module is not imported is not looked up (importing it would run its code)."""
