@@ -179,3 +179,26 @@ def test_a_renderer_without_a_gl_context_is_a_one_line_error(terrain, monkeypatc
     err = capsys.readouterr().err
     assert exit_info.value.code == 2 and len(err.splitlines()) == 1, err
     assert "offscreen rendering failed (AttributeError: " in err and "set MUJOCO_GL=egl" in err, err
+
+
+def test_gente_play_video_without_a_gl_context_is_refused_before_the_env_is_built(monkeypatch, capsys):
+    """The one-line error comes first, not after the env build and the policy's export."""
+    import mujoco
+
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.scripts import play as play_script
+
+    def no_context(*args, **kwargs):
+        raise AttributeError("'NoneType' object has no attribute 'eglGetCurrentContext'")
+
+    def built(*args, **kwargs):
+        raise AssertionError("the env was built before the video's OpenGL check")
+
+    monkeypatch.setattr(mujoco, "Renderer", no_context)
+    monkeypatch.setattr(task_registry, "make_env", built)
+    with pytest.raises(SystemExit) as exit_info:
+        play_script.main(["--task", "gente_biped_flat", "--pretrained", "--video", "--headless", "--steps", "1",
+                          "--num_envs", "1", "--device", "cpu"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and len(err.splitlines()) == 1, err
+    assert "offscreen rendering failed (AttributeError: " in err and "set MUJOCO_GL=egl" in err, err

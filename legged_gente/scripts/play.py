@@ -76,6 +76,10 @@ class VideoRecorder:
 
 
 def play(args) -> dict:
+    if args.video:
+        from legged_gente.viewer.video import check_offscreen_rendering
+
+        check_offscreen_rendering()
     if getattr(args, "pretrained", False):
         pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
         check_log_root(args.log_root, default_log_root())  # its exports go there

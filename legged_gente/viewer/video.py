@@ -102,6 +102,22 @@ class OffscreenGLError(OSError):
     """No OpenGL context for offscreen rendering: the machine's set-up, reported in one line like a missing file."""
 
 
+def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+    """``mujoco.Renderer`` of ``model``; without an OpenGL context an OffscreenGLError that says how to get one."""
+    try:
+        return mujoco.Renderer(model, height=height, width=width)
+    except Exception as error:  # no GL context: say how to get one
+        backend = f"MUJOCO_GL={os.environ['MUJOCO_GL']}" if "MUJOCO_GL" in os.environ else "MUJOCO_GL is unset"
+        raise OffscreenGLError(f"{backend}: offscreen rendering failed "
+                               f"({type(error).__name__}: {error}); {GL_FIX}") from error
+
+
+def check_offscreen_rendering() -> None:
+    """Refuse a video before any work when no offscreen OpenGL context can be made (an empty scene, closed at once):
+    otherwise the error would come after the env is built and the policy exported."""
+    offscreen_renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 2, 2).close()
+
+
 class VideoRenderer:
     """Frames of one robot (qpos per frame) on its terrain, from a camera that follows its base."""
 
@@ -116,12 +132,7 @@ class VideoRenderer:
         self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, width)
         self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, height)
         self.data = mujoco.MjData(self.model)
-        try:
-            self.renderer = mujoco.Renderer(self.model, height=height, width=width)
-        except Exception as error:  # no GL context: say how to get one
-            backend = f"MUJOCO_GL={os.environ['MUJOCO_GL']}" if "MUJOCO_GL" in os.environ else "MUJOCO_GL is unset"
-            raise OffscreenGLError(f"{backend}: offscreen rendering failed "
-                                   f"({type(error).__name__}: {error}); {GL_FIX}") from error
+        self.renderer = offscreen_renderer(self.model, width, height)
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = True
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
         self.camera = mujoco.MjvCamera()
