@@ -33,6 +33,20 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "legged_gente" / "benchmarks"
 CPU = ["--device", "cpu", "--num_envs", "1", "--headless"]
 
 
+@pytest.mark.parametrize("override, message", [
+    ("terrain.num_rows=-2", "num_rows=-2 and num_cols=20 must both be >= 1"),
+    ("terrain.resolution=0", "resolution must be > 0 m"),
+    ("terrain.terrain_length=8.05", "terrain_length=8.05 m is not a whole number of resolution=0.1 m cells"),
+])
+def test_an_invalid_grid_setting_is_refused_on_a_plane_task_too(capsys, tmp_path, monkeypatch, override, message):
+    """A plane task builds no terrain grid, but a grid setting it ignores is still refused when invalid: silently
+    accepted, it would surface only once the user moves to a task with a grid."""
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    line = one_line_error(capsys, train_script.main, ["--task", "gente_biped_flat", *CPU, "--max_iterations", "1",
+                                                      "--set", override])
+    assert message in line, line
+
+
 def test_unknown_task(capsys):
     line = one_line_error(capsys, train_script.main, ["--task", "gente_bipd", *CPU])
     assert line.startswith("gente-train: error: unknown task 'gente_bipd'") and "gente_biped_flat" in line

@@ -15,6 +15,7 @@ import torch
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO, rsl_rl_train_cfg
 from legged_gente.envs.terrain_arg import apply_terrain_arg
+from legged_gente.terrain.terrain import check_grid_settings
 from legged_gente.utils.args import apply_overrides, override_of
 
 CPU_MANY_ENVS = 64  # more robots than this on the CPU: say that it will be slow, and how to make it fast
@@ -63,6 +64,7 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
     up front."""
     checks = []
     if env_cfg is not None:
+        check_grid_settings(env_cfg.terrain)
         checks += [("sim.dt", env_cfg.sim.dt, float, 0.0), ("env.episode_length_s", env_cfg.env.episode_length_s, float, 0.0),
                    ("control.decimation", env_cfg.control.decimation, int, 1), ("env.num_envs", env_cfg.env.num_envs, int, 1),
                    ("terrain.hfield_piece_size", env_cfg.terrain.hfield_piece_size, float, 0.0)]

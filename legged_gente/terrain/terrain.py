@@ -106,30 +106,39 @@ def _cells(length: float, resolution: float, what: str) -> int:
     return int(round(n))
 
 
+def check_grid_settings(cfg: Any) -> None:
+    """The grid settings a ``Terrain`` reads, checked without building it. A plane task's env builds no grid and
+    ignores them, but checks them too: an invalid one left unsaid would surface only in a task with a grid."""
+    mode = "plane" if cfg.mesh_type == "plane" else cfg.mode
+    if mode not in MODES:
+        raise ValueError(f"terrain mode {cfg.mode!r} is not one of {MODES}.")
+    if cfg.num_rows < 1 or cfg.num_cols < 1:
+        raise ValueError(f"num_rows={cfg.num_rows} and num_cols={cfg.num_cols} must both be >= 1.")
+    for name in ("terrain_length", "terrain_width", "border_size"):  # NaN passes every comparison below
+        if not math.isfinite(getattr(cfg, name)):
+            raise ValueError(f"{name}={getattr(cfg, name)} m must be a finite number of metres; set terrain.{name}.")
+    check_ground_friction(cfg.static_friction)
+    if cfg.border_size < 0:
+        raise ValueError(f"border_size must be >= 0 m, got {cfg.border_size}.")
+    if mode != "plane" and not (float(cfg.seed) == int(cfg.seed) >= 0):
+        raise ValueError(f"terrain seed={cfg.seed} must be a whole number >= 0 (it seeds every tile); set terrain.seed.")
+    if not float(cfg.resolution) > 0:
+        raise ValueError(f"resolution must be > 0 m, got {cfg.resolution}.")
+    for name in ("terrain_length", "terrain_width", "border_size")[:2 + (cfg.border_size > 0)]:
+        _cells(getattr(cfg, name), float(cfg.resolution), name)
+
+
 class Terrain:
     """The whole terrain: ``height_field`` (float32, m), ``material`` (MaterialMap) and tile spawn origins."""
 
     def __init__(self, cfg: Any, num_robots: int):
         if num_robots < 1:
             raise ValueError(f"num_robots must be >= 1, got {num_robots}.")
+        check_grid_settings(cfg)
         self.cfg = cfg
         self.num_robots = int(num_robots)
         self.mode = "plane" if cfg.mesh_type == "plane" else cfg.mode
-        if self.mode not in MODES:
-            raise ValueError(f"terrain mode {cfg.mode!r} is not one of {MODES}.")
-        if cfg.num_rows < 1 or cfg.num_cols < 1:
-            raise ValueError(f"num_rows={cfg.num_rows} and num_cols={cfg.num_cols} must both be >= 1.")
-        for name in ("terrain_length", "terrain_width", "border_size"):  # NaN passes every comparison below
-            if not math.isfinite(getattr(cfg, name)):
-                raise ValueError(f"{name}={getattr(cfg, name)} m must be a finite number of metres; set terrain.{name}.")
-        check_ground_friction(cfg.static_friction)
-        if cfg.border_size < 0:
-            raise ValueError(f"border_size must be >= 0 m, got {cfg.border_size}.")
-        if self.mode != "plane" and not (float(cfg.seed) == int(cfg.seed) >= 0):
-            raise ValueError(f"terrain seed={cfg.seed} must be a whole number >= 0 (it seeds every tile); set terrain.seed.")
         self.resolution = float(cfg.resolution)
-        if not self.resolution > 0:
-            raise ValueError(f"resolution must be > 0 m, got {cfg.resolution}.")
         self.num_rows, self.num_cols = int(cfg.num_rows), int(cfg.num_cols)
         self.tile_size = (float(cfg.terrain_length), float(cfg.terrain_width))
         self.tile_cells = (
