@@ -250,3 +250,30 @@ def test_a_default_angle_outside_the_joints_range_is_refused(tutorial):
     cfg.init_state.default_joint_angles = {"hip": 0.6, "knee": 1.2}
     with pytest.raises(ValueError, match=r"FL_knee=1.2 outside its range \[-2.4, -0.3\].*sign"):
         LeggedRobot(cfg)
+
+
+def test_a_joint_driven_by_two_actuators_is_refused(tutorial, tmp_path):
+    """A second actuator on a joint would be a thirteenth action on twelve joints, the file's own gains added to the
+    config's: refused, naming the joint and its actuators."""
+    motors = '<actuator><motor name="hip_a" joint="FL_hip" gear="10"/><motor name="hip_b" joint="FL_hip"/></actuator>'
+    with pytest.raises(ValueError, match=r"joint 'FL_hip' is driven by 2 actuators \['hip_a', 'hip_b'\].*one each"):
+        LeggedRobot(tutorial_cfg(variant(tutorial, tmp_path, "</mujoco>", f"{motors}\n</mujoco>")))
+
+
+def test_an_actuator_on_a_tendon_or_site_is_refused(tutorial, tmp_path):
+    """The env's actions are joint angle targets, one PD actuator per joint: an actuator of another transmission
+    would be an action without a joint."""
+    extra = ('<tendon><fixed name="knees"><joint joint="FL_knee" coef="1"/><joint joint="FR_knee" coef="1"/></fixed>'
+             '</tendon><actuator><motor name="pull" tendon="knees"/></actuator>')
+    with pytest.raises(ValueError, match=r"actuator 'pull' drives a tendon.*joints only.*remove it"):
+        LeggedRobot(tutorial_cfg(variant(tutorial, tmp_path, "</mujoco>", f"{extra}\n</mujoco>")))
+
+
+def test_a_foot_without_a_colliding_geom_is_refused(tutorial, tmp_path):
+    """A foot whose geoms collide with nothing would pass through the ground (the robot standing on its shins) and
+    never register a contact: refused, naming the foot bodies."""
+    path = variant(tutorial, tmp_path, '<body name="FL_foot" pos="0 0 -0.12"><geom name="FL_foot_geom" class="foot"/>',
+                   '<body name="FL_foot" pos="0 0 -0.12"><geom name="FL_foot_geom" class="foot" contype="0" '
+                   'conaffinity="0"/>')
+    with pytest.raises(ValueError, match=r"cfg.asset.foot_bodies: \['FL_foot'\] have no geom that collides.*contype"):
+        LeggedRobot(tutorial_cfg(path))

@@ -108,6 +108,13 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
         collides = geom.contype or geom.conaffinity or switched_on
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
         geom.friction = [cfg.terrain.static_friction, *geom.friction[1:]]
+    colliding = {g.parent.name for g in robot_geoms if g.contype}
+    feet = match_names(cfg.asset.foot_bodies, bodies, "body") if cfg.asset.foot_bodies else []
+    if [foot for foot in feet if foot not in colliding]:
+        raise ValueError(f"cfg.asset.foot_bodies: {[foot for foot in feet if foot not in colliding]} have no geom that "
+                         f"collides (contype and conaffinity 0 on each), so they would pass through the ground and "
+                         f"never touch it; give each foot body a collision geom with contype=\"1\" "
+                         f"conaffinity=\"1\"")
     if owns_sole_contacts(cfg, terrain):
         # the terrain force fields collide sphere / capsule soles, and the legs that follow them into their ruts,
         # with the heightfield analytically (external_forces/contact.py); MuJoCo must not collide them too
@@ -168,6 +175,20 @@ def _check_robot(robot: mujoco.MjModel, cfg) -> None:
     if cfg.asset.base_body and mujoco.mj_name2id(robot, mujoco.mjtObj.mjOBJ_BODY, cfg.asset.base_body) < 0:
         raise ValueError(f"cfg.asset.base_body={cfg.asset.base_body!r} is not a body of the robot; its bodies are: "
                          f"{_body_names(robot)}")
+    for a in range(robot.nu):  # the env's actions are joint targets: one PD actuator per joint, nothing else
+        kind = mujoco.mjtTrn(robot.actuator_trntype[a])
+        if kind != mujoco.mjtTrn.mjTRN_JOINT:
+            raise ValueError(f"actuator {robot.actuator(a).name or a!r} drives a {kind.name[6:].lower()}; legged_gente "
+                             f"drives joints only (a PD position actuator per joint, made from the config's gains): "
+                             f"remove it from {cfg.asset.file!r}")
+    drivers: dict[int, list[str]] = {}
+    for a in range(robot.nu):
+        drivers.setdefault(int(robot.actuator_trnid[a, 0]), []).append(robot.actuator(a).name or f"actuator {a}")
+    for j, names in drivers.items():
+        if len(names) > 1:
+            raise ValueError(f"joint {robot.joint(j).name!r} is driven by {len(names)} actuators {names} in "
+                             f"{cfg.asset.file!r}; legged_gente gives each joint one PD actuator (one action each): "
+                             f"keep one each")
     joints = [robot.joint(j).name for j in range(robot.njnt) if robot.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE]
     check_patterns(cfg.control.stiffness, joints, "cfg.control.stiffness")
     check_patterns(cfg.control.damping, joints, "cfg.control.damping")
