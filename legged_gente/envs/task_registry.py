@@ -189,11 +189,30 @@ class TaskRegistry:
         self.tasks: dict[str, tuple[type, type, type]] = {}
 
     def register(self, name: str, env_class: type, env_cfg: type[LeggedRobotCfg], train_cfg: type[LeggedRobotCfgPPO]):
-        self.tasks[name] = (env_class, env_cfg, train_cfg)
+        """Name a task (env class, env config class, train config class). The classes are checked here, where a
+        user's task module calls this, not at the first command; a name is taken once (the same three again are
+        fine: a module imported twice)."""
+        from legged_gente.envs.base.legged_robot import LeggedRobot
+
+        for what, value, base in (("env_class", env_class, LeggedRobot), ("env_cfg", env_cfg, LeggedRobotCfg),
+                                  ("train_cfg", train_cfg, LeggedRobotCfgPPO)):
+            if not (isinstance(value, type) and issubclass(value, base)):
+                got = value.__name__ if isinstance(value, type) else f"an instance of {type(value).__name__}"
+                kind = f"{base.__name__} or a class derived from it" if base is LeggedRobot else \
+                    f"a class derived from {base.__name__}"
+                raise TypeError(f"register({name!r}, ...): {what} must be {kind}, got {got}")
+        task = (env_class, env_cfg, train_cfg)
+        if self.tasks.get(name, task) != task:
+            taken = ", ".join(cls.__name__ for cls in self.tasks[name])
+            raise ValueError(f"task {name!r} is already registered ({taken}); register {env_cfg.__name__} under "
+                             f"another name")
+        self.tasks[name] = task
 
     def get_cfgs(self, name: str) -> tuple[LeggedRobotCfg, LeggedRobotCfgPPO]:
         if name not in self.tasks:
-            raise KeyError(f"unknown task {name!r}; registered tasks: {sorted(self.tasks)}")
+            raise KeyError(f"unknown task {name!r}; registered tasks: {sorted(self.tasks)}; a task kept outside the "
+                           f"package is registered by its own module: run the command from a script that imports it "
+                           f"(docs/new_robot.md)")
         _, env_cfg, train_cfg = self.tasks[name]
         return env_cfg(), train_cfg()
 

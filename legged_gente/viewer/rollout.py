@@ -241,7 +241,9 @@ def robot_model(task: str) -> mujoco.MjModel:
     from legged_gente.sim.assembly import resolve_path
 
     if task not in task_registry.tasks:
-        raise ValueError(f"task {task!r} is not registered; use one of {sorted(task_registry.tasks)}.")
+        raise ValueError(f"the rollout is of task {task!r}, not registered here (registered: "
+                         f"{sorted(task_registry.tasks)}); a task kept outside the package is registered by its own "
+                         f"module: replay it from a script that imports it (docs/new_robot.md)")
     env_cfg, _ = task_registry.get_cfgs(task)
     return mujoco.MjModel.from_xml_path(str(resolve_path(env_cfg.asset.file)))
 
