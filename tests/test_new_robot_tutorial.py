@@ -277,3 +277,38 @@ def test_a_foot_without_a_colliding_geom_is_refused(tutorial, tmp_path):
                    'conaffinity="0"/>')
     with pytest.raises(ValueError, match=r"cfg.asset.foot_bodies: \['FL_foot'\] have no geom that collides.*contype"):
         LeggedRobot(tutorial_cfg(path))
+
+
+def rough_cfg():
+    cfg, _ = task_registry.get_cfgs("my_robot_rough")
+    cfg.env.num_envs = 2
+    cfg.terrain.num_rows, cfg.terrain.num_cols = 1, 5
+    cfg.terrain.terrain_length = cfg.terrain.terrain_width = 3.0
+    cfg.terrain.border_size = 1.0
+    return cfg
+
+
+def test_foot_geoms_that_leave_out_a_foot_are_refused(tutorial):
+    """Three of four feet listed: the fourth would get no soil and collide through MuJoCo while the others use the
+    analytic sole contacts. A listed geom off the feet is refused too: its contacts would count for no foot."""
+    cfg = rough_cfg()
+    cfg.forces.foot_geom_names = ["FL_foot_geom", "FR_foot_geom", "RL_foot_geom"]
+    with pytest.raises(ValueError, match=r"forces.foot_geom_names lists no geom of the feet \['RR_foot'\] of "
+                                         r"cfg.asset.foot_bodies.*list each foot's sole geoms"):
+        LeggedRobot(cfg)
+    cfg = rough_cfg()
+    cfg.forces.foot_geom_names = [*cfg.forces.foot_geom_names, "FL_shin_collision"]
+    with pytest.raises(ValueError, match=r"forces.foot_geom_names: \['FL_shin_collision'\] are on \['FL_shin'\], "
+                                         r"no foot of cfg.asset.foot_bodies"):
+        LeggedRobot(cfg)
+
+
+def test_water_and_soil_with_no_geoms_to_feel_them_warn(tutorial):
+    """A terrain with water and mud but no leg or foot geoms named: the water and the mud would do nothing, unsaid."""
+    cfg = rough_cfg()
+    cfg.forces.leg_geom_names, cfg.forces.foot_geom_names = [], []
+    with pytest.warns(UserWarning) as caught:
+        LeggedRobot(cfg)
+    said = " ".join(str(w.message) for w in caught)
+    assert "the terrain has water, but forces.leg_geom_names and forces.foot_geom_names name no geom" in said, said
+    assert "the terrain has soil, but forces.foot_geom_names names no geom" in said, said

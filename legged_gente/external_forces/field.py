@@ -104,6 +104,20 @@ def _check_material(material: MaterialMap, shape: tuple[int, int]) -> None:
             raise ValueError(f"material.{field.name} holds {bad.flat[0]}; {fix}.")
 
 
+def _warn_unfelt_materials(material: MaterialMap, cfg) -> None:
+    """Water or soil on the terrain that no named geom feels: the robot would walk through it as if it were not
+    there (soil: rigid ground with its friction), which a config that forgot the geom names should hear of."""
+    foot_water = cfg.foot_water_geom_names if cfg.foot_water_geom_names is not None else cfg.foot_geom_names
+    if cfg.wading and material.has_water().any() and not (cfg.leg_geom_names or foot_water):
+        warnings.warn("forces: the terrain has water, but forces.leg_geom_names and forces.foot_geom_names name no "
+                      "geom: no water force acts on the robot; name its legs' capsules and its feet's geoms (or set "
+                      "forces.wading = False)", stacklevel=3)
+    if cfg.soil and material.has_soil().any() and not cfg.foot_geom_names:
+        warnings.warn("forces: the terrain has soil, but forces.foot_geom_names names no geom: no foot sinks into it "
+                      "or is held by its shear strength (it is rigid ground with tan(phi) friction); name the feet's "
+                      "sole geoms (or set forces.soil = False)", stacklevel=3)
+
+
 def _foot_spheres_inside_legs(mjm, foot_geoms, leg_geoms) -> tuple[np.ndarray, np.ndarray]:
     """Per foot water geom: whether it is a sphere lying wholly inside a leg capsule or cylinder welded to it, and
     whether wholly inside that leg's straight part. A ball inside a capsule's end cap (the quadruped's foot in its
@@ -262,6 +276,7 @@ class TerrainForces:
             raise ValueError(f"heights {heights.shape} and material map {material.shape} must be the same 2-D "
                              f"grid; build both from the same Terrain.")
         _check_material(material, heights.shape)
+        _warn_unfelt_materials(material, cfg)
         if not resolution > 0:
             raise ValueError(f"resolution must be > 0 m, got {resolution}.")
         self.m, self.d, self.cfg = m, d, cfg

@@ -115,6 +115,8 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
                          f"collides (contype and conaffinity 0 on each), so they would pass through the ground and "
                          f"never touch it; give each foot body a collision geom with contype=\"1\" "
                          f"conaffinity=\"1\"")
+    if cfg.forces.enabled and cfg.forces.foot_geom_names:
+        _check_foot_geoms(spec, cfg.forces.foot_geom_names, feet)
     if owns_sole_contacts(cfg, terrain):
         # the terrain force fields collide sphere / capsule soles, and the legs that follow them into their ruts,
         # with the heightfield analytically (external_forces/contact.py); MuJoCo must not collide them too
@@ -157,6 +159,23 @@ def _warn_flat_feet_on_heightfield(mjm: mujoco.MjModel, foot_bodies: np.ndarray)
         warnings.warn(f"foot geoms {bad} collide with the heightfield terrain as boxes/meshes, whose heightfield "
                       f"contacts go wrong once they sink ~1 cm (feet get launched); collide through spheres at the "
                       f"sole's corners instead (see docs/robots.md, 'Why sphere soles').", stacklevel=3)
+
+
+def _check_foot_geoms(spec: mujoco.MjSpec, names: list[str], feet: list[str]) -> None:
+    """The force fields' foot geoms are the feet's soles: each foot of ``asset.foot_bodies`` has some, and none is
+    elsewhere. A foot left out would get no soil and touch the terrain through MuJoCo's contacts while the others
+    use the sole contacts; a geom elsewhere would press ruts for no foot. (A name that is no geom is
+    TerrainForces' error.)"""
+    body_of = {name: spec.geom(name).parent.name for name in names if spec.geom(name) is not None}
+    stray = [name for name, body in body_of.items() if body not in feet]
+    if stray:
+        raise ValueError(f"forces.foot_geom_names: {stray} are on {sorted({body_of[n] for n in stray})}, no foot of "
+                         f"cfg.asset.foot_bodies ({feet}); list the feet's sole geoms only")
+    bare = [foot for foot in feet if foot not in body_of.values()]
+    if bare and body_of:
+        raise ValueError(f"forces.foot_geom_names lists no geom of the feet {bare} of cfg.asset.foot_bodies: they "
+                         f"would get no soil and touch the terrain through MuJoCo's contacts while the others use the "
+                         f"sole contacts; list each foot's sole geoms")
 
 
 def _check_robot(robot: mujoco.MjModel, cfg) -> None:
