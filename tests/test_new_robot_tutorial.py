@@ -312,3 +312,44 @@ def test_water_and_soil_with_no_geoms_to_feel_them_warn(tutorial):
     said = " ".join(str(w.message) for w in caught)
     assert "the terrain has water, but forces.leg_geom_names and forces.foot_geom_names name no geom" in said, said
     assert "the terrain has soil, but forces.foot_geom_names names no geom" in said, said
+
+
+def test_a_body_pattern_matching_nothing_names_its_field(tutorial):
+    """Three lists take body patterns: the error says which one it came from (and lists the robot's bodies, the
+    world body none of them)."""
+    cfg = tutorial_cfg()
+    cfg.asset.terminate_after_contacts_on = ["*_calf"]
+    with pytest.raises(ValueError, match=r"cfg.asset.terminate_after_contacts_on: body '\*_calf' matches nothing in "
+                                         r"the robot; its bodies are: \['base', 'FL_thigh'"):
+        LeggedRobot(cfg)
+
+
+def test_feet_that_end_the_episode_on_contact_are_refused(tutorial):
+    cfg = tutorial_cfg()
+    cfg.asset.terminate_after_contacts_on = ["base", "*_foot"]
+    with pytest.raises(ValueError, match=r"terminate_after_contacts_on includes the feet \['FL_foot', 'FR_foot', "
+                                         r"'RL_foot', 'RR_foot'\].*every touchdown would end the episode"):
+        LeggedRobot(cfg)
+
+
+@pytest.mark.parametrize("old, new, reason", [
+    ('<geom name="base_geom" type="box"', '<geom name="base_geom" type="mesh" mesh="no_such_mesh"',
+     "mesh 'no_such_mesh' not found"),
+    ("</worldbody>", "", "XML parse error"),
+])
+def test_a_file_mujoco_cannot_load_is_named(tutorial, tmp_path, old, new, reason):
+    """MuJoCo's own error names no file (and starts with its own "Error:"): the message names the robot file."""
+    path = variant(tutorial, tmp_path, old, new)
+    with pytest.raises(ValueError, match=rf"robot file '{re.escape(path)}' \(cfg.asset.file\): MuJoCo cannot load it: "
+                                         rf"{reason}"):
+        LeggedRobot(tutorial_cfg(path))
+
+
+def test_a_misspelt_force_geom_lists_the_robots_geoms_only(tutorial):
+    """The terrain's heightfield pieces are geoms too, dozens of them: the list of names to pick from is the robot's."""
+    cfg = rough_cfg()
+    cfg.forces.leg_geom_names = ["FL_thigh_gem"]
+    with pytest.raises(ValueError, match=r"forces.leg_geom_names: no geom named 'FL_thigh_gem' in the robot \(exact "
+                                         r"names\); its named geoms: \['base_geom', 'FL_thigh_geom'") as error:
+        LeggedRobot(cfg)
+    assert "terrain" not in str(error.value)

@@ -191,8 +191,9 @@ def _geom_ids(mjm: mujoco.MjModel, names, what: str) -> np.ndarray:
             raise ValueError(f"forces.{what} lists {name!r} {list(names).count(name)} times; list each geom once.")
         gid = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, name)
         if gid < 0:
-            known = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, i) for i in range(mjm.ngeom)]
-            raise ValueError(f"forces.{what}: no geom named {name!r} in the model; named geoms: "
+            known = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, i) for i in range(mjm.ngeom)
+                     if mjm.geom_bodyid[i] != 0]  # the robot's: the terrain's pieces are the world body's
+            raise ValueError(f"forces.{what}: no geom named {name!r} in the robot (exact names); its named geoms: "
                              f"{[k for k in known if k]}.")
         ids.append(gid)
     return np.asarray(ids, np.int32)

@@ -33,13 +33,15 @@ def resolve_path(path: str) -> Path:
     return candidate
 
 
-def match_names(patterns: list[str], names: list[str], what: str) -> list[str]:
-    """Names matching any fnmatch pattern, in model order; a pattern matching nothing raises with the valid names."""
+def match_names(patterns: list[str], names: list[str], field: str, what: str) -> list[str]:
+    """Names matching any fnmatch pattern, in model order; a pattern matching nothing raises with the valid names
+    and the config ``field`` that gave it."""
     matched: list[str] = []
     for pattern in patterns:
         hits = [n for n in names if fnmatch.fnmatchcase(n, pattern)]
         if not hits:
-            raise ValueError(f"{what} {pattern!r} matches nothing in the robot; its {'bodies' if what == 'body' else what + 's'} are: {names}")
+            raise ValueError(f"{field}: {what} {pattern!r} matches nothing in the robot; its "
+                             f"{'bodies' if what == 'body' else what + 's'} are: {names}")
         matched += [h for h in hits if h not in matched]
     return [n for n in names if n in matched]
 
@@ -78,19 +80,26 @@ class RobotLayout:
 
 
 def _body_names(spec_model: mujoco.MjModel) -> list[str]:
-    return [spec_model.body(i).name for i in range(spec_model.nbody)]
+    """The robot's bodies (the world body is none of them)."""
+    return [spec_model.body(i).name for i in range(1, spec_model.nbody)]
 
 
 def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
     """Compile robot + terrain into one MjModel and resolve the robot's names into indices."""
-    spec = mujoco.MjSpec.from_file(str(resolve_path(cfg.asset.file)))
-    robot = spec.copy().compile()  # the robot as its file has it, before any edit
+    path = resolve_path(cfg.asset.file)
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+        robot = spec.copy().compile()  # the robot as its file has it, before any edit
+    except ValueError as error:  # MuJoCo's parse or compile error, which names no file
+        reason = " ".join(str(error).removeprefix("Error: ").split())
+        raise ValueError(f"robot file {str(path)!r} (cfg.asset.file): MuJoCo cannot load it: {reason}") from None
     _check_robot(robot, cfg)
     _configure_options(spec, cfg.sim)
     _add_terrain(spec, cfg.terrain, terrain)
     bodies = _body_names(robot)
-    collide = match_names(cfg.asset.penalize_contacts_on + cfg.asset.terminate_after_contacts_on, bodies, "body") if (
-        cfg.asset.penalize_contacts_on or cfg.asset.terminate_after_contacts_on) else []
+    collide = [*match_names(cfg.asset.penalize_contacts_on, bodies, "cfg.asset.penalize_contacts_on", "body"),
+               *match_names(cfg.asset.terminate_after_contacts_on, bodies, "cfg.asset.terminate_after_contacts_on",
+                            "body")]
     # Robot geoms collide with the terrain only (contype 2 vs the terrain's conaffinity 2), never with each
     # other: the geoms the MJCF makes collide (feet) plus, on the bodies whose contacts the task watches but
     # that have no colliding geom, their collision geoms (group 3, MuJoCo's usual collision group) if they
@@ -109,7 +118,7 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
         geom.contype, geom.conaffinity = (ROBOT_CONTYPE, 0) if collides else (0, 0)
         geom.friction = [cfg.terrain.static_friction, *geom.friction[1:]]
     colliding = {g.parent.name for g in robot_geoms if g.contype}
-    feet = match_names(cfg.asset.foot_bodies, bodies, "body") if cfg.asset.foot_bodies else []
+    feet = match_names(cfg.asset.foot_bodies, bodies, "cfg.asset.foot_bodies", "body")
     if [foot for foot in feet if foot not in colliding]:
         raise ValueError(f"cfg.asset.foot_bodies: {[foot for foot in feet if foot not in colliding]} have no geom that "
                          f"collides (contype and conaffinity 0 on each), so they would pass through the ground and "
@@ -330,9 +339,9 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
     joint_names = [mjm.joint(j).name for j in joint_ids]
     asset = cfg.asset
 
-    def body_ids(patterns: list[str]) -> np.ndarray:
-        return np.array([mjm.body(n).id for n in match_names(patterns, bodies, "body")], dtype=np.int64) \
-            if patterns else np.zeros(0, dtype=np.int64)
+    def body_ids(field: str) -> np.ndarray:
+        names = match_names(getattr(asset, field), bodies, f"cfg.asset.{field}", "body")
+        return np.array([mjm.body(n).id for n in names], dtype=np.int64)
 
     defaults = np.array([value_for(n, cfg.init_state.default_joint_angles, "default angle") if
                          cfg.init_state.default_joint_angles else 0.0 for n in joint_names])
@@ -343,15 +352,20 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
     if outside:  # a reset would clamp the joint while its PD target stays outside, pressing it into its limit
         raise ValueError(f"cfg.init_state.default_joint_angles puts {', '.join(outside)}; give an angle inside the "
                          f"joint's range (check the joint's sign)")
-    hips = match_names(asset.hip_joints, joint_names, "joint") if asset.hip_joints else []
+    feet, terminate = body_ids("foot_bodies"), body_ids("terminate_after_contacts_on")
+    ending = [mjm.body(int(b)).name for b in feet if b in terminate]
+    if ending:
+        raise ValueError(f"cfg.asset.terminate_after_contacts_on includes the feet {ending} (cfg.asset.foot_bodies): "
+                         f"every touchdown would end the episode as a fall; leave the feet out")
+    hips = match_names(asset.hip_joints, joint_names, "cfg.asset.hip_joints", "joint")
     return RobotLayout(
         base_body=base,
         joint_names=joint_names,
         qpos_adr=np.array([mjm.jnt_qposadr[j] for j in joint_ids], dtype=np.int64),
         dof_adr=np.array([mjm.jnt_dofadr[j] for j in joint_ids], dtype=np.int64),
-        foot_bodies=body_ids(asset.foot_bodies),
-        penalized_bodies=body_ids(asset.penalize_contacts_on),
-        terminate_bodies=body_ids(asset.terminate_after_contacts_on),
+        foot_bodies=feet,
+        penalized_bodies=body_ids("penalize_contacts_on"),
+        terminate_bodies=terminate,
         hip_joint_ids=np.array([joint_names.index(h) for h in hips], dtype=np.int64),
         default_joint_pos=defaults,
         joint_limits=limits,

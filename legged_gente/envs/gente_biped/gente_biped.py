@@ -21,7 +21,7 @@ class GenteBiped(LeggedRobot):
         super()._init_buffers()
         # the sole geoms of each foot (cfg.asset.sole_geoms), (num_feet, soles per foot), and their depths
         geoms = [self.mjm.geom(i).name for i in range(self.mjm.ngeom)]
-        soles = [self.mjm.geom(name).id for name in match_names(self.cfg.asset.sole_geoms, geoms, "geom")]
+        soles = [self.mjm.geom(name).id for name in match_names(self.cfg.asset.sole_geoms, geoms, "cfg.asset.sole_geoms", "geom")]
         off_feet = [geoms[g] for g in soles if self.mjm.geom_bodyid[g] not in self.layout.foot_bodies]
         if off_feet:
             raise ValueError(f"cfg.asset.sole_geoms={self.cfg.asset.sole_geoms} matches {off_feet}, not on a foot "
