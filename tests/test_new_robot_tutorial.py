@@ -353,3 +353,23 @@ def test_a_misspelt_force_geom_lists_the_robots_geoms_only(tutorial):
                                          r"names\); its named geoms: \['base_geom', 'FL_thigh_geom'") as error:
         LeggedRobot(cfg)
     assert "terrain" not in str(error.value)
+
+
+def small_runner(cfg, task):
+    env, _ = task_registry.make_env(task, env_cfg=cfg)
+    _, train_cfg = task_registry.get_cfgs(task)
+    train_cfg.actor.hidden_dims = train_cfg.critic.hidden_dims = [8]
+    return task_registry.make_alg_runner(env, task, train_cfg=train_cfg, log_root=None)[0]
+
+
+def test_a_checkpoint_of_a_task_with_other_observations_says_so(tutorial, tmp_path):
+    """my_robot and my_robot_rough both have 8 actions; the rough task's policy also sees the height scan. The
+    refusal names the difference (the actor's input width), not only the two tasks' equal action counts."""
+    from legged_gente.utils.checkpoints import CheckpointError
+
+    path = tmp_path / "model_0.pt"
+    small_runner(tutorial_cfg(), "my_robot").save(str(path))
+    with pytest.raises(CheckpointError, match=r"is for my_robot \(8 actions\); this task is my_robot_rough \(8 "
+                                              r"actions\), whose actor takes \d+ inputs, the checkpoint's \d+ \(another "
+                                              r"observation set\)\. Pick a checkpoint of this task"):
+        small_runner(rough_cfg(), "my_robot_rough").load(str(path))

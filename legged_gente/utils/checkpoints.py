@@ -171,6 +171,12 @@ def checkpoint_summary(loaded: dict) -> str:
     return f"{infos.get('task') or 'an unnamed task'} ({actions} actions)"
 
 
+def _actor_inputs(state: dict) -> int | str:
+    """The actor's observation width: the input width of its first layer."""
+    weights = [v for k, v in state.items() if k.endswith(".weight") and v.ndim == 2]
+    return int(weights[0].shape[1]) if weights else "?"
+
+
 def _actor_outputs(state: dict) -> int | str:
     """The actor's action count: the width of its distribution's std parameter, else of its last layer."""
     for key, value in state.items():
@@ -190,8 +196,11 @@ def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int
     saved_actions = infos.get("num_actions", _actor_outputs(saved))
     if saved_actions != num_actions or (saved_task and task and saved_task != task
                                         and _shapes(saved) != _shapes(actor_state)):
+        inputs, saved_inputs = _actor_inputs(actor_state), _actor_inputs(saved)
+        why = (f", whose actor takes {inputs} inputs, the checkpoint's {saved_inputs} (another observation set)"
+               if saved_actions == num_actions and inputs != saved_inputs else "")
         raise CheckpointError(f"checkpoint {path} is for {checkpoint_summary(loaded)}; this task is "
-                              f"{task or 'unnamed'} ({num_actions} actions). Pick a checkpoint of this task, or "
+                              f"{task or 'unnamed'} ({num_actions} actions){why}. Pick a checkpoint of this task, or "
                               f"the task of this checkpoint (--task).")
     check_state_fits(saved, actor_state, path, "actor", strict)
 
