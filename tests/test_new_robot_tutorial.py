@@ -12,6 +12,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import mujoco
 import pytest
 import torch
 
@@ -373,3 +374,23 @@ def test_a_checkpoint_of_a_task_with_other_observations_says_so(tutorial, tmp_pa
                                               r"actions\), whose actor takes \d+ inputs, the checkpoint's \d+ \(another "
                                               r"observation set\)\. Pick a checkpoint of this task"):
         small_runner(rough_cfg(), "my_robot_rough").load(str(path))
+
+
+def test_a_urdf_gets_advice_it_can_follow(tutorial, tmp_path):
+    """A URDF cannot hold <freejoint/>: its floating base is a "floating" joint from a link named "world" (MuJoCo's
+    URDF reader makes it a free joint); with one, the file builds."""
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text('<robot name="r"><link name="base"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" '
+                    'izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>')
+    with pytest.raises(ValueError, match=r'found 0; in a URDF the floating base is a joint of type "floating" from '
+                                         r'a link named "world" to the root link: add both'):
+        LeggedRobot(tutorial_cfg(str(urdf)))
+    from legged_gente.sim.assembly import _check_robot
+
+    urdf.write_text(urdf.read_text().replace('<robot name="r">', '<robot name="r"><link name="world"/><joint '
+                                             'name="float" type="floating"><parent link="world"/><child link="base"/>'
+                                             '</joint>'))
+    robot = mujoco.MjSpec.from_file(str(urdf)).compile()
+    cfg = tutorial_cfg(str(urdf))
+    cfg.control.stiffness = cfg.control.damping = cfg.init_state.default_joint_angles = {}
+    _check_robot(robot, cfg)  # one free joint, first in qpos, no geom on the world body

@@ -192,7 +192,10 @@ def _check_robot(robot: mujoco.MjModel, cfg) -> None:
     free = [j for j in range(robot.njnt) if robot.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
     if len(free) != 1:
         raise ValueError(f"the robot in {cfg.asset.file!r} needs exactly one free joint (floating base), found "
-                         f"{len(free)}; add <freejoint/> to its root body.")
+                         f"{len(free)}; " + (
+                             "in a URDF the floating base is a joint of type \"floating\" from a link named "
+                             "\"world\" to the root link: add both." if str(cfg.asset.file).lower().endswith(
+                                 ".urdf") else "add <freejoint/> to its root body."))
     if robot.jnt_qposadr[free[0]] != 0:
         raise ValueError(f"the free joint of {cfg.asset.file!r} must come first in qpos; put the robot's root body "
                          f"first in the worldbody.")
