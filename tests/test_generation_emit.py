@@ -56,6 +56,18 @@ def test_emit_with_a_stand_in_base_and_bad_bases(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="is not a terrain config"):  # training would refuse the emitted class
         emit(spec, tmp_path / "p", base="standin_cfg:Task.env")
     assert class_name_for("forest_trail") == "ForestTrailTerrainCfg"
+    assert class_name_for("generated_terrain") == "GeneratedTerrainCfg"  # not GeneratedTerrainTerrainCfg
+
+
+def test_a_name_from_text_skips_leading_numbers():
+    """A prompt that starts with a number names its spec by its first word (a name must start with a letter):
+    "123 rivers" was "generated_terrain", "3 small ponds" likewise."""
+    from legged_gente.generation.spec import spec_name
+
+    assert spec_name("123 rivers") == "rivers"
+    assert spec_name("3 small ponds and a bridge") == "small_ponds_and_bridge"
+    assert spec_name("2024") == "generated_terrain"
+    assert class_name_for(spec_name("123 rivers")) == "RiversTerrainCfg"
 
 
 def test_cli(tmp_path, capsys):

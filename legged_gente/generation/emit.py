@@ -49,8 +49,11 @@ class EmitResult:
 
 
 def class_name_for(name: str) -> str:
-    """``forest_trail`` -> ``ForestTrailTerrainCfg``."""
-    return "".join(w[:1].upper() + w[1:] for w in name.split("_") if w) + "TerrainCfg"
+    """``forest_trail`` -> ``ForestTrailTerrainCfg``; ``generated_terrain`` -> ``GeneratedTerrainCfg``."""
+    words = [w for w in name.split("_") if w]
+    if len(words) > 1 and words[-1] == "terrain":
+        words.pop()
+    return "".join(w[:1].upper() + w[1:] for w in words) + "TerrainCfg"
 
 
 def resolve_base(base: str) -> tuple[str, str, type]:

@@ -59,9 +59,11 @@ def image_source(data: bytes, name: str | None = None) -> dict[str, Any]:
 def spec_name(text: str, default: str = "generated_terrain") -> str:
     """A snake_case identifier from the first words of ``text`` (used for spec and class names), cut to the longest
     name a spec allows."""
-    words = [w for w in re.findall(r"[a-z0-9]+", text.lower()) if w not in ("a", "an", "the", "of", "with")][:4]
-    name = "_".join(words)[: SPEC_SCHEMA["properties"]["name"]["maxLength"]]
-    return name if name and name[0].isalpha() else default
+    words = [w for w in re.findall(r"[a-z0-9]+", text.lower()) if w not in ("a", "an", "the", "of", "with")]
+    while words and not words[0][0].isalpha():  # a name starts with a letter: "123 rivers" is "rivers"
+        words.pop(0)
+    name = "_".join(words[:4])[: SPEC_SCHEMA["properties"]["name"]["maxLength"]]
+    return name or default
 
 
 @dataclasses.dataclass
