@@ -138,3 +138,13 @@ def test_whole_calls_of_a_cut_answer_are_kept_with_a_warning():
         result = _backend(srv).generate(text="bumps")
     assert [c.params["height"] for c in result.calls] == [0.2]
     assert any("finish_reason 'length'" in w for w in result.warnings)
+
+
+def test_the_vision_model_that_described_the_image_is_recorded_in_the_spec():
+    """Two models made the terrain: the spec's provenance names both (its model field the tool-calling one)."""
+    description = _completion(content="A field of low rocks.")
+    reply = _completion([_tool_call("rocks", {"region": "full"})])
+    with FakeServer([ok(description), ok(reply)]) as srv:
+        spec, _ = generate_spec(image=_png_bytes(), backend="openai", base_url=srv.url, model="m", two_phase=True,
+                                vision_model="vlm")
+    assert spec.model == "m" and spec.to_dict()["source"]["vision_model"] == "vlm"

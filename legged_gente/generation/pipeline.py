@@ -79,6 +79,8 @@ def generate_spec(
         source = text_source(text)
     if backend == "openai" and toolset != "ours":
         source["toolset"] = toolset
+    if backend == "openai" and vision_model:  # the model that described the image (two_phase); ``model`` made the calls
+        source["vision_model"] = vision_model
     smoothing = None
     if backend == "openai" and toolset == "gente":
         from legged_gente.generation.gente_compat import gente_smoothing
