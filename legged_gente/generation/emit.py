@@ -169,7 +169,7 @@ def emit(
         raise ValueError(f"mesh format {mesh!r} is none of {list(MESH_FORMATS)}; pass one of those.")
     spec = spec.validated()  # spec.json must load: the emitted module and training read it
     out = Path(out_dir)
-    created = not out.exists()
+    made = [folder for folder in (out, *out.parents) if not folder.exists()]  # removed again if the emit fails
     out.mkdir(parents=True, exist_ok=True)
     mesh_name = f"terrain.{mesh.lstrip('.').lower()}" if mesh else None
     map_name = HEIGHTMAP_NAME if spec.heightmap is not None else None
@@ -186,7 +186,7 @@ def emit(
             if name:
                 os.replace(stage / name, out / name)
     except BaseException:
-        shutil.rmtree(out if created else stage, ignore_errors=True)  # a folder made here holds only the stage
+        shutil.rmtree(made[-1] if made else stage, ignore_errors=True)  # folders made here hold only the stage
         raise
     shutil.rmtree(stage)  # left in it: the bytecode cache of the mesh's import
     mesh_path = out / mesh_name if mesh_name else None
