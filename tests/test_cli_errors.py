@@ -386,17 +386,24 @@ def test_network_sizes_are_positive_layer_widths(capsys, monkeypatch, override):
     assert f"{section}.hidden_dims=" in line and "must be a non-empty list of layer widths >= 1" in line, line
 
 
-def test_a_checkpoint_without_config_json_is_evaluated_with_set(capsys, tmp_path):
-    """The size-mismatch error tells gente-evaluate's user to pass --set actor.hidden_dims=[...]: that works."""
-    runner = small_runner("gente_biped_flat")
-    runner.save(str(tmp_path / "model_0.pt"))  # no config.json beside it
+def test_a_checkpoint_without_config_json_is_evaluated_with_the_sizes_of_its_weights(capsys, tmp_path):
+    """A lone model.pt (no run's config.json beside it) of 8-wide layers, without observation normalisation: its
+    actor's layer widths and normaliser are read off its weights, and said; a --set that agrees is fine too."""
+    args = parse_args(build_parser("test"), ["--task", "gente_biped_flat", *CPU])
+    env, _ = task_registry.make_env(args.task, args)
+    _, train_cfg = task_registry.get_cfgs(args.task)
+    train_cfg.actor.hidden_dims, train_cfg.critic.hidden_dims = [8, 6], [8]
+    train_cfg.actor.obs_normalization = False
+    task_registry.make_alg_runner(env, args.task, train_cfg=train_cfg, log_root=None)[0].save(
+        str(tmp_path / "model_0.pt"))  # no config.json beside it
     flags = ["--task", "gente_biped_flat", "--checkpoint", str(tmp_path / "model_0.pt"), "--benchmark", "flat",
              "--robots_per_terrain", "1", "--episode_s", "0.1", "--settle_s", "0", "--device", "cpu",
              "--no_progress", "--out", str(tmp_path / "out")]
-    line = one_line_error(capsys, evaluate_script.main, flags)
-    assert "--set actor.hidden_dims=[...]" in line
-    evaluate_script.main([*flags, "--set", "actor.hidden_dims=[8]"])
+    evaluate_script.main(flags)
     assert (tmp_path / "out" / "report.json").is_file()
+    assert ("no config.json beside it: the actor's settings are read off its weights: hidden_dims [8, 6], "
+            "obs_normalization False") in capsys.readouterr().out
+    evaluate_script.main([*flags, "--set", "actor.hidden_dims=[8,6]"])
 
 
 def test_evaluating_a_run_folder_skips_its_unreadable_newest_checkpoint_as_play_does(capsys, tmp_path):

@@ -331,10 +331,21 @@ class TaskRegistry:
     def make_policy_runner(self, env, name: str, checkpoint: Path, train_cfg: LeggedRobotCfgPPO | None = None):
         """A runner (no run folder) with the actor of ``checkpoint`` loaded, for playing or evaluating it: a run's
         ``model_<N>.pt`` or a shipped, actor-only ``model.pt``. The network sizes come from the ``config.json``
-        beside it when there is one (a run folder or a shipped policy's folder), else from ``train_cfg``."""
+        beside it when there is one (a run folder or a shipped policy's folder), else the actor's are read off its
+        weights."""
+        from legged_gente.utils.checkpoints import actor_settings_from_weights, load_checkpoint
+
         train_cfg = train_cfg or self.get_cfgs(name)[1]
         train_cfg.runner.resume = False
-        network_sizes_from(checkpoint, train_cfg)
+        if not network_sizes_from(checkpoint, train_cfg):
+            # a lone model.pt: its weights say the actor's layer widths and whether it normalises its observations
+            settings = actor_settings_from_weights(
+                load_checkpoint(checkpoint, map_location="cpu").get("actor_state_dict", {}))
+            if settings is not None:
+                for key, value in settings.items():
+                    setattr(train_cfg.actor, key, value)
+                print(f"{checkpoint}: no config.json beside it: the actor's settings are read off its weights: "
+                      + ", ".join(f"{key} {value}" for key, value in settings.items()))
         with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints its models and observation sets: for training
             runner, _, _ = self.make_alg_runner(env, name, train_cfg=train_cfg, log_root=None)
         runner.load(str(checkpoint), load_cfg={"actor": True}, map_location=env.device)

@@ -171,6 +171,19 @@ def checkpoint_summary(loaded: dict) -> str:
     return f"{infos.get('task') or 'an unnamed task'} ({actions} actions)"
 
 
+def actor_settings_from_weights(state: dict) -> dict | None:
+    """The actor's ``hidden_dims`` and ``obs_normalization`` read off its weights (rsl-rl's MLP: ``mlp.<i>.weight``
+    layers chained input to output, an ``obs_normalizer.*`` when it normalises), for a checkpoint without its run's
+    config.json; None when its layers are not such a chain (another architecture)."""
+    layers = sorted(((int(key.split(".")[1]), value) for key, value in state.items()
+                     if re.fullmatch(r"mlp\.\d+\.weight", key) and value.ndim == 2), key=lambda layer: layer[0])
+    widths = [tuple(value.shape) for _, value in layers]
+    if len(widths) < 2 or any(later[1] != earlier[0] for earlier, later in zip(widths, widths[1:])):
+        return None
+    return {"hidden_dims": [out for out, _ in widths[:-1]],
+            "obs_normalization": any(key.startswith("obs_normalizer.") for key in state)}
+
+
 def _actor_inputs(state: dict) -> int | str:
     """The actor's observation width: the input width of its first layer."""
     weights = [v for k, v in state.items() if k.endswith(".weight") and v.ndim == 2]
