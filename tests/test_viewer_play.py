@@ -51,6 +51,9 @@ def test_view_cli_plays_pretrained_and_records(tmp_path, capsys):
                       "--seconds", "0", "--headless", "--port", str(free_port()), "--record", str(out), *SMALL])
     printed = capsys.readouterr().out
     assert "policy shipped for gente_biped" in printed and f"wrote {out}" in printed
+    lines = printed.splitlines()  # said before the file is written, never after it (nor once it has finished)
+    finishing = [i for i, line in enumerate(lines) if "finishing the rollout" in line]
+    assert all(i < lines.index(f"wrote {out}") for i in finishing)
     rollout = Rollout.load(out)
     assert (rollout.num_steps, rollout.num_robots) == (4, 2)
 

@@ -174,7 +174,7 @@ def _run_play(env, policy, recorder, steps: int, record: str | None, stop: threa
             obs, _, _, _ = env.step(policy(obs))
             recorder.add()
     if record:
-        print(f"wrote {recorder.rollout().save(record)}")
+        print(f"wrote {recorder.rollout().save(record)}", flush=True)  # from the play thread: in order when piped
 
 
 def main(argv=None) -> None:
@@ -265,7 +265,8 @@ def main(argv=None) -> None:
         pass
     if play is not None:
         if args.record:
-            print("gente-view: finishing the rollout to record it", flush=True)
+            if play.is_alive():  # else it has finished, and said so
+                print("gente-view: finishing the rollout to record it", flush=True)
         else:
             stop_play.set()  # only watched: the policy stops with the viewer
         play.join()
