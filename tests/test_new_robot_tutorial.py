@@ -394,3 +394,14 @@ def test_a_urdf_gets_advice_it_can_follow(tutorial, tmp_path):
     cfg = tutorial_cfg(str(urdf))
     cfg.control.stiffness = cfg.control.damping = cfg.init_state.default_joint_angles = {}
     _check_robot(robot, cfg)  # one free joint, first in qpos, no geom on the world body
+
+
+def test_joints_without_a_torque_limit_warn(tutorial, tmp_path):
+    """No actuatorfrcrange and no actuator force range: the PD torque is unbounded, which no motor gives."""
+    path = variant(tutorial, tmp_path, ' actuatorfrcrange="-8 8"', "")
+    with pytest.warns(UserWarning, match=r"joints \['FL_hip', 'FL_knee', .*\] have no torque limit: their PD torque is "
+                                         r"unbounded; give them actuatorfrcrange"):
+        LeggedRobot(tutorial_cfg(path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the tutorial's robot as written: limited, no warning
+        LeggedRobot(tutorial_cfg())

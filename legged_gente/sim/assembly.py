@@ -360,6 +360,10 @@ def _layout(mjm: mujoco.MjModel, cfg) -> RobotLayout:
     if ending:
         raise ValueError(f"cfg.asset.terminate_after_contacts_on includes the feet {ending} (cfg.asset.foot_bodies): "
                          f"every touchdown would end the episode as a fall; leave the feet out")
+    unlimited = [n for a, n in enumerate(joint_names) if not mjm.actuator_forcelimited[a]]
+    if unlimited:  # a PD actuator with no force range pushes as hard as its error asks: no real motor does
+        warnings.warn(f"joints {unlimited} have no torque limit: their PD torque is unbounded; give them "
+                      f"actuatorfrcrange in {cfg.asset.file!r} (or their actuators a forcerange)", stacklevel=2)
     hips = match_names(asset.hip_joints, joint_names, "cfg.asset.hip_joints", "joint")
     return RobotLayout(
         base_body=base,
