@@ -403,7 +403,9 @@ def test_a_checkpoint_without_config_json_is_evaluated_with_the_sizes_of_its_wei
     assert (tmp_path / "out" / "report.json").is_file()
     assert ("no config.json beside it: the actor's settings are read off its weights: hidden_dims [8, 6], "
             "obs_normalization False") in capsys.readouterr().out
-    evaluate_script.main([*flags, "--set", "actor.hidden_dims=[8,6]"])
+    for override in ("actor.hidden_dims=[8,6]", "actor.obs_normalization=True"):  # the weights say: no second say
+        line = one_line_error(capsys, evaluate_script.main, [*flags, "--set", override])
+        assert f"--set {override}: a checkpoint without config.json gets its actor's layer widths" in line, line
 
 
 def test_evaluating_a_run_folder_skips_its_unreadable_newest_checkpoint_as_play_does(capsys, tmp_path):
@@ -418,8 +420,7 @@ def test_evaluating_a_run_folder_skips_its_unreadable_newest_checkpoint_as_play_
     newest = run / "model_4.pt"
     newest.write_bytes(newest.read_bytes()[:1000])
     flags = ["--task", "gente_biped_flat", "--benchmark", "flat", "--robots_per_terrain", "1", "--episode_s", "0.1",
-             "--settle_s", "0", "--device", "cpu", "--no_progress", "--out", str(tmp_path / "out"), "--set",
-             "actor.hidden_dims=[8]"]
+             "--settle_s", "0", "--device", "cpu", "--no_progress", "--out", str(tmp_path / "out")]
     report = evaluate_script.evaluate(evaluate_script.build_parser().parse_args([*flags, "--checkpoint", str(run)]))
     assert report["meta"]["policy_file"] == str((run / "model_3.pt").resolve())
     out = capsys.readouterr().out

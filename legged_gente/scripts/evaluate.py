@@ -100,10 +100,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--device", default=None, help="cpu | cuda | cuda:N (default: cuda if available)")
     p.add_argument(*flag("--no_progress"), action="store_true", help="no progress bar")
     p.add_argument("--set", action="append", default=[], metavar="SECTION.FIELD=VALUE", dest="overrides",
-                   help="the network sizes of a --checkpoint without a config.json beside it (repeatable), e.g. "
-                        "--set actor.hidden_dims=[256,128] (actor.*, critic.*)")
+                   help="the network settings of a --checkpoint without a config.json beside it that its weights "
+                        "do not give (repeatable), e.g. --set actor.activation=relu (actor.*, critic.*; the layer "
+                        "widths and normaliser are read off the weights)")
     add_verbose(p)
     return p
+
+
+WEIGHTS_SETTINGS = ("actor.hidden_dims", "actor.obs_normalization")
+"""What a checkpoint's weights say of its actor (read off them when no config.json lies beside it)."""
 
 
 def check_network_overrides(args) -> None:
@@ -124,6 +129,10 @@ def check_network_overrides(args) -> None:
         if not sets_a_network(text):
             raise ValueError(f"--set {text}: gente-evaluate sets only the network sizes (actor.*, critic.*) of a "
                              f"--checkpoint without config.json; the evaluation's settings are its flags.")
+        if text.split("=")[0].strip() in WEIGHTS_SETTINGS:
+            raise ValueError(f"--set {text}: a checkpoint without config.json gets its actor's layer widths and "
+                             f"observation normaliser from its weights; leave it out (--set gives the rest, e.g. "
+                             f"actor.activation)")
 
 
 def evaluate(args) -> dict:
