@@ -1,7 +1,9 @@
 """Two evaluations of the same benchmark compared terrain by terrain (`python -m legged_gente.evaluation.compare`):
 the paired mean difference and its standard error, worked out by hand here."""
 
+import json
 import math
+import re
 
 import pytest
 
@@ -64,3 +66,48 @@ def test_cli_prints_a_table_and_errors_are_one_line(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main([str(a), str(tmp_path / "missing.csv")])
     assert "missing.csv: no such file; give the report.csv that gente-evaluate --out wrote" in capsys.readouterr().err
+
+
+def _evaluation(folder, rows, **meta):
+    """An --out folder: report.csv and the report.json whose meta holds the scoring settings."""
+    folder.mkdir()
+    (folder / "report.json").write_text(json.dumps({"meta": {
+        "task_mode": "velocity", "tracking_threshold": 0.25, "min_progress": 0.7, "min_speed": 0.3,
+        "stand_fraction": 0.125, "episode_length_s": 10.0, "settle_s": 1.0, "tile_edge_margin": 0.5,
+        "max_base_speed": 10.0, "seed": 0, "policy": "a", **meta}}))
+    return _report(folder / "report.csv", rows)
+
+
+def test_evaluations_scored_differently_are_not_compared(tmp_path, capsys):
+    """A velocity evaluation against a waypoint one (or another episode length, speed floor, share of standing
+    robots) differs by how it was scored, not by the policy: refused, naming the settings. The policy and seed may
+    differ, and a report.csv alone is compared with a line saying its settings were not checked."""
+    a = _evaluation(tmp_path / "a", A_ROWS)
+    b = _evaluation(tmp_path / "b", B_ROWS, seed=1, policy="b")
+    assert compare_reports(a, b)["all"]["terrains"] == 4
+    waypoints = _evaluation(tmp_path / "w", B_ROWS, task_mode="waypoints", episode_length_s=2.0)
+    with pytest.raises(ValueError, match=r"the two evaluations were scored differently \(task_mode velocity against "
+                                         r"waypoints; episode_length_s 10.0 against 2.0, from their report.json\); "
+                                         r"evaluate both with the same flags"):
+        compare_reports(a, waypoints)
+    slower = _evaluation(tmp_path / "s", B_ROWS, min_speed=0.8, stand_fraction=0.5)
+    with pytest.raises(ValueError, match=r"min_speed 0.3 against 0.8; stand_fraction 0.125 against 0.5"):
+        compare_reports(a, slower)
+    lone = _report(tmp_path / "lone.csv", B_ROWS)
+    compare_reports(a, lone)
+    assert f"no report.json beside {lone}: the two evaluations' settings are not checked" in capsys.readouterr().out
+
+
+def test_a_cut_or_binary_report_is_one_line_naming_the_file(tmp_path, capsys):
+    a = _report(tmp_path / "a.csv", A_ROWS)
+    cut = tmp_path / "cut.csv"
+    cut.write_text(a.read_text()[:120])
+    binary = tmp_path / "binary.csv"
+    binary.write_bytes(b"\xff\xfe\x00garbage")
+    for path, message in ((cut, r"cut.csv, line \d: \d fields where the header has 7 \(cut short or edited\)"),
+                          (binary, r"binary.csv is not a gente-evaluate report.csv .*'utf-8' codec")):
+        with pytest.raises(SystemExit) as info:
+            main([str(a), str(path)])
+        err = capsys.readouterr().err.strip()
+        assert info.value.code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert re.search(message, err), err

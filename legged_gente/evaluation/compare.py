@@ -12,6 +12,7 @@ Choose between training candidates on ``gente_val`` this way, and report on gent
 from __future__ import annotations
 
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -22,16 +23,30 @@ RESOLVED_AT = 2.0
 """A mean difference counts as resolved beyond this many standard errors (about 95 % two-sided)."""
 
 
+SCORING_SETTINGS = ("task_mode", "tracking_threshold", "min_progress", "min_speed", "stand_fraction",
+                    "reach_distance", "speed", "episode_length_s", "settle_s", "tile_edge_margin", "max_base_speed")
+"""The settings of report.json's ``meta`` that change what a terrain scores: two reports compared must agree on
+them (the policy, seed, robots per terrain and device may differ)."""
+
+
 def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], float]]:
     """Terrain name -> (its groups: kind and categories, the metric), from a gente-evaluate report.csv."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file; give the report.csv that gente-evaluate --out wrote.")
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    not_a_report = (f"{path} is not a gente-evaluate report.csv (columns row, name, kind, categories, then the "
+                    f"metrics)")
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.DictReader(f))
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise ValueError(f"{not_a_report}: {error}; give the report.csv that gente-evaluate --out wrote.") from None
     if not rows or not {"row", "name", "kind", "categories"} <= set(rows[0]):
-        raise ValueError(f"{path} is not a gente-evaluate report.csv (columns row, name, kind, categories, then the "
-                         f"metrics); give the report.csv that gente-evaluate --out wrote.")
+        raise ValueError(f"{not_a_report}; give the report.csv that gente-evaluate --out wrote.")
+    for line, row in enumerate(rows, start=2):
+        if None in row or None in row.values():  # fields missing or extra: a file cut short, or edited
+            raise ValueError(f"{path}, line {line}: {len(row) - (None in row)} fields where the header has "
+                             f"{len(rows[0]) - (None in rows[0])} (cut short or edited); evaluate again.")
     if metric not in rows[0]:
         raise ValueError(f"--metric {metric}: {path} has no such column; give one of {', '.join(METRIC_COLUMNS)}.")
     terrains = {}
@@ -46,10 +61,33 @@ def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], fl
     return terrains
 
 
+def check_made_alike(a: Path, b: Path) -> None:
+    """The two reports' scoring settings (``SCORING_SETTINGS``, from the report.json beside each report.csv) agree:
+    a difference between, say, a 10 s velocity evaluation and a waypoint one is no difference between policies.
+    Without a report.json beside one, that is said and the comparison goes on."""
+    metas = []
+    for path in (a, b):
+        beside = path.parent / "report.json"
+        try:
+            metas.append(json.loads(beside.read_text())["meta"])
+        except FileNotFoundError:
+            print(f"no report.json beside {path}: the two evaluations' settings are not checked")
+            return
+        except (ValueError, KeyError, TypeError) as error:
+            raise ValueError(f"{beside} is not a gente-evaluate report.json ({type(error).__name__}: {error}); "
+                             f"evaluate again.") from None
+    differ = [f"{name} {metas[0].get(name)} against {metas[1].get(name)}" for name in SCORING_SETTINGS
+              if metas[0].get(name) != metas[1].get(name)]
+    if differ:
+        raise ValueError(f"the two evaluations were scored differently ({'; '.join(differ)}, from their "
+                         f"report.json); evaluate both with the same flags.")
+
+
 def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") -> dict[str, dict]:
     """Per group ("all", the kinds, the categories present): terrains, mean of A, mean of B, mean difference
     B - A, its standard error (NaN for one terrain) and whether it is resolved."""
     first, second = read_terrains(a, metric), read_terrains(b, metric)
+    check_made_alike(Path(a), Path(b))
     if first.keys() != second.keys():
         raise ValueError(f"compare evaluations of the same benchmark: {b} lacks {sorted(first.keys() - second.keys())}, "
                          f"has {sorted(second.keys() - first.keys())} that {a} has not.")

@@ -332,6 +332,8 @@ class Evaluation:
         if isinstance(task, WaypointTask):
             traces["waypoints"] = task.waypoints[first].cpu().numpy()
             params |= {"reach_distance": task.reach_distance, "speed": task.speed}
+        else:  # the commands' draw: which robots stand, how fast the others are told to go
+            params |= {"min_speed": task.min_speed, "stand_fraction": task.stand_fraction}
         return RunResult(self.tile.cpu().numpy(), out, traces, self.mode, params)
 
 

@@ -35,6 +35,7 @@ class VelocityTask:
             raise ValueError(f"stand_fraction must be in [0, 1], got {stand_fraction}.")
         if not min_speed > 0:
             raise ValueError(f"min_speed must be > 0 m/s, got {min_speed}.")
+        self.min_speed, self.stand_fraction = float(min_speed), float(stand_fraction)
         g = torch.Generator().manual_seed(seed)
         n = num_robots
         yaw = _uniform(*ranges.ang_vel_yaw, n, g) if not heading_command else torch.zeros(n)
