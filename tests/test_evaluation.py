@@ -138,6 +138,36 @@ def test_figures(tmp_path):
     assert path.stat().st_size > 0
 
 
+def test_the_figures_tool_says_the_file_it_wrote_and_names_a_bad_traces_file(tmp_path, capsys):
+    """--out without a suffix writes (and says) name.png; a folder as --out, a traces.npz cut short, a CSV
+    renamed .npz (numpy's advice would be to unpickle it) and another archive are each one line naming the file."""
+    from legged_gente.evaluation import figures
+
+    steps = 30
+    traces = tmp_path / "traces.npz"
+    np.savez(traces, ids=np.array(["t0", "t1"]), dt=np.array(0.02), cmd=np.zeros((2, steps, 3)),
+             vel=np.ones((2, steps, 3)), active=np.ones((2, steps), bool))
+    figures.main(["tracking", str(traces), "--out", str(tmp_path / "fig")])
+    assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'fig.png'}" and (tmp_path / "fig.png").is_file()
+    (tmp_path / "cut.npz").write_bytes(traces.read_bytes()[:200])
+    (tmp_path / "csv.npz").write_text("row,name\nterrain,t0\n")
+    np.savez(tmp_path / "other.npz", qpos=np.zeros(3))
+    cases = [(str(traces), str(tmp_path), f"--out {tmp_path} is a folder; give the PNG's path"),
+             (str(tmp_path / "cut.npz"), str(tmp_path / "x.png"), "cut.npz is not a readable NumPy .npz archive"),
+             (str(tmp_path / "csv.npz"), str(tmp_path / "x.png"), "csv.npz is not a readable NumPy .npz archive"),
+             (str(tmp_path / "other.npz"), str(tmp_path / "x.png"), "other.npz is not a traces.npz of gente-evaluate")]
+    for source, out, message in cases:
+        with pytest.raises(SystemExit) as info:
+            figures.main(["tracking", source, "--out", out])
+        err = capsys.readouterr().err.strip()
+        assert info.value.code == 2 and len(err.splitlines()) == 1 and message in err, err
+        assert "pickle" not in err
+    with pytest.raises(SystemExit):
+        figures.main(["tracking", str(traces), "--ids", "nope", "--out", str(tmp_path / "y.png")])
+    err = capsys.readouterr().err
+    assert "['nope'] not in" in err and "it has ['t0', 't1']" in err and "np.str_" not in err, err
+
+
 def test_one_evaluation_runs_several_times():
     """The waypoint figure reruns one Evaluation per reach distance: the second run must start cleanly."""
     from legged_gente.evaluation.benchmark import load_benchmark

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from legged_gente.utils.args import Parser, add_verbose, quiet_third_party, run_command
+from legged_gente.utils.tables import open_npz
 
 DPI = 90
 PROG = "python -m legged_gente.evaluation.figures"
@@ -83,8 +84,11 @@ def plot_reward_seeds(sources: list[str | Path], out: str | Path, column: str = 
 # -------------------------------------------------------------------------------- (b) velocity tracking
 def plot_tracking(traces: str | Path, out: str | Path, ids: list[str] | None = None, max_terrains: int = 4) -> Path:
     """Commanded vs actual vx (top) and vy (bottom) of each chosen terrain's first robot, while it was alive."""
-    data = np.load(traces)
-    all_ids = list(data["ids"])
+    data = open_npz(traces)
+    if not {"ids", "dt", "active"} <= set(data.files):
+        raise ValueError(f"{traces} is not a traces.npz of gente-evaluate (it holds {sorted(data.files)[:6]}); give "
+                         f"the traces.npz that gente-evaluate --out wrote.")
+    all_ids = [str(i) for i in data["ids"]]
     chosen = ids or all_ids[:max_terrains]
     missing = [i for i in chosen if i not in all_ids]
     if missing:
@@ -207,7 +211,12 @@ def success_over_training(task: str, run_dirs: list[str | Path], item_ids: list[
 
 
 def _save(fig, out: str | Path) -> Path:
+    """The figure as a PNG at ``out`` (``.png`` added to a name without a suffix: the path said is the one written)."""
     out = Path(out)
+    if out.is_dir():
+        raise ValueError(f"--out {out} is a folder; give the PNG's path, e.g. {out / 'figure.png'}")
+    if not out.suffix:
+        out = out.with_suffix(".png")
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(out, dpi=DPI)

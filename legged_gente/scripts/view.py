@@ -88,7 +88,7 @@ def _benchmark_items(root: Path, args):
     specs = {i.id: i for i in items}
     if args.traces is None:
         return [TerrainItem(i.id, _task_terrain(args, i.spec_path)) for i in items], None
-    from legged_gente.viewer.rollout import open_npz
+    from legged_gente.utils.tables import open_npz
 
     with open_npz(args.traces) as f:
         if "version" in f.files:

@@ -31,26 +31,15 @@ bulldozing resistance against its motion, which the contacts' friction limit app
 from __future__ import annotations
 
 import dataclasses
-import zipfile
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
 from legged_gente.terrain.materials import NO_WATER, MaterialMap
+from legged_gente.utils.tables import open_npz
 from legged_gente.viewer.scene import plane_terrain
 
-
-def open_npz(path: str | Path):
-    """``np.load`` of a rollout or traces archive (never unpickling), or a one-line error naming the file."""
-    if not Path(path).is_file():
-        raise FileNotFoundError(f"{path}: no such file; give a rollout written by gente-view --record or a "
-                                f"traces.npz written by gente-evaluate.")
-    try:
-        return np.load(path)
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile):  # a text file, a truncated or foreign archive
-        raise ValueError(f"{path} is not a readable NumPy .npz archive; give a rollout written by gente-view "
-                         f"--record or a traces.npz written by gente-evaluate.") from None
 
 ROLLOUT_VERSION = 2
 """2: a done row holds the ended episode's last state (1: the next episode's start, as the env held it after
