@@ -77,6 +77,20 @@ def test_a_launched_or_flagged_robot_is_diverged_not_fallen_and_its_step_is_not_
     assert recorder.active.tolist() == [True, False, False, False]
 
 
+def test_a_fallen_robots_progress_is_over_the_whole_commanded_distance():
+    """Two robots commanded 0.5 m/s for ten 0.02 s steps (0.1 m). Robot 0 walks it: progress 1. Robot 1 lunges
+    forward at 1 m/s for two steps (0.04 m) and falls in step 3: over the 0.1 m it was told to cover, 0.4, where
+    taking only its two live steps' 0.02 m made it 2.0, better than walking."""
+    env = stand_in_env(2, vx=0.5)
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    for k in range(1, 11):
+        env.sim.qvel[:, 0] = env.base_lin_vel[:, 0] = torch.tensor([0.5, 1.0])
+        record_step(recorder, env, torch.tensor([False, k == 3]))
+    progress = (recorder.along_cmd / recorder.cmd_distance).tolist()
+    assert recorder.fell.tolist() == [False, True]
+    assert progress == pytest.approx([1.0, 0.04 / 0.1])
+
+
 def test_the_heading_error_is_taken_after_the_settle_time_only():
     """Heading mode, commanded heading 0.5 rad, both robots facing +x (yaw 0): |0.5 - 0| rad = 28.65 deg. settle_s
     = 0.06 s = 3 steps of 0.02 s. Robot 0 is measured for 5 steps: 28.65 deg. Robot 1 falls in step 3, so its last

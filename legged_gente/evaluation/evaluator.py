@@ -20,7 +20,8 @@ Metric definitions (per robot; docs/evaluation.md repeats them):
 * ``tracking_error`` (m/s): mean over the robot's steps after ``settle_s`` of |v_cmd_xy - v_xy|, the
   horizontal base velocity in the base frame against the commanded (vx, vy).
 * ``progress``: velocity task: the distance covered along the commanded path over the commanded distance, both
-  after ``settle_s``: sum over steps of (v_xy . u) dt divided by the sum of |c_xy| dt, with v_xy the base's world
+  after ``settle_s``, the commanded distance to the episode's end for a robot that fell (to its last measured
+  step for one that reached its tile's edge): sum over steps of (v_xy . u) dt divided by the sum of |c_xy| dt, with v_xy the base's world
   velocity and u the command's direction (c_xy / |c_xy|, given in the base frame) turned by a reference yaw: the
   yaw of a robot that turned exactly at the yaw rates it was commanded, from its spawn yaw (in heading mode it
   stops at the commanded heading: the env commands the rate from the robot's own yaw, so a robot that turns late
@@ -150,7 +151,9 @@ class Recorder:
         velocity = quat_rotate_inverse(yaw_quat(self.reference_yaw), env.sim.qvel[:, 0:3])[:, :2]
         along = torch.sum(velocity * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
         self.along_cmd += torch.where(alive, along, 0.0) * self.dt * counted
-        self.cmd_distance += cmd_speed * self.dt * counted
+        # a fallen robot stays told to walk: its progress is over the whole episode's commanded distance (over its
+        # live steps alone, a lunge before a fall scored above walking); one that reached its tile's edge stops
+        self.cmd_distance += cmd_speed * self.dt * float(self.step > self.settle_steps) * (alive | self.fell).float()
         if env.heading_command:
             heading_error = torch.rad2deg(wrap_to_pi(env.commands[:, 3] - yaw_of(env.base_quat)).abs())
             measured = alive & ~env.standing_still & (self.step > self.settle_steps)
