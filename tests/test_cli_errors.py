@@ -313,6 +313,26 @@ def test_third_party_noise_is_quiet_by_default():
         wp.config.log_level = level
 
 
+def test_the_projects_own_warnings_are_one_line_unless_verbose(tmp_path):
+    """A command's warning of the project's (no flat spawn patch, water no geom feels, ...) is one line saying
+    what, not Python's file, line and source line; a third party's keeps Python's form; --verbose keeps both."""
+    import subprocess
+    import sys
+
+    code = ("import sys, warnings\n"
+            "from legged_gente.utils.args import quiet_third_party\n"
+            "quiet_third_party(verbose=sys.argv[1] == 'verbose')\n"
+            "import legged_gente.terrain.terrain as t\n"
+            "warnings.warn_explicit('no flat 1.0 m spawn patch\\n on tile (0, 1)', UserWarning, t.__file__, 191)\n"
+            "warnings.warn_explicit('a library speaks', UserWarning, '/elsewhere/lib.py', 7)\n")
+    quiet = subprocess.run([sys.executable, "-c", code, "quiet"], capture_output=True, text=True, timeout=300)
+    lines = [line for line in quiet.stderr.splitlines() if not line.startswith("Warp CUDA warning")]
+    assert lines[0] == "warning: no flat 1.0 m spawn patch on tile (0, 1)", quiet.stderr
+    assert lines[1].startswith("/elsewhere/lib.py:7: UserWarning: a library speaks"), quiet.stderr
+    verbose = subprocess.run([sys.executable, "-c", code, "verbose"], capture_output=True, text=True, timeout=300)
+    assert "terrain.py:191: UserWarning: no flat 1.0 m spawn patch" in verbose.stderr, verbose.stderr
+
+
 def test_an_os_error_is_one_line_naming_its_path(capsys, tmp_path):
     """A folder that is a file, or one that may not be written, from wherever in a command it comes."""
     from legged_gente.utils.args import run_command

@@ -236,6 +236,17 @@ THIRD_PARTY_NOISE = (
 THIRD_PARTY_LOGGERS = ("torch.onnx",)
 
 
+_python_formatwarning = warnings.formatwarning
+
+
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """The project's own warnings as one line, ``warning: <message>``, without Python's file, line and source
+    line (which say where the check is, not what to do); anything else as Python writes it."""
+    if f"{os.sep}legged_gente{os.sep}" in str(filename):
+        return f"warning: {' '.join(str(message).split())}\n"
+    return _python_formatwarning(message, category, filename, lineno, line)
+
+
 def quiet_third_party(verbose: bool = False) -> None:
     """Keep Warp's per-module 'Module ... loaded' lines and its banner (``warp.config.log_level``) and known
     third-party deprecation/future warnings off the console; ``verbose`` keeps everything."""
@@ -244,6 +255,7 @@ def quiet_third_party(verbose: bool = False) -> None:
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
+    warnings.formatwarning = _one_line_warning
     for name in THIRD_PARTY_LOGGERS:
         logging.getLogger(name).setLevel(logging.ERROR)
     for category, message, module in THIRD_PARTY_NOISE:
