@@ -111,3 +111,10 @@ def test_a_cut_or_binary_report_is_one_line_naming_the_file(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert info.value.code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
         assert re.search(message, err), err
+
+
+def test_compare_takes_the_out_folders_and_names_the_metrics_unit(tmp_path, capsys):
+    a = _evaluation(tmp_path / "a", A_ROWS)
+    _evaluation(tmp_path / "b", B_ROWS)
+    main([str(a.parent), str(tmp_path / "b"), "--metric", "tracking_error"])
+    assert capsys.readouterr().out.startswith("tracking_error, per terrain, B - A (m/s)")

@@ -438,7 +438,9 @@ def test_an_evaluation_without_moving_robots_says_so(tmp_path, capsys):
     main(["--task", "gente_biped_flat", "--baseline", "zero", "--benchmark", "flat", "--robots_per_terrain", "2",
           "--stand_fraction", "1", "--episode_s", "0.2", "--settle_s", "0.1", "--device", "cpu", "--out",
           str(tmp_path), "--no_progress"])
-    assert "no robot had a moving command (all were told to stand still" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "no robot had a moving command (all were told to stand still" in out
+    assert "success - over 0 robots" in out and "nan" not in out, out
 
 
 def test_a_robot_at_its_tiles_edge_ends_its_measured_episode_there_with_a_tile_edge_margin():

@@ -19,6 +19,9 @@ from pathlib import Path
 from legged_gente.evaluation.benchmark import KINDS
 from legged_gente.evaluation.report import CATEGORIES, METRIC_COLUMNS
 
+METRIC_UNITS = {"tracking_error": " (m/s)", "heading_error": " (deg)", "distance": " (m)", "displacement": " (m)",
+                "energy_per_m": " (J/m)"}
+"""The unit of a compared metric, for the table's title (rates are in points)."""
 RESOLVED_AT = 2.0
 """A mean difference counts as resolved beyond this many standard errors (about 95 % two-sided)."""
 
@@ -32,6 +35,8 @@ them (the policy, seed, robots per terrain and device may differ)."""
 def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], float]]:
     """Terrain name -> (its groups: kind and categories, the metric), from a gente-evaluate report.csv."""
     path = Path(path)
+    if path.is_dir():  # gente-evaluate's --out folder
+        path = path / "report.csv"
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file; give the report.csv that gente-evaluate --out wrote.")
     not_a_report = (f"{path} is not a gente-evaluate report.csv (columns row, name, kind, categories, then the "
@@ -86,8 +91,9 @@ def check_made_alike(a: Path, b: Path) -> None:
 def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") -> dict[str, dict]:
     """Per group ("all", the kinds, the categories present): terrains, mean of A, mean of B, mean difference
     B - A, its standard error (NaN for one terrain) and whether it is resolved."""
+    a, b = (Path(p) / "report.csv" if Path(p).is_dir() else Path(p) for p in (a, b))
     first, second = read_terrains(a, metric), read_terrains(b, metric)
-    check_made_alike(Path(a), Path(b))
+    check_made_alike(a, b)
     if first.keys() != second.keys():
         raise ValueError(f"compare evaluations of the same benchmark: {b} lacks {sorted(first.keys() - second.keys())}, "
                          f"has {sorted(second.keys() - first.keys())} that {a} has not.")
@@ -114,14 +120,14 @@ def main(argv=None) -> None:
     from legged_gente.utils.args import Parser, run_command
 
     parser = Parser(prog="python -m legged_gente.evaluation.compare", description=__doc__.split("\n\n")[0])
-    parser.add_argument("a", help="report.csv of evaluation A")
-    parser.add_argument("b", help="report.csv of evaluation B (differences are B - A)")
+    parser.add_argument("a", help="report.csv of evaluation A (or the --out folder holding it)")
+    parser.add_argument("b", help="report.csv of evaluation B (or its folder; differences are B - A)")
     parser.add_argument("--metric", default="success_rate", help="a report column (default success_rate)")
     args = parser.parse_args(argv)
 
     def show(args) -> None:
         rows = compare_reports(args.a, args.b, args.metric)
-        scale, unit = (100.0, " points") if args.metric.endswith("_rate") else (1.0, "")
+        scale, unit = (100.0, " points") if args.metric.endswith("_rate") else (1.0, METRIC_UNITS.get(args.metric, ""))
         print(f"{args.metric}, per terrain, B - A{unit} (A: {args.a}, B: {args.b})")
         print(f"{'group':>18} {'terrains':>8} {'A':>8} {'B':>8} {'B - A':>8} {'SE':>7}")
         for group, r in rows.items():

@@ -251,7 +251,7 @@ def main(argv=None) -> None:
     d = sub.choices["training"]
     d.add_argument("--run", nargs="+", required=True,
                    help="training run folder with model_*.pt, then the folders of its --resume chunks")
-    d.add_argument("--items", nargs="+", required=True, help="three benchmark item ids")
+    d.add_argument("--items", nargs="+", required=True, help="benchmark item ids (the paper's figure has three)")
     d.add_argument("--max_checkpoints", type=int, default=8)
     d.add_argument("--robots_per_terrain", type=int, default=16)
     for s in sub.choices.values():

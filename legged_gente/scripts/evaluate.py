@@ -143,7 +143,8 @@ def evaluate(args) -> dict:
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built
-            raise FileNotFoundError(f"{name} {given}: no such file or run folder.")
+            raise FileNotFoundError(f"{name} {given}: no such file" + (" or run folder." if name == "--checkpoint"
+                                                                          else "; give the policy.onnx gente-play wrote."))
     check_output(args.out, "--out")
     if args.overrides:
         check_network_overrides(args)
@@ -181,11 +182,12 @@ def evaluate(args) -> dict:
               f"{settings['stand_fraction']}); raise --robots_per_terrain to score the moving ones.")
     heading = o.get("heading_error")
     heading = f"heading error {heading:.1f} deg; " if heading is not None and math.isfinite(heading) else ""
-    print(f"success {100 * o['success_rate']:.1f}% over {o['robots']} robots on {o['terrains']} terrains; "
-          f"tracking error {o['tracking_error']:.3f} m/s; {heading}falls {o['falls']}; diverged {o['diverged']}; "
+    rate = lambda value: "-" if math.isnan(value) else f"{100 * value:.1f}%"  # noqa: E731  (nan: no robot scored)
+    print(f"success {rate(o['success_rate'])} over {o['robots']} robots on {o['terrains']} terrains; "
+          f"tracking error {'-' if math.isnan(o['tracking_error']) else format(o['tracking_error'], '.3f')} m/s; {heading}falls {o['falls']}; diverged {o['diverged']}; "
           f"stopped at their tile's edge {o['left_tile']}")
     for name, g in report["groups"].items():
-        print(f"  {name:18s} success {100 * g['success_rate']:5.1f}%  ({g['terrains']} terrains)")
+        print(f"  {name:18s} success {rate(g['success_rate']):>6s}  ({g['terrains']} terrains)")
     print(f"wrote {json_path}, {csv_path}, {Path(args.out) / 'traces.npz'}")
     return report
 
