@@ -108,6 +108,23 @@ def test_nonsense_evaluation_flags(capsys, tmp_path, flags, message):
 
 
 @pytest.mark.parametrize("flags, message", [
+    (["--stand_fraction", "2"], "--stand_fraction must be in [0, 1], got 2.0"),
+    (["--min_speed", "-1"], "--min_speed must be > 0 m/s, got -1.0"),
+    (["--mode", "waypoints", "--reach_distance", "0"], "--reach_distance must be > 0 m, got 0.0"),
+    (["--mode", "waypoints", "--speed", "inf"], "--speed must be a finite speed in m/s, got inf"),
+])
+def test_a_task_setting_is_refused_in_its_flags_name_before_the_env_is_built(capsys, tmp_path, monkeypatch, flags,
+                                                                             message):
+    from legged_gente.evaluation import evaluator
+
+    monkeypatch.setattr(evaluator, "Evaluation", never)
+    line = one_line_error(capsys, evaluate_script.main, ["--task", "gente_biped_flat", "--baseline", "zero",
+                                                         "--benchmark", "flat", "--device", "cpu", "--out",
+                                                         str(tmp_path / "out"), *flags])
+    assert message in line, line
+
+
+@pytest.mark.parametrize("flags, message", [
     (["--speed", "0.8"], "--speed is a flag of --mode waypoints; it does nothing with --mode velocity"),
     (["--reach_distance", "5"], "--reach_distance is a flag of --mode waypoints; it does nothing with --mode velocity"),
     (["--mode", "waypoints", "--min_speed", "0.5"], "--min_speed is a flag of --mode velocity; it does nothing with --mode waypoints"),

@@ -31,10 +31,7 @@ class VelocityTask:
 
     def __init__(self, num_robots: int, ranges, heading_command: bool, device: str, seed: int = 0,
                  min_speed: float = MIN_SPEED, stand_fraction: float = STAND_FRACTION):
-        if not 0.0 <= stand_fraction <= 1.0:
-            raise ValueError(f"stand_fraction must be in [0, 1], got {stand_fraction}.")
-        if not min_speed > 0:
-            raise ValueError(f"min_speed must be > 0 m/s, got {min_speed}.")
+        check_task_settings(min_speed=min_speed, stand_fraction=stand_fraction)
         self.min_speed, self.stand_fraction = float(min_speed), float(stand_fraction)
         g = torch.Generator().manual_seed(seed)
         n = num_robots
@@ -95,9 +92,7 @@ class WaypointTask:
     def __init__(self, waypoints: torch.Tensor, reach_distance: float, speed: float):
         if waypoints.ndim != 3 or waypoints.shape[-1] != 2 or waypoints.shape[1] < 1:
             raise ValueError(f"waypoints must be (num_robots, K >= 1, 2) world xy, got {tuple(waypoints.shape)}.")
-        if not reach_distance > 0:
-            raise ValueError(f"reach_distance must be > 0 m, got {reach_distance}.")
-        _check_speed(speed)
+        check_task_settings(reach_distance=reach_distance, speed=speed)
         self.waypoints = waypoints
         self.reach_distance = float(reach_distance)
         self.speed = float(speed)
@@ -143,18 +138,23 @@ def zigzag_length(count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING, lat
     return math.hypot(spacing, lateral) + (count - 1) * math.hypot(spacing, 2 * lateral)
 
 
-def _check_speed(speed: float) -> None:
-    """A waypoint speed must be positive and finite (an infinite one would make a zero-length episode)."""
-    if not speed > 0:
-        raise ValueError(f"speed must be > 0 m/s, got {speed}.")
-    if not math.isfinite(speed):
-        raise ValueError(f"speed must be a finite speed in m/s, got {speed}.")
+def check_task_settings(**settings: float) -> None:
+    """The tasks' settings given (each message starts with its name, which gente-evaluate's flags share): a share
+    of standing robots in [0, 1], a positive speed floor and reach distance, a positive and finite waypoint speed
+    (an infinite one would make a zero-length episode)."""
+    for name, value in settings.items():
+        if name == "stand_fraction" and not 0.0 <= value <= 1.0:
+            raise ValueError(f"stand_fraction must be in [0, 1], got {value}.")
+        if name in ("min_speed", "reach_distance", "speed") and not value > 0:
+            raise ValueError(f"{name} must be > 0 {'m' if name == 'reach_distance' else 'm/s'}, got {value}.")
+        if name == "speed" and not math.isfinite(value):
+            raise ValueError(f"speed must be a finite speed in m/s, got {value}.")
 
 
 def waypoint_episode_s(speed: float, count: int = WAYPOINTS, spacing: float = WAYPOINT_SPACING,
                        lateral: float = WAYPOINT_LATERAL) -> float:
     """s; the waypoint task's default episode: ``WAYPOINT_TIME_SLACK`` times the zigzag's length over ``speed``."""
-    _check_speed(speed)
+    check_task_settings(speed=speed)
     return WAYPOINT_TIME_SLACK * zigzag_length(count, spacing, lateral) / speed
 
 

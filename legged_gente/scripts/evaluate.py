@@ -139,7 +139,7 @@ def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
     from legged_gente.evaluation.report import build_report, check_success_rule, write_reports
-    from legged_gente.evaluation.tasks import waypoint_episode_s
+    from legged_gente.evaluation.tasks import check_task_settings, waypoint_episode_s
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built
@@ -149,6 +149,10 @@ def evaluate(args) -> dict:
     if args.overrides:
         check_network_overrides(args)
     settings = mode_settings(args)
+    try:  # before the (slow) evaluation envs are built, in the flags' names
+        check_task_settings(**{k: v for k, v in settings.items() if k not in ("tracking_threshold", "min_progress")})
+    except ValueError as error:
+        raise ValueError(f"--{error}") from None
     # the velocity task's success rule (the waypoint task's, the last waypoint reached, has no setting)
     rule = {name: settings.pop(name) for name in ("tracking_threshold", "min_progress") if name in settings}
     if rule:
