@@ -35,8 +35,6 @@ them (the policy, seed, robots per terrain and device may differ)."""
 def read_terrains(path: str | Path, metric: str) -> dict[str, tuple[set[str], float]]:
     """Terrain name -> (its groups: kind and categories, the metric), from a gente-evaluate report.csv."""
     path = Path(path)
-    if path.is_dir():  # gente-evaluate's --out folder
-        path = path / "report.csv"
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file; give the report.csv that gente-evaluate --out wrote.")
     not_a_report = (f"{path} is not a gente-evaluate report.csv (columns row, name, kind, categories, then the "
@@ -91,7 +89,7 @@ def check_made_alike(a: Path, b: Path) -> None:
 def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") -> dict[str, dict]:
     """Per group ("all", the kinds, the categories present): terrains, mean of A, mean of B, mean difference
     B - A, its standard error (NaN for one terrain) and whether it is resolved."""
-    a, b = (Path(p) / "report.csv" if Path(p).is_dir() else Path(p) for p in (a, b))
+    a, b = (Path(p) / "report.csv" if Path(p).is_dir() else Path(p) for p in (a, b))  # a gente-evaluate --out folder
     first, second = read_terrains(a, metric), read_terrains(b, metric)
     check_made_alike(a, b)
     if first.keys() != second.keys():

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from legged_gente.utils.args import (
-    Parser, add_verbose, apply_overrides, check_output, flag, import_mujoco, quiet_third_party, resolve_device,
-    run_command, seed)
+    Parser, add_verbose, apply_overrides, check_output, flag, import_mujoco, override_of, quiet_third_party,
+    resolve_device, run_command, seed)
 
 import_mujoco("gente-evaluate")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
@@ -129,10 +129,11 @@ def check_network_overrides(args) -> None:
         if not sets_a_network(text):
             raise ValueError(f"--set {text}: gente-evaluate sets only the network sizes (actor.*, critic.*) of a "
                              f"--checkpoint without config.json; the evaluation's settings are its flags.")
-        if text.split("=")[0].strip() in WEIGHTS_SETTINGS:
-            raise ValueError(f"--set {text}: a checkpoint without config.json gets its actor's layer widths and "
-                             f"observation normaliser from its weights; leave it out (--set gives the rest, e.g. "
-                             f"actor.activation)")
+    given = override_of(args.overrides, *WEIGHTS_SETTINGS)
+    if given:
+        raise ValueError(f"--set {given}: a checkpoint without config.json gets its actor's layer widths and "
+                         f"observation normaliser from its weights; leave it out (--set gives the rest, e.g. "
+                         f"actor.activation)")
 
 
 def evaluate(args) -> dict:
@@ -149,12 +150,12 @@ def evaluate(args) -> dict:
     if args.overrides:
         check_network_overrides(args)
     settings = mode_settings(args)
-    try:  # before the (slow) evaluation envs are built, in the flags' names
-        check_task_settings(**{k: v for k, v in settings.items() if k not in ("tracking_threshold", "min_progress")})
-    except ValueError as error:
-        raise ValueError(f"--{error}") from None
     # the velocity task's success rule (the waypoint task's, the last waypoint reached, has no setting)
     rule = {name: settings.pop(name) for name in ("tracking_threshold", "min_progress") if name in settings}
+    try:  # the task's own settings, before the (slow) evaluation envs are built, in the flags' names
+        check_task_settings(**settings)
+    except ValueError as error:
+        raise ValueError(f"--{error}") from None
     if rule:
         check_success_rule(**rule)  # before the rollout, not after it
     items = load_benchmark(args.benchmark, args.items)

@@ -119,8 +119,9 @@ def build_model(cfg, terrain=None) -> tuple[mujoco.MjModel, RobotLayout]:
         geom.friction = [cfg.terrain.static_friction, *geom.friction[1:]]
     colliding = {g.parent.name for g in robot_geoms if g.contype}
     feet = match_names(cfg.asset.foot_bodies, bodies, "cfg.asset.foot_bodies", "body")
-    if [foot for foot in feet if foot not in colliding]:
-        raise ValueError(f"cfg.asset.foot_bodies: {[foot for foot in feet if foot not in colliding]} have no geom that "
+    passing = [foot for foot in feet if foot not in colliding]
+    if passing:
+        raise ValueError(f"cfg.asset.foot_bodies: {passing} have no geom that "
                          f"collides (contype and conaffinity 0 on each), so they would pass through the ground and "
                          f"never touch it; give each foot body a collision geom with contype=\"1\" "
                          f"conaffinity=\"1\"")
