@@ -644,16 +644,10 @@ class TerrainForces:
 
     def passive(self, m, d):
         """A substep's terrain forces into the zeroed ``d.xfrc_applied``: the legs' water, the feet's water and the
-        soil (three independent groups: parallel branches on a GPU, see ``_in_parallel``), then the water points'
-        added mass into the mass matrix (it reads both water kernels' points)."""
+        soil (three independent groups: parallel branches on a GPU, see ``_in_parallel``); each water group adds its
+        points' added mass into the mass matrix after its forces (atomically, so the two branches may overlap)."""
         d.xfrc_applied.zero_()
         self._in_parallel(lambda: self._feet_water(m, d), lambda: self._legs_water(m, d), lambda: self._soil(m, d))
-        if self.cfg.wading and not self.cfg.paper_added_mass and (self.nseg or len(self.foot_water_geom)):
-            wp.launch(
-                W.added_mass_kernel, dim=(self.nworld, *self.point_dofs.shape), device=self.device,
-                inputs=[self.point_dofs, self.point_geom, self.point_axes, m.dof_parentid, m.M_rownnz, m.M_rowadr,
-                        d.geom_xmat, d.cdof, self.point_mass, self.point_offset, d.M],
-            )
 
     def _in_parallel(self, *groups) -> None:
         """Launch each group of kernels (a callable; the groups independent, their forces added atomically) on a
@@ -691,6 +685,7 @@ class TerrainForces:
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
                         d.xfrc_applied, self.seg_force, self.point_mass, self.point_offset],
             )
+            self._added_mass(m, d, 0, W.NGAUSS * self.nseg)
 
     def _feet_water(self, m, d):
         cfg = self.cfg
@@ -706,6 +701,18 @@ class TerrainForces:
                         d.xfrc_applied, self.foot_water_force, self.point_mass, self.point_offset,
                         W.NGAUSS * self.nseg],
             )
+            self._added_mass(m, d, W.NGAUSS * self.nseg, len(self.foot_water_geom))
+
+    def _added_mass(self, m, d, first_point: int, count: int):
+        """The added mass of the water points ``first_point`` to ``first_point + count - 1`` into ``d.M``, from the
+        scales and offsets their water kernel has just written (none with ``paper_added_mass``)."""
+        if self.cfg.paper_added_mass:
+            return
+        wp.launch(
+            W.added_mass_kernel, dim=(self.nworld, count, self.point_dofs.shape[1]), device=self.device,
+            inputs=[self.point_dofs, self.point_geom, self.point_axes, m.dof_parentid, m.M_rownnz, m.M_rowadr,
+                    d.geom_xmat, d.cdof, self.point_mass, self.point_offset, first_point, d.M],
+        )
 
     def _soil(self, m, d):
         """Bekker and bulldozing (then RFT's granular media, which adds to the same feet's forces)."""

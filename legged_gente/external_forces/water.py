@@ -3,8 +3,8 @@
 ``segment_water_kernel`` (worlds x leg segments) writes drag, buoyancy and the flow's inertia force to
 ``xfrc_applied`` at each slice's Gauss point and each slice's added mass (a scale and the point's offset from the
 tree's centre of mass); ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot;
-``added_mass_kernel`` (worlds x points x dofs) then builds each point's tensor from its geom's axes and adds it to
-the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which
+``added_mass_kernel`` (worlds x points x dofs), launched after each of them for its own points, builds each point's
+tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which
 rebuilds it from scratch each substep), calls the passive callback in ``fwd_velocity`` and only then factorises M
 (``fwd_acceleration``) and builds the constraint solver's Hessian and the implicit integrators' matrices from it,
 so an addition made here is seen by the whole step: the added mass is implicit, acts in the same substep and cannot
@@ -492,14 +492,18 @@ def added_mass_kernel(
     cdof: wp.array2d[wp.spatial_vector],
     point_mass: wp.array2d[float],
     point_offset: wp.array2d[wp.vec3],
+    first_point: int,
     M: wp.array2d[float],
 ):
     """Implicit added mass: M[i, j] += J_i(p) . A J_j(p) for each water point p (a leg slice's Gauss point, a foot),
     i one of the dofs moving its body (``point_dofs[pt, n]``, -1 past the chain) and j each ancestor of i (or i
     itself). A = s R diag(point_axes) R^T, R its geom's axes, s = ``point_mass`` (a slice's m_k with axes (1, 1, 0):
     across the axis only; a foot's wet fraction with its added masses along its axes). One thread per (world,
-    point, dof) keeps the chains' loops short; the water kernels write only a scale and an offset per point."""
-    w, pt, n = wp.tid()
+    point, dof) keeps the chains' loops short; the water kernels write only a scale and an offset per point. A
+    launch covers the points from ``first_point`` on, as many as its second dimension: the legs' and the feet's
+    are launched apart, each after its own water kernel (``TerrainForces.passive``)."""
+    w, k, n = wp.tid()
+    pt = first_point + k
     i = point_dofs[pt, n]
     if i < 0:
         return
