@@ -464,3 +464,25 @@ def test_packed_arrays_refuse_elements_that_are_not_whole_words():
 
     with pytest.raises(ValueError, match=r"\['mask'\] have elements that are not whole 4-byte words"):
         PackedArrays({"a": (3, float), "mask": (3, wp.bool)}, DEV)
+
+
+def test_feet_cells_go_beside_the_contact_filter_only_when_no_foot_is_in_mujocos_contacts():
+    """On a GPU the feet's cells (which clear the feet's contact flags) run beside the contact filter only when no
+    foot geom reaches MuJoCo's contacts: a MuJoCo-collided foot's contact makes the filter write those flags, so the
+    two must then run one after the other."""
+    wp.set_device(DEV)
+    hfield = f'<asset><hfield name="hf" nrow="{SHAPE[1]}" ncol="{SHAPE[0]}" size="2 2 1 0.1"/></asset>'
+
+    def forces(foot_geoms: str, names: list):
+        mjm = mujoco.MjModel.from_xml_string(f"""<mujoco>{hfield}<worldbody>
+          <geom name="terrain" type="hfield" hfield="hf"/>
+          <body name="foot" pos="0 0 0.05"><joint type="slide" axis="0 0 1"/>{foot_geoms}</body>
+          </worldbody></mujoco>""")
+        cfg = type("C", (SoilCfg,), {"foot_geom_names": names})
+        return make(mjm, MaterialMap.rigid(SHAPE), cfg(), nworld=1)[2]
+
+    sole = '<geom name="sole" type="sphere" size="0.02" contype="0" conaffinity="0"/>'
+    box = '<geom name="plate" type="box" size="0.05 0.05 0.01"/>'
+    assert forces(sole, ["sole"]).feet_apart_from_filter
+    assert not forces(box, ["plate"]).feet_apart_from_filter
+    assert not forces(sole + box, ["sole", "plate"]).feet_apart_from_filter
