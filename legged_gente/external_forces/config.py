@@ -78,7 +78,8 @@ class ForcesConfig:
                            rut (m); the forces use the full sinkage. MuJoCo's heightfield contacts go wrong once a
                            geom is ~3 cm inside a cell (docs/forces.md); analytic sole contacts show the full rut
     parallel_kernels: bool  on a GPU, the legs' water, the feet's water and the soil (independent kernels) run as
-                          concurrent branches, each on a stream of its own; False: one after another (the forces
+                          concurrent branches, each on a stream of its own, and so do the feet's cells and the
+                          contact filter where no foot is in MuJoCo's contacts; False: one after another (the forces
                           are the same, up to the order in which the atomic adds sum them)
     """
 

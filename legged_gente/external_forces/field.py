@@ -424,7 +424,7 @@ class TerrainForces:
         self.legs.load, self.legs.sinkage, self.legs.cand = self.leg_load, self.leg_sinkage, self.leg_cand
         self.legs.touch, self.legs.inrut = self.leg_touch, self.leg_inrut
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
-        # the passive kernels' second and third branches (``_in_parallel``)
+        # the side branches of ``_in_parallel`` (the passive kernels' second and third, the contact filter's second)
         self._side_streams = [wp.Stream(dev) for _ in range(2)] if dev.is_cuda and cfg.parallel_kernels else []
         self.reset(self._all)
         self.new_policy_step()
