@@ -113,9 +113,9 @@ def test_the_csv_holds_the_documented_columns_and_leaves_undefined_values_empty(
     _, path = write_reports(report, tmp_path)
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
-    assert list(rows[0]) == ["row", "name", "kind", "categories", "robots", "success_rate", "tracking_error",
-                             "progress", "heading_error", "distance", "displacement", "collisions", "falls",
-                             "fall_rate", "diverged", "energy_per_m", "left_tile"]
+    assert list(rows[0]) == ["row", "name", "kind", "categories", "terrains", "robots", "success_rate",
+                             "tracking_error", "progress", "heading_error", "distance", "displacement", "collisions",
+                             "falls", "fall_rate", "diverged", "energy_per_m", "left_tile"]
     a, b = rows[0], rows[1]
     assert (a["row"], a["name"], a["kind"], a["categories"]) == ("terrain", "a", "text", "soil+obstacles")
     assert a["robots"] == "2" and float(a["success_rate"]) == 0.5 and float(a["progress"]) == pytest.approx(0.7)
@@ -123,6 +123,8 @@ def test_the_csv_holds_the_documented_columns_and_leaves_undefined_values_empty(
     assert a["heading_error"] == ""  # yaw-rate mode or none measured: undefined, not 0
     assert [r["row"] for r in rows[2:]] == ["group"] * 5 + ["overall"]
     assert [r["name"] for r in rows[2:]] == ["text", "image", "soil", "obstacles", "stand_still", "all"]
+    # how many terrains each row covers: one each; a, the text one, has soil and obstacles; b has the standing robots
+    assert [r["terrains"] for r in rows] == ["1", "1", "1", "1", "1", "1", "1", "2"]
 
 
 # ------------------------------------------------------------------------------------------------ recorder

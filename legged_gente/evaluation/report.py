@@ -170,11 +170,13 @@ def write_reports(report: dict, out_dir: str | Path) -> tuple[Path, Path]:
     json_path.write_text(json.dumps(_json_safe(report), indent=1) + "\n")
     with open(csv_path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["row", "name", "kind", "categories", *METRIC_COLUMNS])
+        writer.writerow(["row", "name", "kind", "categories", "terrains", *METRIC_COLUMNS])
         fmt = lambda v: "" if isinstance(v, float) and not math.isfinite(v) else (f"{v:.4g}" if isinstance(v, float) else v)  # noqa: E731
         for t in report["terrains"]:
-            writer.writerow(["terrain", t["id"], t["kind"], "+".join(t["categories"]), *(fmt(t[c]) for c in METRIC_COLUMNS)])
+            writer.writerow(["terrain", t["id"], t["kind"], "+".join(t["categories"]), 1,
+                             *(fmt(t[c]) for c in METRIC_COLUMNS)])
         for name, g in report["groups"].items():
-            writer.writerow(["group", name, "", "", *(fmt(g[c]) for c in METRIC_COLUMNS)])
-        writer.writerow(["overall", "all", "", "", *(fmt(report["overall"][c]) for c in METRIC_COLUMNS)])
+            writer.writerow(["group", name, "", "", g["terrains"], *(fmt(g[c]) for c in METRIC_COLUMNS)])
+        overall = report["overall"]
+        writer.writerow(["overall", "all", "", "", overall["terrains"], *(fmt(overall[c]) for c in METRIC_COLUMNS)])
     return json_path, csv_path
