@@ -33,3 +33,20 @@ def test_a_report_of_another_benchmark_is_refused(tool, monkeypatch, capsys, tmp
     assert run(tool, monkeypatch, "--benchmark", "flat", "--report", str(report)) == 2
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert str(report) in err and "flat" in err
+
+
+def test_a_report_of_some_terrains_bins_those_and_says_so(tool, monkeypatch, capsys, tmp_path):
+    """An evaluation of two of the steps benchmark's items (gente-evaluate --items): the bins count those two, not
+    the benchmark's others with no score, and the output says how many of its terrains the report scores."""
+    from legged_gente.evaluation.benchmark import load_benchmark
+
+    count = len(load_benchmark("steps"))
+    report = tmp_path / "report.csv"
+    report.write_text("row,name,success_rate,fall_rate,tracking_error\n"
+                      "terrain,step_10cm,1.0,0.0,0.1\nterrain,step_15cm,0.5,0.5,0.3\n")
+    monkeypatch.setattr(sys, "argv", ["terrain_roughness.py", "--benchmark", "steps", "--report", str(report)])
+    tool.main()
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == f"{report} scores 2 of the {count} terrains of steps: the bins hold those"
+    counts = [int(line.split()[2]) for line in out[2:]]
+    assert sum(counts) == 2 and count > 2

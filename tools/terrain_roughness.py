@@ -50,9 +50,10 @@ def read_report(path: str) -> dict[str, dict[str, float]]:
         return {r["name"]: {k: float(r[k] or "nan") for k in REPORT_COLUMNS} for r in reader if r["row"] == "terrain"}
 
 
-def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float, dict[str, float]]]:
+def benchmark_table(benchmark: str, report: str | None) -> tuple[list[tuple[str, float, dict[str, float]]], int]:
     """(item id, rough share, the report's ``REPORT_COLUMNS`` for it, NaN without a report) per item of
-    ``benchmark``; a report with none of its terrains is a ValueError."""
+    ``benchmark`` that the report scores (each item without a report), and the benchmark's item count; a report
+    with none of its terrains is a ValueError."""
     from legged_gente.evaluation.benchmark import load_benchmark
 
     items = load_benchmark(benchmark)
@@ -63,10 +64,12 @@ def benchmark_table(benchmark: str, report: str | None) -> list[tuple[str, float
     missing = dict.fromkeys(REPORT_COLUMNS, float("nan"))
     rows = []
     for item in items:
+        if report and item.id not in metrics:  # an evaluation of some items (--items): the bins count those
+            continue
         spec = item.spec()
         heights, _ = spec.build()
         rows.append((item.id, rough_share(heights, spec.resolution), metrics.get(item.id, missing)))
-    return rows
+    return rows, len(items)
 
 
 def print_bins(rows: list[tuple[str, float, dict[str, float]]]) -> None:
@@ -123,9 +126,11 @@ def main() -> None:
         if args.curriculum:
             curriculum_table(args.curriculum, args.overrides)
             return
-        rows = benchmark_table(args.benchmark, args.report)
+        rows, count = benchmark_table(args.benchmark, args.report)
     except USER_ERRORS as error:
         parser.error(error_text(error))
+    if len(rows) < count:
+        print(f"{args.report} scores {len(rows)} of the {count} terrains of {args.benchmark}: the bins hold those")
     print_bins(rows)
 
 
