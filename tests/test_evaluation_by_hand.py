@@ -229,3 +229,27 @@ def test_figure_b_plots_each_trace_row_at_the_time_it_was_reached(tmp_path, monk
     monkeypatch.setattr(figures._plt(), "subplots", subplots)
     figures.plot_tracking(traces, tmp_path / "b.png")
     assert plotted and all(np.allclose(x, [0.02, 0.04, 0.06, 0.08, 0.10]) for x in plotted)
+
+
+def test_figure_b_titles_each_panel_with_its_whole_terrain_id(tmp_path, monkeypatch):
+    """Two ids alike in their first 24 characters (gente100's image items share long prefixes) keep apart: each
+    panel's title is its whole id, wrapped over lines of at most 24 characters."""
+    from legged_gente.evaluation import figures
+
+    ids = ["image_40_scene_forest_stream_a", "image_40_scene_forest_stream_b"]
+    traces = tmp_path / "traces.npz"
+    cmd = np.zeros((2, 3, 3), np.float32)
+    np.savez(traces, ids=np.array(ids), dt=np.array(0.02), active=np.ones((2, 3), bool), cmd=cmd, vel=cmd)
+    drawn = []
+    real_subplots = figures._plt().subplots
+
+    def subplots(*args, **kwargs):
+        fig, axes = real_subplots(*args, **kwargs)
+        drawn.append(axes)
+        return fig, axes
+
+    monkeypatch.setattr(figures._plt(), "subplots", subplots)
+    figures.plot_tracking(traces, tmp_path / "b.png")
+    titles = [ax.get_title() for ax in drawn[0][0]]
+    assert [t.replace("\n", "") for t in titles] == ids
+    assert all(len(line) <= 24 for t in titles for line in t.split("\n"))

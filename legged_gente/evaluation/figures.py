@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -107,7 +108,7 @@ def plot_tracking(traces: str | Path, out: str | Path, ids: list[str] | None = N
             ax.grid(alpha=0.3)
             if c == 0:
                 ax.set_ylabel(f"{name} (m/s)")
-        axes[0, c].set_title(item[:24], fontsize=7)
+        axes[0, c].set_title("\n".join(textwrap.wrap(item, 24)), fontsize=7)  # whole: ids share long prefixes
         axes[1, c].set_xlabel("time (s)")
     axes[0, 0].legend(fontsize=7)
     return _save(fig, out)
