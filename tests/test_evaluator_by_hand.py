@@ -230,3 +230,25 @@ def test_the_figures_command_keeps_third_party_output_off_the_console_unless_ver
     figures.main(["reward", str(run), "--out", str(tmp_path / "a.png")])
     figures.main(["reward", str(run), "--out", str(tmp_path / "b.png"), "--verbose"])
     assert calls == [False, True] and (tmp_path / "a.png").is_file()
+
+
+def test_the_waypoint_figure_takes_the_shipped_policy(monkeypatch, tmp_path):
+    """`waypoints --pretrained` draws with the policy shipped for --task, as gente-evaluate --pretrained does: the
+    figure asks the evaluator for that policy and no other."""
+    import legged_gente.evaluation.evaluator as evaluator
+
+    asked = []
+
+    class Asked(Exception):
+        pass
+
+    def load_policy(evaluation, **sources):
+        asked.append({k: v for k, v in sources.items() if v})
+        raise Asked
+
+    monkeypatch.setattr(evaluator, "Evaluation", lambda *a, **k: SimpleNamespace())  # nothing to simulate
+    monkeypatch.setattr(evaluator, "load_policy", load_policy)
+    with pytest.raises(Asked):
+        figures.main(["waypoints", "--pretrained", "--benchmark", "flat", "--item", "flat",
+                      "--out", str(tmp_path / "c.png")])
+    assert asked == [{"pretrained": True}]

@@ -248,6 +248,7 @@ def main(argv=None) -> None:
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--checkpoint")
     src.add_argument("--exported")
+    src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"))
     d = sub.choices["training"]
     d.add_argument("--run", nargs="+", required=True,
@@ -270,7 +271,8 @@ def _draw(args) -> None:
         path = plot_tracking(args.traces, args.out, args.ids)
     elif args.figure == "waypoints":
         path = waypoint_figure(args.task, args.item, args.out, args.benchmark, tuple(args.distances), args.device,
-                               checkpoint=args.checkpoint, exported=args.exported, baseline=args.baseline)
+                               checkpoint=args.checkpoint, exported=args.exported, baseline=args.baseline,
+                               pretrained=args.pretrained)
     else:
         path = success_over_training(args.task, args.run, args.items, args.out, args.benchmark, args.max_checkpoints,
                                      args.robots_per_terrain, args.device)
