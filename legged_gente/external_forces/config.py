@@ -42,7 +42,9 @@ class ForcesConfig:
                            the footprint of the first foot's geoms in its body's x-y plane, each as it is turned in
                            the body (a lone sphere, or a lone upright capsule or cylinder: a disc of its radius; else
                            the rectangle around the geoms)
-    contact_threshold: float  foot normal force (N) above which a foot counts as in contact
+    contact_threshold: float  foot normal force (N) above which the force fields count a foot as in contact (its slip
+                          since touchdown, its lift-off); the env's ``foot_contacts()``, which the gait rewards read,
+                          is legged_gym's vertical contact force above 1 N, not this
     liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
                           off: its slip and rut are forgotten (shorter dips are solver chatter, not lift-off)
     min_friction: float   a ground contact whose friction is below this is made frictionless (condim 1): as mu -> 0

@@ -853,6 +853,8 @@ class LeggedRobot(VecEnv):
     # helpers for rewards
     # ------------------------------------------------------------------------------------------------------
     def foot_contacts(self) -> torch.Tensor:
+        """(num_envs, feet) bool: the foot's vertical contact force is above 1 N (legged_gym's rule; the force fields
+        keep their own, ``forces.contact_threshold`` on the normal force)."""
         return self.contact_forces[:, self.feet, 2] > 1.0
 
     # ------------------------------------------------------------------------------------------------------
