@@ -67,12 +67,12 @@ def water(shape, resolution, rng, heights, depth, flow, speed, direction, omega,
 
 
 SOIL_CHOICES = tuple(SOIL_PRESETS) + ("custom",)
-"""Built-in presets of ``legged_gente.terrain.soil`` plus "custom" (register it there first: until then a model is
-not offered it)."""
+"""Built-in presets of ``legged_gente.terrain.soil`` plus "custom"; a soil registered there under any other name is a
+choice too (``Param.registered``). Each custom one must be registered first: until then a model is not offered it."""
 
 SOIL_PRESET = Param(
     "dry_sand",
-    "soil preset; 'custom' needs register_custom_soil('custom', ...) from legged_gente.terrain.soil",
+    "soil preset; a custom one (any name) needs register_custom_soil(name, ...) from legged_gente.terrain.soil",
     choices=SOIL_CHOICES,
     registered=SOIL_PRESETS,
 )

@@ -41,18 +41,23 @@ class Param:
     choices: tuple[str, ...] | None = None
     integer: bool = False
     registered: Mapping[str, Any] | None = dataclasses.field(default=None, compare=False, repr=False)
-    """Where choices that name things registered at run time must be (the soil presets) before they can be used:
-    :meth:`offered` lists those it holds now; the terrain's ``rules`` refuse the others, saying how to register."""
+    """Where choices that name things registered at run time are kept (the soil presets): a choice must be there
+    before it can be used, and any name registered there is a choice too. :meth:`offered` lists those usable now;
+    the terrain's ``rules`` refuse a listed choice not registered yet, saying how to register it."""
 
     def offered(self) -> list[str]:
-        """The choices usable now, in order: all of ``choices``, or those ``registered`` holds."""
-        return [c for c in self.choices if self.registered is None or c in self.registered]
+        """The choices usable now, in order: all of ``choices``, or those ``registered`` holds, then the names
+        registered beyond them."""
+        if self.registered is None:
+            return list(self.choices)
+        return [c for c in self.choices if c in self.registered] + [c for c in self.registered if c not in self.choices]
 
     def check(self, name: str, value: Any, terrain: str) -> Any:
         """Return ``value`` if valid, else raise ValueError naming the terrain, the parameter and the fix."""
         if self.choices is not None:
-            if value not in self.choices:
-                raise ValueError(f"{terrain}: {name}={value!r} is not one of {self.offered()}; pick one of those.")
+            if value not in self.choices and not (self.registered is not None and value in self.registered):
+                more = "" if self.registered is None else f" ({self.doc})"  # the doc says how to register one
+                raise ValueError(f"{terrain}: {name}={value!r} is not one of {self.offered()}; pick one of those{more}.")
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ValueError(f"{terrain}: {name} must be a number ({self.unit}), got {type(value).__name__} {value!r}.")
