@@ -13,6 +13,7 @@ from pathlib import Path
 
 import torch
 
+from legged_gente.envs.base.base_config import near_misses
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg, LeggedRobotCfgPPO, rsl_rl_train_cfg
 from legged_gente.envs.terrain_arg import apply_terrain_arg
 from legged_gente.terrain.terrain import check_grid_settings
@@ -83,6 +84,8 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
             bound = f"> {low}" if kind is float else f">= {low}"
             raise ValueError(f"{name}={value!r}: must be {bound} (--set {name}=...)")
     if train_cfg is not None:
+        for message in near_misses(type(train_cfg), "train_cfg"):
+            warnings.warn(message, stacklevel=2)
         a = train_cfg.algorithm
         for field, test, bound in PPO_RANGES:
             value = getattr(a, field)

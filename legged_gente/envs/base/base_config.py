@@ -64,3 +64,39 @@ def update_from_dict(obj: object, values: dict, path: str = "cfg") -> None:
             update_from_dict(current, value, f"{path}.{key}")
         else:
             setattr(obj, key, value)
+
+
+def near_misses(cls: type, path: str, open_sections: tuple[str, ...] = ()) -> list[str]:
+    """Names a config class (or a nested section class of it) brings in that none of its bases has, but that lie
+    a slip or two (``typing_slips``) from one its bases declare, each as a sentence. A misspelt field in a subclass
+    (``paper_drag_aera = True``) is a new attribute to Python, which nothing reads, while the parent's value stays
+    in force; a name further from every declared one is the user's own setting and is left alone.
+    ``open_sections`` (dotted paths below ``path``) hold the user's own names (reward scales, observation terms)
+    and are not looked into."""
+    found = []
+    inherited = {n for base in cls.__mro__[1:] for n in dir(base) if not n.startswith("_")}
+    for name in (n for n in vars(cls) if not n.startswith("_") and n not in inherited):
+        close = [d for d in inherited if typing_slips(name, d) <= (2 if len(d) >= 6 else 1)]
+        if close:
+            found.append(f"{path}.{name} (in {cls.__qualname__}) is not a setting its parents declare, so nothing "
+                         f"reads it; did you mean {path}.{min(close, key=lambda d: typing_slips(name, d))}?")
+    for name in (n for n in dir(cls) if not n.startswith("_")):
+        value, here = getattr(cls, name), f"{path}.{name}"
+        if inspect.isclass(value) and here.split(".", 1)[-1] not in open_sections:
+            found += near_misses(value, here, open_sections)
+    return found
+
+
+def typing_slips(a: str, b: str) -> int:
+    """How many letters missing, added, changed or swapped with their neighbour turn ``a`` into ``b`` (the optimal
+    string alignment distance): a misspelt name is one or two slips from the intended one, while a name of the
+    user's own (``swing_height_target`` beside ``base_height_target``) is several."""
+    prev2, prev = None, list(range(len(b) + 1))
+    for i, ca in enumerate(a, 1):
+        row = [i] + [0] * len(b)
+        for j, cb in enumerate(b, 1):
+            row[j] = min(prev[j] + 1, row[j - 1] + 1, prev[j - 1] + (ca != cb))
+            if prev2 is not None and i > 1 and j > 1 and ca == b[j - 2] and a[i - 2] == cb:
+                row[j] = min(row[j], prev2[j - 2] + 1)
+        prev2, prev = prev, row
+    return prev[-1]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 from types import SimpleNamespace
 
 import numpy as np
@@ -22,6 +23,7 @@ import warp as wp
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
+from legged_gente.envs.base.base_config import near_misses
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
 from legged_gente.envs.base.step_runner import StepRunner
 from legged_gente.envs.base.terms import obs_terms
@@ -182,6 +184,8 @@ class LeggedRobot(VecEnv):
             if not ok:
                 raise ValueError(message + ".")
         check_ground_friction(cfg.terrain.static_friction)  # a plane builds no terrain grid, which checks it too
+        for message in near_misses(type(cfg), "cfg", open_sections=("observations",)):  # its terms: the user's
+            warnings.warn(message, stacklevel=2)
 
     def _create_terrain(self):
         if self.cfg.terrain.mesh_type == "plane":
