@@ -1,5 +1,7 @@
 """Warp device formulas against the numpy references, and the references against textbook values."""
 
+import re
+
 import numpy as np
 import pytest
 import warp as wp
@@ -295,3 +297,17 @@ def test_a_custom_soil_value_that_is_no_number_or_pair_names_its_parameter(value
     with pytest.raises(ValueError, match=r"register_custom_soil\('peat_v'\): kc=.* is not a number or a \(mean, std\) "
                                          r"pair; give e.g. kc=\(1000.0, 100.0\) or kc=1000.0"):
         register_custom_soil("peat_v", **{**params, "kc": value})
+
+
+@pytest.mark.parametrize("field, value, named", [
+    ("mu", 28.0, "math.tan(math.radians(phi))"),  # phi in degrees, not tan(phi)
+    ("K", 2.5, "2.5 cm is 0.025"),  # centimetres, not metres
+])
+def test_a_soil_value_in_the_wrong_unit_is_refused_naming_the_unit(field, value, named):
+    """No soil has tan(phi) above 2 (phi 63 deg) or a shear deformation modulus above 0.5 m (the presets: 0.01-0.05
+    m): 28 for mu is degrees, 2.5 for K centimetres."""
+    params = dict(kc=1.0e3, kphi=2.0e5, n=1.0, c=2.0e3, mu=0.4, K=0.03, bulldoze_c=0.0, bulldoze_g=0.0)
+    params[field] = value
+    with pytest.raises(ValueError, match=re.escape(named)):
+        register_custom_soil("peat", **params)
+    assert "peat" not in SOIL_PRESETS

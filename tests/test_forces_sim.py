@@ -1,6 +1,7 @@
 """TerrainForces in tiny MuJoCo-Warp worlds on the CPU: drag, energy, floating draft, tide, sinkage, friction."""
 
 import math
+import warnings
 
 import mujoco
 import mujoco_warp as mjw
@@ -486,3 +487,24 @@ def test_feet_cells_go_beside_the_contact_filter_only_when_no_foot_is_in_mujocos
     assert forces(sole, ["sole"]).feet_apart_from_filter
     assert not forces(box, ["plate"]).feet_apart_from_filter
     assert not forces(sole + box, ["sole", "plate"]).feet_apart_from_filter
+
+
+def test_a_soil_that_would_swallow_the_standing_robot_is_warned_of(custom_soil):
+    """Bekker's kphi taken from a table in kN as if in N: 300 N/m^2 (kc 0, n 1) under two 0.1 m square soles
+    sharing 25 kg sinks z = p / kphi = (25 * 9.81 / 2 / 0.01) / 300 = 40.9 m standing; 300 kN/m^2 sinks 4.1 cm, no
+    warning."""
+    wp.set_device(DEV)
+    mat = MaterialMap.rigid(SHAPE)
+    mat.soil[:] = 0
+    for name, kphi, sinks in (("peat_kn", 300.0, 25 * 9.81 / 2 / 0.01 / 300.0), ("peat", 300.0e3, None)):
+        custom_soil(name, kc=0.0, kphi=kphi, n=1.0, c=0.0, mu=0.5, K=0.02, bulldoze_c=0.0, bulldoze_g=0.0)
+        mat.soil_presets = [name]
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            make(feet_world(), mat, SoilCfg())
+        said = [str(w.message) for w in caught if "sinks" in str(w.message)]
+        if sinks is None:
+            assert said == []
+        else:
+            assert abs(sinks - 40.875) < 1e-3 and len(said) == 1
+            assert f"sinks {sinks:.3g} m" in said[0] and "kN" in said[0]

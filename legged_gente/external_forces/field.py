@@ -52,6 +52,10 @@ _NON_NEGATIVE = ("drag_coefficient", "added_mass_coefficient", "plate_drag_coeff
 # (at 4096 robots the force kernels' share of a substep fell from 5.6 to 5.0-5.1 %: docs/performance.md)
 LIMB_BLOCK_DIM = 64
 
+# a soil whose Bekker sinkage under a standing robot's feet passes this (m) has its stiffness in the wrong unit, or
+# swallows the legs: the ruts the contacts show stop at max_rut_depth, and the robot sinks until it is reset
+MAX_STANDING_SINKAGE = 0.3
+
 
 def _check_values(cfg) -> None:
     """One ValueError naming the first numeric setting out of its range (infinite ones too: an infinite density
@@ -372,11 +376,21 @@ class TerrainForces:
         else:
             self.sole_area = self.sole_length * self.sole_width
             self.bekker_width = min(self.sole_length, self.sole_width)
+        # a foot's share of the robot's weight, for the standing sinkage below
+        stance = float(mjm.body_mass[1:].sum()) * self.g / max(self.nfoot, 1) / self.sole_area
         for s, name in enumerate(material.soil_presets):  # p = (kc / b + kphi) z^n must give a sinkage
+            if table[s, K.MODEL, 0] >= 0.5:  # RFT: no Bekker law
+                continue
             k = table[s, K.KC, 0] / self.bekker_width + table[s, K.KPHI, 0]
-            if table[s, K.MODEL, 0] < 0.5 and not k > 0:
+            if not k > 0:
                 raise ValueError(f"soil {name!r}: kc/b + kphi = {k:.4g} N/m^(n+2) <= 0 for this robot's sole (b = "
                                  f"{self.bekker_width:.4g} m): Bekker's law gives no sinkage; raise kphi or kc.")
+            sinkage = (stance / k) ** (1.0 / table[s, K.N, 0])
+            if self.nfoot and sinkage > MAX_STANDING_SINKAGE:
+                warnings.warn(f"soil {name!r}: this robot standing on it sinks {sinkage:.3g} m by Bekker's law "
+                              f"(its weight shared by its {self.nfoot} feet, {stance:.4g} Pa under a sole); kc and "
+                              f"kphi are in N/m^(n+1) and N/m^(n+2), and tables in kN need 1000 times the number",
+                              stacklevel=2)
         self._setup_sole_contacts(mjm, groups)
         self._filter_key, self._filter_launches = None, []
 

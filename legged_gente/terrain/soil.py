@@ -70,6 +70,14 @@ def bulldozing_coefficients(c: float, phi_deg: float, gamma: float) -> tuple[flo
     return 0.67 * c * kpc, 0.5 * gamma * kpgamma
 
 
+MAX_MU = 2.0
+"""The largest soil friction coefficient tan(phi) accepted: 63 deg, past the internal friction angle of the soils
+Wong tabulates (Theory of Ground Vehicles, ch. 2; the presets below: 11-29 deg)."""
+MAX_K = 0.5
+"""The largest shear deformation modulus K (m) accepted: soils mobilise their shear strength over centimetres of
+slip (the presets below: K = 0.01-0.05 m); half a metre would mobilise nothing under a foot."""
+
+
 @dataclasses.dataclass(frozen=True)
 class SoilPreset:
     """One deformable soil: each parameter a ``(mean, std)`` pair in the SI units of the module docstring."""
@@ -101,6 +109,14 @@ class SoilPreset:
                 raise ValueError(f"SoilPreset.{name} mean must be > 0, got {mean}.")
             if name in ("c", "mu", "bulldoze_c", "bulldoze_g", "zeta") and mean < 0:
                 raise ValueError(f"SoilPreset.{name} mean must be >= 0, got {mean}.")
+        # bounds no soil reaches, which a value in the wrong unit crosses: tan(phi) of 28 deg given as 28, K in cm
+        if self.mu[0] > MAX_MU:
+            raise ValueError(f"SoilPreset.mu={self.mu}: mu is tan(phi), dimensionless, at most {MAX_MU} (phi "
+                             f"{math.degrees(math.atan(MAX_MU)):.0f} deg); for phi in degrees give "
+                             f"math.tan(math.radians(phi)) (28 deg: 0.53).")
+        if self.K[0] > MAX_K:
+            raise ValueError(f"SoilPreset.K={self.K}: K is Janosi-Hanamoto's shear deformation modulus in metres, "
+                             f"at most {MAX_K} m (the presets: 0.01-0.05 m); 2.5 cm is 0.025.")
         if self.model == "rft" and not self.zeta[0] > 0:  # after the pair checks: zeta is a pair here
             raise ValueError(f"SoilPreset.zeta={self.zeta}: an 'rft' soil needs zeta > 0 N/m^3 (Li et al. 2013).")
 
