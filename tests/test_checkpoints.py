@@ -368,6 +368,31 @@ def test_config_records_the_resolved_terrain_of_a_heightfield_run(tmp_path):
     assert record["generated_specs"] == {str(spec): {"version": 1, "calls": []}}
 
 
+def test_config_records_the_parameters_of_each_soil_the_robots_got():
+    """A custom soil is registered by the user's code, which may change after the run: config.json keeps each soil's
+    parameters, (mean, std) pairs in SI units, as they were."""
+    from types import SimpleNamespace
+
+    from legged_gente.scripts.train import resolved_terrain
+    from legged_gente.terrain.soil import SOIL_PRESETS, register_custom_soil
+    from legged_gente.terrain.terrain import Terrain
+
+    register_custom_soil("peat", kc=1.0e3, kphi=2.0e5, n=1.0, c=2.0e3, mu=(0.4, 0.04), K=0.03, bulldoze_c=0.0,
+                         bulldoze_g=0.0)
+    try:
+        env_cfg, _ = task_registry.get_cfgs("gente_biped")
+        env_cfg.terrain.num_rows, env_cfg.terrain.num_cols = 1, 2
+        env_cfg.terrain.terrain_types = ["soil:preset=peat", "soil:preset=mud"]
+        env_cfg.terrain.terrain_proportions = [0.5, 0.5]
+        record = json.loads(json.dumps(resolved_terrain(SimpleNamespace(terrain=Terrain(env_cfg.terrain, 2),
+                                                                        cfg=env_cfg))))
+    finally:
+        SOIL_PRESETS.pop("peat")
+    assert sorted(record["soils"]) == ["mud", "peat"]
+    assert record["soils"]["peat"]["kphi"] == [2.0e5, 0.0] and record["soils"]["peat"]["mu"] == [0.4, 0.04]
+    assert record["soils"]["mud"]["n"] == list(SOIL_PRESETS["mud"].n)
+
+
 TINY = ["--task", "gente_biped_flat", "--device", "cpu", "--num_envs", "1", "--max_iterations", "50", "--set",
         "runner.num_steps_per_env=2", "--set", "algorithm.num_mini_batches=1", "--set", "actor.hidden_dims=[8]",
         "--set", "critic.hidden_dims=[8]", "--set", "runner.save_interval=1000"]

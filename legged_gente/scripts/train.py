@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shlex
@@ -20,6 +21,7 @@ import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it
 from legged_gente.envs.base.base_config import class_to_dict
 from legged_gente.envs.task_registry import (
     apply_args, check_run_folder_names, default_log_root, is_one_folder_name, task_registry)
+from legged_gente.terrain.soil import SOIL_PRESETS
 from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
 
 
@@ -47,8 +49,9 @@ def code_version() -> dict:
 
 
 def resolved_terrain(env) -> dict:
-    """What the robots actually walk on: the tile grid's terrain names and, for generated terrains, the specs
-    themselves (a spec file may change after the run)."""
+    """What the robots actually walk on: the tile grid's terrain names, for generated terrains the specs themselves
+    (a spec file may change after the run), and the parameters of every soil on it (a custom soil is registered
+    by the user's code, which may change after the run too)."""
     terrain = env.terrain
     if terrain is None:
         return {"mode": "plane"}
@@ -58,8 +61,9 @@ def resolved_terrain(env) -> dict:
             specs[str(path)] = json.loads(Path(path).read_text())
         except (OSError, ValueError):
             specs[str(path)] = None
+    soils = {name: dataclasses.asdict(SOIL_PRESETS[name]) for name in terrain.material.soil_presets}
     return {"mode": terrain.mode, "tile_size_m": list(terrain.tile_size), "resolution_m": terrain.resolution,
-            "tiles": terrain.tile_names.tolist(), "generated_specs": specs}
+            "tiles": terrain.tile_names.tolist(), "generated_specs": specs, "soils": soils}
 
 
 def run_record(task: str, env, env_cfg, train_cfg) -> dict:
