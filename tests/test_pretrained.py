@@ -199,3 +199,36 @@ def test_train_pretrained_with_rsl_rls_ppo_names_the_warmup_setting(tmp_path):
         "--set", "algorithm.class_name=PPO", "--set", "runner.critic_warmup_iterations=0"])
     runner, _, _ = task_registry.make_alg_runner(env, args.task, args, log_root=tmp_path)
     assert type(runner.alg).__name__ == "PPO"
+
+
+def test_a_task_of_one_s_own_fine_tunes_the_policy_it_is_registered_from(capsys):
+    """A task of new rewards is a subclassed task with no policy shipped for it: registered with
+    pretrained_from=<a shipped task>, gente-train --pretrained starts it from that task's actor."""
+    from legged_gente.scripts.train import build_train_parser
+
+    env_class, env_cfg, train_cfg = task_registry.tasks[SHIPPED]
+
+    class MyCfg(env_cfg):
+        class rewards(env_cfg.rewards):
+            class scales(env_cfg.rewards.scales):
+                feet_air_time = 2.0
+
+    with pytest.raises(ValueError, match="no policy is shipped for 'gente_quadruped_flat'"):
+        task_registry.register("my_biped_flat", env_class, MyCfg, train_cfg, pretrained_from="gente_quadruped_flat")
+    task_registry.tasks.pop("my_biped_flat")
+    with pytest.raises(FileNotFoundError, match=r"pretrained_from="):
+        task_registry.shipped_policy("my_biped_flat_unregistered")
+    task_registry.register("my_biped_flat", env_class, MyCfg, train_cfg, pretrained_from=SHIPPED)
+    try:
+        args = parse_args(build_train_parser(), ["--task", "my_biped_flat", "--device", "cpu", "--num_envs", "1",
+                                                 "--pretrained"])
+        env, _ = task_registry.make_env(args.task, args)
+        runner, _, _ = task_registry.make_alg_runner(env, args.task, args, log_root=None)
+        assert f"Starting from the policy shipped for {SHIPPED} (my_biped_flat's pretrained_from)" in \
+            capsys.readouterr().out
+        shipped = load_checkpoint(policies_root() / SHIPPED / "model.pt")["actor_state_dict"]
+        for key, value in runner.alg.actor.state_dict().items():
+            assert torch.equal(value.cpu(), shipped[key])
+    finally:
+        task_registry.tasks.pop("my_biped_flat")
+        task_registry.pretrained_from.pop("my_biped_flat")

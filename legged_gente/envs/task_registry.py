@@ -190,11 +190,14 @@ def nominal(env_cfg: LeggedRobotCfg) -> None:
 class TaskRegistry:
     def __init__(self) -> None:
         self.tasks: dict[str, tuple[type, type, type]] = {}
+        self.pretrained_from: dict[str, str] = {}
 
-    def register(self, name: str, env_class: type, env_cfg: type[LeggedRobotCfg], train_cfg: type[LeggedRobotCfgPPO]):
+    def register(self, name: str, env_class: type, env_cfg: type[LeggedRobotCfg], train_cfg: type[LeggedRobotCfgPPO],
+                 pretrained_from: str | None = None):
         """Name a task (env class, env config class, train config class). The classes are checked here, where a
         user's task module calls this, not at the first command; a name is taken once (the same three again are
-        fine: a module imported twice)."""
+        fine: a module imported twice). ``pretrained_from``: a task with a shipped policy that ``--pretrained``
+        starts this one from (a task subclassed from it, with the same observations and actions)."""
         from legged_gente.envs.base.legged_robot import LeggedRobot
 
         for what, value, base in (("env_class", env_class, LeggedRobot), ("env_cfg", env_cfg, LeggedRobotCfg),
@@ -210,6 +213,13 @@ class TaskRegistry:
             raise ValueError(f"task {name!r} is already registered ({taken}); register {env_cfg.__name__} under "
                              f"another name")
         self.tasks[name] = task
+        if pretrained_from is not None:
+            from legged_gente.utils.checkpoints import shipped_tasks
+
+            if pretrained_from not in shipped_tasks():
+                raise ValueError(f"register({name!r}, ..., pretrained_from={pretrained_from!r}): no policy is shipped "
+                                 f"for {pretrained_from!r}; shipped: {', '.join(shipped_tasks()) or 'none'}")
+            self.pretrained_from[name] = pretrained_from
 
     def get_cfgs(self, name: str) -> tuple[LeggedRobotCfg, LeggedRobotCfgPPO]:
         if name not in self.tasks:
@@ -218,6 +228,15 @@ class TaskRegistry:
                            f"(docs/new_robot.md)")
         _, env_cfg, train_cfg = self.tasks[name]
         return env_cfg(), train_cfg()
+
+    def shipped_policy(self, name: str) -> tuple[str, Path]:
+        """The task whose shipped policy ``--pretrained`` starts ``name`` from, and its ``model.pt``: the policy shipped
+        for ``name``, else the one of the task it was registered with ``pretrained_from`` (a task of new rewards on
+        the biped starts from the biped's policy; its sizes are checked when it loads)."""
+        from legged_gente.utils.checkpoints import pretrained_policy, shipped_tasks
+
+        source = name if name in shipped_tasks() else self.pretrained_from.get(name, name)
+        return source, pretrained_policy(source)[0]
 
     def get_play_cfgs(self, name: str, num_envs: int) -> tuple[LeggedRobotCfg, LeggedRobotCfgPPO]:
         """The task's configs for watching a policy (gente-play, gente-view --play), as legged_gym's play: at most
@@ -257,10 +276,10 @@ class TaskRegistry:
         unreadable latest checkpoint falls back to the newest readable one). ``log_root``: where runs are
         ("default": ``default_log_root()``; None: no run folder). ``policy_only``: load the checkpoint's policy
         alone, for playing it (an actor-only ``model.pt`` plays too; training needs the critic and optimiser)."""
-        from legged_gente.utils.checkpoints import find_checkpoint, pretrained_policy
+        from legged_gente.utils.checkpoints import find_checkpoint
         from legged_gente.utils.distributed import GenteOnPolicyRunner
 
-        pretrained = pretrained_policy(name)[0] if getattr(args, "pretrained", False) else None
+        source, pretrained = self.shipped_policy(name) if getattr(args, "pretrained", False) else (None, None)
         if train_cfg is None:
             _, train_cfg = self.get_cfgs(name)
             if pretrained is not None:
@@ -312,7 +331,8 @@ class TaskRegistry:
                                      f"legged_gente.utils.ppo:GentePPO, not {train_cfg.algorithm.class_name}; "
                                      f"set it to 0")
                 runner.alg.freeze_actor(warmup)
-            message = (f"Starting from the policy shipped for {name} ({pretrained}): its actor; the critic, "
+            shipped_for = source if source == name else f"{source} ({name}'s pretrained_from)"
+            message = (f"Starting from the policy shipped for {shipped_for} ({pretrained}): its actor; the critic, "
                        f"optimiser and curriculum start afresh")
             if warmup:
                 message += f"; the first {warmup} iterations train the critic alone"
@@ -326,9 +346,7 @@ class TaskRegistry:
     def make_pretrained_runner(self, env, name: str, train_cfg: LeggedRobotCfgPPO | None = None):
         """A runner (no run folder) with the policy shipped for task ``name`` loaded (actor only), its network
         sizes taken from the shipped config. The checkpoint's path."""
-        from legged_gente.utils.checkpoints import pretrained_policy
-
-        path, _ = pretrained_policy(name)
+        _, path = self.shipped_policy(name)
         return self.make_policy_runner(env, name, path, train_cfg), path
 
     def make_policy_runner(self, env, name: str, checkpoint: Path, train_cfg: LeggedRobotCfgPPO | None = None):

@@ -18,7 +18,6 @@ from legged_gente.utils.args import (
 import_mujoco("gente-play")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
 from legged_gente.envs.task_registry import apply_args, check_run_folder_names, default_log_root, task_registry
-from legged_gente.utils.checkpoints import pretrained_policy
 from legged_gente.utils.export import deployment_metadata, export_onnx
 
 
@@ -81,7 +80,7 @@ def play(args) -> dict:
 
         check_offscreen_rendering()
     if getattr(args, "pretrained", False):
-        pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
+        task_registry.shipped_policy(args.task)  # a task without a shipped policy: say so before building anything
         check_log_root(args.log_root, default_log_root())  # its exports go there
     env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, 16)
     apply_args(args, env_cfg, train_cfg)

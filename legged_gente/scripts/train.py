@@ -149,10 +149,10 @@ def build_train_parser():
                              "build began (kernel compilation included), saving a checkpoint to continue with "
                              "--resume (for time-limited jobs; no signal needed)")
     parser.add_argument("--pretrained", action="store_true",
-                        help="start from the policy shipped for --task (its actor; the critic, optimiser and "
-                             "curriculum start afresh, and the critic trains alone for the first "
-                             "runner.critic_warmup_iterations, 800 by default): fine-tune it on changed physics, "
-                             "terrain or rewards")
+                        help="start from the policy shipped for --task, or for the task it was registered with "
+                             "pretrained_from (its actor; the critic, optimiser and curriculum start afresh, and the "
+                             "critic trains alone for the first runner.critic_warmup_iterations, 800 by default): "
+                             "fine-tune it on changed physics, terrain or rewards")
     return parser
 
 

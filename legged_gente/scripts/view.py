@@ -198,9 +198,9 @@ def main(argv=None) -> None:
     rollout, mjm, play, stop_play = None, None, None, threading.Event()
     try:
         if args.pretrained:
-            from legged_gente.utils.checkpoints import pretrained_policy
+            from legged_gente.envs.task_registry import task_registry
 
-            pretrained_policy(args.task)  # a task without a shipped policy: say so before building anything
+            task_registry.shipped_policy(args.task)  # a task without a shipped policy: say so before building anything
         if args.play:
             if args.record:
                 check_output(args.record, "--record", folder=False)

@@ -243,15 +243,21 @@ def policies_root() -> Path:
     return Path(str(importlib.resources.files("legged_gente"))) / "resources" / "policies"  # package data
 
 
+def shipped_tasks() -> list[str]:
+    """The tasks with a policy shipped in the package."""
+    root = policies_root()
+    return sorted(p.name for p in root.iterdir() if (p / "model.pt").is_file()) if root.is_dir() else []
+
+
 def pretrained_policy(task: str) -> tuple[Path, dict]:
     """The shipped policy of ``task``: its checkpoint and its run's config (network sizes, code commit, note)."""
     folder = policies_root() / task
     if not (folder / "model.pt").is_file():
-        shipped = sorted(p.name for p in policies_root().iterdir() if (p / "model.pt").is_file()) \
-            if policies_root().is_dir() else []
         raise FileNotFoundError(f"--pretrained: no policy is shipped for task {task!r} (shipped: "
-                                f"{', '.join(shipped) or 'none'}); train one with gente-train --task {task}, then "
-                                f"load it from its run (gente-play --load_run, gente-evaluate --checkpoint).")
+                                f"{', '.join(shipped_tasks()) or 'none'}); train one with gente-train --task {task}, "
+                                f"then load it from its run (gente-play --load_run, gente-evaluate --checkpoint), or "
+                                f"start a task of your own from a shipped one: task_registry.register(..., "
+                                f"pretrained_from='{(shipped_tasks() or ['TASK'])[0]}').")
     return folder / "model.pt", json.loads((folder / "config.json").read_text())
 
 
