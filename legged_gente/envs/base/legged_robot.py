@@ -99,6 +99,7 @@ class LeggedRobot(VecEnv):
         self.sim = Simulation(self.mjm, self.num_envs, device, cfg.sim)
         self.num_actions = len(self.layout.joint_names)
         self.forces = self._create_forces()
+        self._foot_terrain_obs = self._foot_terrain_view()
 
         self._read_settings()
         self._init_buffers()
@@ -186,6 +187,16 @@ class LeggedRobot(VecEnv):
         check_ground_friction(cfg.terrain.static_friction)  # a plane builds no terrain grid, which checks it too
         for message in near_misses(type(cfg), "cfg", open_sections=("observations",)):  # its terms: the user's
             warnings.warn(message, stacklevel=2)
+
+    def _foot_terrain_view(self) -> torch.Tensor:
+        """(num_envs, feet, values) view of the force fields' observation for ``foot_terrain``; zeros on a plane."""
+        from legged_gente.external_forces.field import privileged_obs_size
+        from legged_gente.external_forces.kernels import OBS_PER_FOOT
+
+        obs = self._force_obs
+        if obs is None:
+            obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces), device=self.device)
+        return obs.view(self.num_envs, -1, OBS_PER_FOOT)
 
     def _create_terrain(self):
         if self.cfg.terrain.mesh_type == "plane":
@@ -856,6 +867,16 @@ class LeggedRobot(VecEnv):
     # ------------------------------------------------------------------------------------------------------
     # helpers for rewards
     # ------------------------------------------------------------------------------------------------------
+    def foot_terrain(self) -> dict[str, torch.Tensor]:
+        """What lies under each foot of ``forces.foot_geom_names`` at the end of the last step, for rewards: views of
+        the force fields' observation in SI units, each (num_envs, feet): ``water_depth`` (m), ``flow`` (m/s, x and
+        y: (num_envs, feet, 2)), ``on_soil`` (bool), ``sinkage`` (m, the foot's rut) and ``normal_force`` (N, the
+        terrain's push on the foot, summed over its contacts). On a plane, or a terrain with no water, soil or
+        friction map, all are zero (False)."""
+        obs = self._foot_terrain_obs
+        return {"water_depth": obs[..., 0], "flow": obs[..., 1:3], "on_soil": obs[..., 3] > 0.5,
+                "sinkage": obs[..., 4], "normal_force": 100.0 * obs[..., 5]}
+
     def foot_contacts(self) -> torch.Tensor:
         """(num_envs, feet) bool: the foot's vertical contact force is above 1 N (legged_gym's rule; the force fields
         keep their own, ``forces.contact_threshold`` on the normal force)."""
