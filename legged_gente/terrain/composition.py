@@ -252,6 +252,10 @@ class Smoothing:
             raise ValueError(f"smoothing: sigma={self.sigma!r} m must be in (0, {MAX_SMOOTHING_SIGMA}] m.")
 
 
+TILE_DICT_KEYS = {"size_x", "size_y", "resolution", "seed", "parts", "smoothing"}
+"""The keys of :meth:`TileSpec.to_dict`'s form."""
+
+
 @dataclasses.dataclass
 class TileSpec:
     """A tile of ``size_x`` x ``size_y`` m at ``resolution`` m: parts painted in order, random draws from ``seed``.
@@ -321,7 +325,14 @@ def tile_spec_from_document(data: Any, base_dir: str | Path | None = None) -> Ti
     relative to ``base_dir``, the spec file's folder) the ground under the calls: one value per ``resolution``
     cell, times ``vertical_scale`` metres; ``size_x`` and ``size_y`` must be its cells times ``resolution``.
     An optional ``"smoothing": [{"region", "axis": "x" | "y", "sigma" (m)}]`` filters the heights after the
-    geometric calls (:class:`Smoothing`)."""
+    geometric calls (:class:`Smoothing`). A tile composed in Python is taken in its own form too, the dict of
+    :meth:`TileSpec.to_dict` (``parts`` of ``ops`` in place of ``calls``), which builds the very same tile."""
+    if isinstance(data, dict) and "parts" in data and "calls" not in data:  # TileSpec.to_dict()'s form
+        unknown = sorted(set(data) - TILE_DICT_KEYS)
+        if unknown:
+            raise ValueError(f"tile spec dict has unknown key(s) {unknown}; its keys are {sorted(TILE_DICT_KEYS)} "
+                             f"(TileSpec.to_dict)")
+        return TileSpec.from_dict(data)
     if isinstance(data, dict) and data.get("version", SPEC_VERSION) != SPEC_VERSION:
         raise ValueError(f"terrain spec format version {data['version']!r}; this code reads version {SPEC_VERSION}: "
                          f"generate the spec again")
