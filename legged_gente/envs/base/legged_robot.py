@@ -99,10 +99,10 @@ class LeggedRobot(VecEnv):
         self.sim = Simulation(self.mjm, self.num_envs, device, cfg.sim)
         self.num_actions = len(self.layout.joint_names)
         self.forces = self._create_forces()
-        self._foot_terrain_obs = self._foot_terrain_view()
 
         self._read_settings()
         self._init_buffers()
+        self._foot_terrain_obs = self._foot_terrain_view()
         self._prepare_reward_function()
         self._init_origins()
         self._randomize_model()
@@ -189,14 +189,13 @@ class LeggedRobot(VecEnv):
             warnings.warn(message, stacklevel=2)
 
     def _foot_terrain_view(self) -> torch.Tensor:
-        """(num_envs, feet, values) view of the force fields' observation for ``foot_terrain``; zeros on a plane."""
-        from legged_gente.external_forces.field import privileged_obs_size
+        """(num_envs, feet, values) view of the force fields' observation for ``foot_terrain``; on a plane, where
+        no force field reads ``forces.foot_geom_names``, zeros for each of the env's feet."""
         from legged_gente.external_forces.kernels import OBS_PER_FOOT
 
-        obs = self._force_obs
-        if obs is None:
-            obs = torch.zeros(self.num_envs, privileged_obs_size(self.mjm, self.cfg.forces), device=self.device)
-        return obs.view(self.num_envs, -1, OBS_PER_FOOT)
+        if self._force_obs is None:
+            return torch.zeros(self.num_envs, len(self.feet), OBS_PER_FOOT, device=self.device)
+        return self._force_obs.view(self.num_envs, -1, OBS_PER_FOOT)
 
     def _create_terrain(self):
         if self.cfg.terrain.mesh_type == "plane":
@@ -871,8 +870,8 @@ class LeggedRobot(VecEnv):
         """What lies under each foot of ``forces.foot_geom_names`` at the end of the last step, for rewards: views of
         the force fields' observation in SI units, each (num_envs, feet): ``water_depth`` (m), ``flow`` (m/s, x and
         y: (num_envs, feet, 2)), ``on_soil`` (bool), ``sinkage`` (m, the foot's rut) and ``normal_force`` (N, the
-        terrain's push on the foot, summed over its contacts). On a plane, or a terrain with no water, soil or
-        friction map, all are zero (False)."""
+        terrain's push on the foot, summed over its contacts). On a plane (then one per foot body), or a terrain with
+        no water, soil or friction map, all are zero (False)."""
         obs = self._foot_terrain_obs
         return {"water_depth": obs[..., 0], "flow": obs[..., 1:3], "on_soil": obs[..., 3] > 0.5,
                 "sinkage": obs[..., 4], "normal_force": 100.0 * obs[..., 5]}
