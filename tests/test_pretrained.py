@@ -41,6 +41,16 @@ def test_play_pretrained(tmp_path, capsys):
         assert torch.equal(value, shipped[key])
 
 
+def test_play_logs_each_step_s_command_not_the_last_one(tmp_path):
+    """On the CPU, .cpu() of a slice is the live tensor: every logged command was the rollout's last. Episodes of
+    0.2 s (10 steps) over 30 steps resample robot 0's command at each reset, so the logged commands differ."""
+    args = parse_args(play_script.build_play_parser(), [
+        "--task", SHIPPED, "--device", "cpu", "--num_envs", "1", "--headless", "--pretrained", "--steps", "30",
+        "--log_root", str(tmp_path), "--set", "env.episode_length_s=0.2"])
+    log = play_script.play(args)["log"]
+    assert log["reset"].sum() >= 2 and len(np.unique(log["cmd"], axis=0)) >= 3
+
+
 def test_evaluate_pretrained_records_the_file(tmp_path, capsys):
     args = evaluate_script.build_parser().parse_args([
         "--task", SHIPPED, "--pretrained", "--out", str(tmp_path), "--device", "cpu", "--limit", "1",

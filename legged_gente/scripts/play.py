@@ -109,7 +109,7 @@ def play(args) -> dict:
     with torch.inference_mode():
         for _ in range(args.steps):
             obs, _, _, _ = env.step(policy(obs))
-            log["cmd"].append(env.commands[0, :3].cpu().numpy())
+            log["cmd"].append(env.commands[0, :3].cpu().numpy().copy())  # on the CPU .cpu() is the live tensor
             log["vel"].append(torch.cat([env.base_lin_vel[0, :2], env.base_ang_vel[0, 2:3]]).cpu().numpy())
             log["reset"].append(bool(env.reset_buf[0]))  # the episode of robot 0 ended at this step
             log["fall"].append(bool(env.reset_buf[0] & ~env.time_out_buf[0]))
