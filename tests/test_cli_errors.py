@@ -619,3 +619,16 @@ def test_mujoco_not_installed_says_so_not_opengl(capsys, monkeypatch):
     assert stop.value.code == 2 and len(line.splitlines()) == 1, line
     assert line.startswith("gente-train: error: MuJoCo is not installed") and "pip install" in line, line
     assert "OpenGL" not in line and "MUJOCO_GL" not in line, line
+
+
+def test_gente_generate_takes_verbose_for_the_traceback(tmp_path, monkeypatch, capsys):
+    """As the other gente-* commands: an error is one line, and --verbose shows its traceback instead."""
+    def fail(*args, **kwargs):
+        raise ValueError("the output folder cannot be written")
+
+    monkeypatch.setattr(generate_script, "generate_spec", fail)
+    argv = ["--text", "a hill", "--out", str(tmp_path / "o")]
+    assert generate_script.main(argv) == 2
+    assert capsys.readouterr().err.strip() == "gente-generate: error: the output folder cannot be written"
+    with pytest.raises(ValueError, match="cannot be written"):
+        generate_script.main([*argv, "--verbose"])

@@ -31,7 +31,7 @@ from legged_gente.generation.validation import (
     spec_field_problem,
     tile_problem,
 )
-from legged_gente.utils.args import Parser, check_output, flag, one_line, seed
+from legged_gente.utils.args import Parser, add_verbose, check_output, flag, one_line, quiet_third_party, seed
 
 
 def _positive(most: float = math.inf):
@@ -81,12 +81,14 @@ def build_parser() -> Parser:
     p.add_argument("--name", help="terrain name (snake_case); default from the text or image file name")
     p.add_argument("--base", default=DEFAULT_BASE, help=f"terrain config class to subclass (default {DEFAULT_BASE})")
     p.add_argument("--mesh", choices=("obj", "glb", "ply", "stl"), help="also write the terrain as a mesh")
+    add_verbose(p)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    quiet_third_party(args.verbose)
     if args.text is not None and not args.text.strip():
         parser.error("--text is empty; describe the scene, e.g. --text 'a knee-deep river in a forest'.")
     if not args.text and args.image is None:
@@ -158,8 +160,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"warning: {printable(warning)}", file=sys.stderr)
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
     except (ValidationError, GenerationError) as exc:  # the server or the model failed; the planner asks none, so
+        if args.verbose:
+            raise
         return _error(exc, 1 if args.backend == "openai" else 2)  # its refusal is of the text, image or tile
     except (ValueError, OSError) as exc:  # the user's input (e.g. the API key's variable) or the output folder
+        if args.verbose:
+            raise
         return _error(exc, 2)
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0
