@@ -472,3 +472,27 @@ def test_resuming_refuses_other_network_sizes_in_one_line(runner, tmp_path):
                                          r"recorded in .*config.json; leave it out") as error:
         task_registry.make_alg_runner(runner.env, "gente_biped_flat", args, log_root=tmp_path)
     assert "\n" not in str(error.value)
+
+
+def test_the_code_version_counts_changes_to_tracked_files_only(tmp_path, monkeypatch):
+    """The README's generate examples write terrains/ into the checkout: an untracked file is no change to the code,
+    so git_dirty stays False; a changed tracked file makes it True. Checked on a checkout of its own."""
+    import shutil
+    import subprocess
+
+    from legged_gente.scripts import train as train_script
+
+    repo = tmp_path / "checkout"
+    (repo / "legged_gente" / "scripts").mkdir(parents=True)
+    (repo / "legged_gente" / "__init__.py").write_text("")
+    shutil.copy(train_script.__file__, repo / "legged_gente" / "scripts" / "train.py")
+    git = lambda *cmd: subprocess.run(["git", "-C", str(repo), *cmd], check=True, capture_output=True)  # noqa: E731
+    git("init", "-q")
+    git("add", ".")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "c")
+    monkeypatch.setattr(train_script, "__file__", str(repo / "legged_gente" / "scripts" / "train.py"))
+    (repo / "terrains").mkdir()
+    (repo / "terrains" / "spec.json").write_text("{}")
+    assert train_script.code_version()["git_dirty"] is False
+    (repo / "legged_gente" / "__init__.py").write_text("# changed\n")
+    assert train_script.code_version()["git_dirty"] is True

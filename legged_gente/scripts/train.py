@@ -26,8 +26,9 @@ from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
 
 
 def code_version() -> dict:
-    """The code a run was made with: the git commit (and whether the checkout had changes) when legged_gente runs
-    from a git checkout, else the installed package's version."""
+    """The code a run was made with: the git commit (and whether the checkout's tracked files had changes: the
+    terrains, runs and outputs a user writes inside it are untracked and not counted) when legged_gente runs from a
+    git checkout, else the installed package's version."""
     from importlib.metadata import PackageNotFoundError, version
 
     try:
@@ -42,7 +43,7 @@ def code_version() -> dict:
 
         if Path(git("rev-parse", "--show-toplevel")).resolve() != source:
             raise ValueError("legged_gente is not the checkout's top level")  # e.g. installed inside another repo
-        return {"git_commit": git("rev-parse", "HEAD"), "git_dirty": bool(git("status", "--porcelain")),
+        return {"git_commit": git("rev-parse", "HEAD"), "git_dirty": bool(git("status", "--porcelain", "--untracked-files=no")),
                 "package_version": package}
     except (OSError, ValueError, subprocess.SubprocessError):
         return {"git_commit": None, "package_version": package}
