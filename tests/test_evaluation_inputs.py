@@ -91,3 +91,17 @@ def test_a_generated_terrain_folder_names_its_spec_not_a_manifest(tmp_path):
     (tmp_path / "spec.json").write_text("{}")  # what gente-generate writes, beside its terrain_cfg.py
     with pytest.raises(FileNotFoundError, match=r"holds one generated terrain, not a benchmark .*pass its .*spec\.json"):
         load_benchmark(tmp_path)
+
+
+def test_a_settle_time_as_long_as_the_episode_is_refused_before_the_envs_are_built(tmp_path, capsys, monkeypatch):
+    """--episode_s 1 with the default --settle_s 1 leaves no step to measure: one line naming the flag, before the
+    evaluation builds its envs and loads the policy."""
+    import legged_gente.evaluation.evaluator as evaluator
+    from legged_gente.scripts.evaluate import main
+
+    monkeypatch.setattr(evaluator, "Evaluation", lambda *a, **k: pytest.fail("the envs were built"))
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(BENCHMARK), "--items", ITEM,
+              "--episode_s", "1", "--device", "cpu", "--out", str(tmp_path), "--no_progress"])
+    assert exit_info.value.code == 2
+    assert capsys.readouterr().err.strip().startswith("gente-evaluate: error: --settle_s 1.0 s leaves nothing")

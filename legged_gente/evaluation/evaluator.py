@@ -102,6 +102,18 @@ def episode_steps(episode_s: float, dt: float) -> int:
     return math.ceil(round(episode_s / dt, 9))
 
 
+def check_settle(settle_s: float, num_steps: int, dt: float) -> None:
+    """``settle_s``, the start of an episode of ``num_steps`` policy steps of ``dt`` s left out of the tracking error,
+    or a one-line error: it must leave a step to measure."""
+    if not settle_s >= 0.0:
+        raise ValueError(f"settle_s must be >= 0 s, got {settle_s}.")
+    if not math.isfinite(settle_s):
+        raise ValueError(f"settle_s must be a finite time in s, got {settle_s}.")
+    if settle_steps(settle_s, dt) >= num_steps:
+        raise ValueError(f"settle_s {settle_s} s leaves nothing of the {num_steps * dt:g} s episode to measure (steps "
+                         f"of {dt:g} s); give a value in [0, episode_s - one step).")
+
+
 class Recorder:
     """Per-robot accumulators on the env's device, updated after every policy step from what the step left."""
 
@@ -286,13 +298,7 @@ class Evaluation:
         from tqdm import tqdm
 
         env = self.env
-        if not settle_s >= 0.0:
-            raise ValueError(f"settle_s must be >= 0 s, got {settle_s}.")
-        if not math.isfinite(settle_s):
-            raise ValueError(f"settle_s must be a finite time in s, got {settle_s}.")
-        if settle_steps(settle_s, self.dt) >= self.num_steps:
-            raise ValueError(f"settle_s {settle_s} s leaves nothing of the {self.num_steps * self.dt:g} s episode to "
-                             f"measure (steps of {self.dt:g} s); give a value in [0, episode_s - one step).")
+        check_settle(settle_s, self.num_steps, self.dt)
         task = task or self.make_task(tile_edge_margin=tile_edge_margin)  # waypoint paths within this run's margin
         torch.manual_seed(self.seed)
         if env.forces is not None:

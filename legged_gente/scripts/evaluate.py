@@ -138,7 +138,8 @@ def check_network_overrides(args) -> None:
 
 def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
-    from legged_gente.evaluation.evaluator import Evaluation, load_policy_and_file
+    from legged_gente.envs.task_registry import task_registry
+    from legged_gente.evaluation.evaluator import Evaluation, check_settle, episode_steps, load_policy_and_file
     from legged_gente.evaluation.report import build_report, check_success_rule, write_reports
     from legged_gente.evaluation.tasks import check_task_settings, waypoint_episode_s
 
@@ -166,6 +167,13 @@ def evaluate(args) -> dict:
     device = resolve_device(args.device)
     episode_s = args.episode_s if args.episode_s is not None else (
         waypoint_episode_s(settings["speed"]) if args.mode == "waypoints" else 10.0)
+    env_cfg, _ = task_registry.get_cfgs(args.task)
+    dt = env_cfg.sim.dt * env_cfg.control.decimation
+    if math.isfinite(episode_s) and episode_s > 0:  # a bad episode_s: the evaluation says so
+        try:  # before the (slow) evaluation envs are built, in the flag's name
+            check_settle(args.settle_s, episode_steps(episode_s, dt), dt)
+        except ValueError as error:
+            raise ValueError(f"--{error}") from None
     evaluation = Evaluation(args.task, items, args.robots_per_terrain, device, episode_s, args.mode, args.seed)
     apply_overrides(args.overrides, None, evaluation.train_cfg)
     policy, policy_file = load_policy_and_file(evaluation, args.checkpoint, args.exported, args.baseline,
