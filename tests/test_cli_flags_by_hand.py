@@ -2,6 +2,7 @@
 cannot give (inf), a flag and a --set that both set one field, a --run_name that is not one folder name. Parse
 and config only: no env is built (the task's env class is replaced by a stand-in that stops the command)."""
 
+import re
 from pathlib import Path
 
 import pytest
@@ -54,6 +55,9 @@ def overridden(overrides):
     "rewards.scales.tracking_lin_vel=-1e999",
     "domain_rand.friction_range=[0.5, 1e999]",
     "sim.dt=1" + "0" * 400,
+    "rewards.scales.tracking_lin_vel=nan",  # words to Python's literals: a numeric field takes them as none of its
+    "sim.dt=-inf",  # values, and said so only by their type
+    "sim.dt=Infinity",
 ])
 def test_set_refuses_a_number_that_is_not_finite(override):
     with pytest.raises(ValueError, match="not a finite number"):
@@ -151,3 +155,12 @@ def test_run_folder_names_are_one_folder_each(capsys, no_env, flags, field):
     --run_name flag's check; each is now refused before anything is built or written."""
     line = one_line_error(capsys, [*CPU, *flags])
     assert line.startswith(f"gente-train: error: runner.{field}=") and "give a name without '/'" in line
+
+
+@pytest.mark.parametrize("override, listed", [
+    ("foo.bar=1", "its sections: actor, algorithm, asset, commands"),
+    ("terrain.foo.bar=1", "terrain has fields only: --set terrain.FIELD=..."),
+])
+def test_set_of_an_unknown_section_lists_the_sections(override, listed):
+    with pytest.raises(ValueError, match=re.escape(listed)):
+        overridden([override])

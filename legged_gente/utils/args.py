@@ -304,9 +304,10 @@ def _override_value(text: str, current, name: str, owner):
         return None
     if isinstance(current, str) and not isinstance(value, str) and value is not None:
         value = text
-    if _not_finite(value):  # 1e999 reads as inf; a 400-digit integer overflows a float
-        raise ValueError(f"--set {name}={text}: {text} is not a finite number (beyond about 1.8e308); give a finite "
-                         f"value")
+    if _not_finite(value) or (isinstance(value, str) and isinstance(current, (int, float)) and not isinstance(
+            current, bool) and value.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")):
+        # 1e999 reads as inf; a 400-digit integer overflows a float; nan and inf are words to Python's literals
+        raise ValueError(f"--set {name}={text}: {text} is not a finite number; give a finite value")
     expected = type(current)
     if _is_section(current):
         fields = sorted(n for n in dir(current) if not n.startswith("_"))
@@ -468,7 +469,12 @@ def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
             parent, owner = owner, getattr(owner, part, None)
             prefix = ".".join(path[:i + 1])
             if owner is None and not hasattr(parent, part):
-                raise ValueError(f"--set {text!r}: {prefix} is not a config section of {type(cfg).__name__}")
+                tops = [c for c in (env_cfg, train_cfg) if c is not None] if i == 0 else [parent]
+                sections = sorted({n for c in tops for n in dir(c) if not n.startswith("_") and _is_section(getattr(c, n))})
+                where = type(cfg).__name__ if i == 0 else ".".join(path[:i])
+                raise ValueError(f"--set {text!r}: {prefix} is not a config section of {where}; "
+                                 + (f"its sections: {', '.join(sections)}" if sections else
+                                    f"{where} has fields only: --set {where}.FIELD=..."))
             if not _is_section(owner):
                 raise ValueError(f"--set {text!r}: {prefix} is a field ({type(owner).__name__}), not a config "
                                  f"section; set it whole: --set {prefix}={owner!r}")
