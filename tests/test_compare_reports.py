@@ -48,8 +48,12 @@ def test_a_clear_difference_is_resolved(tmp_path):
 
 def test_reports_of_other_terrains_are_refused(tmp_path):
     other = A_ROWS[:3] + [("x9", "image", "", 0.8)]
-    with pytest.raises(ValueError, match=r"compare evaluations of the same benchmark: .*b.csv lacks \['i1'\], has \['x9'\]"):
+    with pytest.raises(ValueError, match=r"compare evaluations of the same benchmark: .*b.csv lacks \['i1'\] and has "
+                                         r"\['x9'\] that .*a.csv has not\.$"):
         compare_reports(_report(tmp_path / "a.csv", A_ROWS), _report(tmp_path / "b.csv", other))
+    # an evaluation of fewer terrains (--items): what it lacks, with no empty list of extras
+    with pytest.raises(ValueError, match=r"b.csv lacks \['i1'\]\.$"):
+        compare_reports(_report(tmp_path / "a.csv", A_ROWS), _report(tmp_path / "b.csv", A_ROWS[:3]))
 
 
 def test_cli_prints_a_table_and_errors_are_one_line(tmp_path, capsys):

@@ -93,8 +93,9 @@ def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") 
     first, second = read_terrains(a, metric), read_terrains(b, metric)
     check_made_alike(a, b)
     if first.keys() != second.keys():
-        raise ValueError(f"compare evaluations of the same benchmark: {b} lacks {sorted(first.keys() - second.keys())}, "
-                         f"has {sorted(second.keys() - first.keys())} that {a} has not.")
+        lacks, extra = sorted(first.keys() - second.keys()), sorted(second.keys() - first.keys())
+        said = [f"lacks {lacks}"] * bool(lacks) + [f"has {extra} that {a} has not"] * bool(extra)
+        raise ValueError(f"compare evaluations of the same benchmark: {b} {' and '.join(said)}.")
     pairs = {name: (groups, first[name][1], value) for name, (groups, value) in second.items()
              if math.isfinite(first[name][1]) and math.isfinite(value)}
     if not pairs:
