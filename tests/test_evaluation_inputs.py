@@ -105,3 +105,29 @@ def test_a_settle_time_as_long_as_the_episode_is_refused_before_the_envs_are_bui
               "--episode_s", "1", "--device", "cpu", "--out", str(tmp_path), "--no_progress"])
     assert exit_info.value.code == 2
     assert capsys.readouterr().err.strip().startswith("gente-evaluate: error: --settle_s 1.0 s leaves nothing")
+
+
+def test_one_generated_terrain_is_evaluated_through_its_spec_json(tmp_path, capsys):
+    """gente-evaluate --benchmark terrains/x said 'pass its spec.json', and the spec.json was then refused: a spec is
+    now a benchmark of one item, its id the spec's name and its kind text (image when an image made it)."""
+    import json
+
+    from legged_gente.evaluation.benchmark import load_benchmark
+    from legged_gente.scripts.evaluate import main
+
+    folder = tmp_path / "mudcreek"
+    folder.mkdir()
+    (folder / "spec.json").write_text(json.dumps({
+        "version": 1, "name": "mud_creek", "size_x": 8.0, "size_y": 8.0, "resolution": 0.1, "seed": 0,
+        "calls": [{"tool": "soil", "region": "left", "params": {"preset": "mud"}}],
+        "source": {"text": "a muddy creek"}, "backend": "planner", "model": None}))
+    with pytest.raises(SystemExit):
+        main(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(folder), "--out", str(tmp_path / "a")])
+    assert f"pass its {folder / 'spec.json'}" in capsys.readouterr().err
+    (item,) = load_benchmark(folder / "spec.json")
+    assert (item.id, item.kind, item.prompt) == ("mud_creek", "text", "a muddy creek")
+    main(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(folder / "spec.json"), "--device", "cpu",
+          "--robots_per_terrain", "1", "--episode_s", "0.1", "--settle_s", "0", "--out", str(tmp_path / "b"),
+          "--no_progress"])
+    rows = (tmp_path / "b" / "report.csv").read_text().splitlines()
+    assert rows[1].startswith("terrain,mud_creek,text,soil,1,")

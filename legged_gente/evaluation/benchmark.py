@@ -47,6 +47,15 @@ class Item:
         return TerrainSpec.load(self.spec_path)
 
 
+def _one_spec(path: Path, ids: list[str] | None) -> list[Item]:
+    """The one item of a spec file: its id the spec's name, its kind "image" when an image made it, else "text"."""
+    spec = TerrainSpec.load(path)
+    item = Item(spec.name, "image" if "image_sha256" in spec.source else "text", path, spec.source.get("text"))
+    if ids is not None and list(ids) != [item.id]:
+        raise ValueError(f"--items {ids}: the spec {path} is one terrain, {item.id!r}; leave out --items")
+    return [item]
+
+
 def shipped_benchmarks() -> list[str]:
     """The names of the benchmarks shipped with the package."""
     return sorted(p.parent.name for p in SHIPPED.glob("*/manifest.json"))
@@ -66,7 +75,10 @@ def benchmark_root(root: str | Path) -> Path:
 
 
 def load_benchmark(root: str | Path, ids: list[str] | None = None) -> list[Item]:
-    """The items of the benchmark at ``root``: all, in manifest order, or those in ``ids``, in that order."""
+    """The items of the benchmark at ``root``: all, in manifest order, or those in ``ids``, in that order. A
+    generated terrain's spec.json is a benchmark of one item, named by the spec's name."""
+    if Path(root).suffix == ".json" and Path(root).is_file():
+        return _one_spec(Path(root), ids)
     root = benchmark_root(root)
     manifest = root / "manifest.json"
     if not manifest.is_file():

@@ -68,7 +68,8 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--pretrained", action="store_true", help="the policy shipped with the package for --task")
     src.add_argument("--baseline", choices=("zero", "random"), help="no policy: zero or random actions")
     p.add_argument("--benchmark", default="gente100", help=f"a shipped benchmark ({', '.join(shipped_benchmarks())}; gente_val is for choosing "
-                                                   "between candidates) or a folder with a manifest.json")
+                                                   "between candidates), a folder with a manifest.json, or one "
+                                                   "generated terrain's spec.json")
     p.add_argument("--items", nargs="+", help="only these item ids")
     p.add_argument("--limit", type=int, help="only the first N items")
     p.add_argument(*flag("--robots_per_terrain"), type=int, default=16)
