@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -496,3 +497,34 @@ def test_the_code_version_counts_changes_to_tracked_files_only(tmp_path, monkeyp
     assert train_script.code_version()["git_dirty"] is False
     (repo / "legged_gente" / "__init__.py").write_text("# changed\n")
     assert train_script.code_version()["git_dirty"] is True
+
+
+def test_resuming_on_another_terrain_than_the_run_s_is_said(runner, tmp_path, monkeypatch):
+    """--resume builds the terrain of its own flags: a run trained on a generated tile resumed without its --terrain
+    went on on the task's default terrain, and the console said the curriculum was restored. Now a one-line warning
+    names the change; resumed as it was, nothing is said."""
+    from legged_gente.scripts import train as train_script
+    from legged_gente.scripts.train import resolved_terrain, terrain_change
+
+    generated = {"mode": "generated", "tile_size_m": [20.0, 20.0], "resolution_m": 0.1, "tiles": [["mud_creek"]],
+                 "generated_specs": {"/t/spec.json": {"calls": []}}}
+    plane = {"mode": "plane"}
+    assert terrain_change(generated, generated) is None and terrain_change(None, plane) is None
+    said = terrain_change(generated, plane)
+    assert said.startswith("--resume: the resumed run trained on generated (1 rows of tiles) terrain; this run "
+                           "builds plane (0 rows of tiles), its mode, tile_size_m, resolution_m, tiles, "
+                           "generated_specs other than")
+    run = _run_with_small_networks(runner, tmp_path)
+    record = json.loads((run / "config.json").read_text())
+    (run / "config.json").write_text(json.dumps(record | {"terrain": generated}))
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path))
+    argv = [*TINY[:6], "--max_iterations", "1", "--resume", "--set", "runner.num_steps_per_env=2", "--set",
+            "algorithm.num_mini_batches=1"]
+    with pytest.warns(UserWarning, match=r"^--resume: the resumed run trained on generated"):
+        train_script.main(argv)
+    # resuming the run just made, whose config.json records this very terrain: nothing is said
+    assert json.loads(max((tmp_path / "gente_biped_flat").iterdir()).joinpath("config.json").read_text())[
+        "terrain"] == resolved_terrain(runner.env)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message="--resume")
+        train_script.main(argv)

@@ -11,6 +11,7 @@ import subprocess
 import sys
 import threading
 import time
+import warnings
 from pathlib import Path
 
 from legged_gente.utils.args import (
@@ -67,6 +68,24 @@ def resolved_terrain(env) -> dict:
             "tiles": terrain.tile_names.tolist(), "generated_specs": specs, "soils": soils}
 
 
+TERRAIN_KEYS = ("mode", "tile_size_m", "resolution_m", "tiles", "generated_specs")
+"""What says which terrain a run's robots got (``resolved_terrain``; its soils are said by the tiles)."""
+
+
+def terrain_change(before: dict | None, now: dict) -> str | None:
+    """How the terrain ``now`` differs from a resumed run's (its config.json's ``terrain``), or None: a --resume
+    builds the terrain of its own flags, not the resumed run's."""
+    if not before:
+        return None
+    changed = [key for key in TERRAIN_KEYS if key in before and before.get(key) != now.get(key)]
+    if not changed:
+        return None
+    then, here = (f"{r.get('mode')} ({len(r.get('tiles') or [])} rows of tiles)" for r in (before, now))
+    return (f"--resume: the resumed run trained on {then} terrain; this run builds {here}, its {', '.join(changed)} "
+            f"other than the resumed run's (a --terrain or --set is not carried over): give the same ones to continue "
+            f"on its terrain")
+
+
 def run_record(task: str, env, env_cfg, train_cfg) -> dict:
     """config.json of a run: enough to reproduce it."""
     return {"task": task, "command": shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]]), "code": code_version(),
@@ -100,6 +119,15 @@ def train(args) -> Path | None:
     check_run_folder_names(named.runner)
     env, env_cfg = task_registry.make_env(args.task, args)
     runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
+    if train_cfg.runner.resume:
+        resumed = Path(runner.loaded_checkpoint).parent / "config.json"
+        try:
+            before = json.loads(resumed.read_text()).get("terrain")
+        except (OSError, ValueError, AttributeError):
+            before = None  # a run folder without its config.json: nothing to compare
+        change = terrain_change(before, resolved_terrain(env))
+        if change:
+            warnings.warn(change, stacklevel=1)
     if log_dir is not None:
         Path(log_dir).parent.mkdir(parents=True, exist_ok=True)
         try:  # exclusive: a run that took this name since make_alg_runner chose it is never written into
