@@ -164,3 +164,14 @@ def test_run_folder_names_are_one_folder_each(capsys, no_env, flags, field):
 def test_set_of_an_unknown_section_lists_the_sections(override, listed):
     with pytest.raises(ValueError, match=re.escape(listed)):
         overridden([override])
+
+
+@pytest.mark.parametrize("argv, whose", [
+    (["--num_envs", "100"], "100 robots on the CPU (no GPU in use): that many are sized for a GPU"),
+    ([], "4096 robots on the CPU (no GPU in use): the task's default is sized for a GPU"),
+])
+def test_the_slow_cpu_notice_says_whose_count_it_is(capsys, no_env, argv, whose):
+    """--num_envs 100 on the CPU was called 'the task's default'."""
+    with pytest.raises(Built):
+        train_script.main(["--task", "gente_biped_flat", "--device", "cpu", *argv])
+    assert whose in capsys.readouterr().out

@@ -263,8 +263,10 @@ class TaskRegistry:
         validate_cfgs(env_cfg, train_cfg)
         device = getattr(args, "device", None) or "cpu"
         if device == "cpu" and env_cfg.env.num_envs > CPU_MANY_ENVS:
-            print(f"[legged_gente] {env_cfg.env.num_envs} robots on the CPU (no GPU in use): the task's default "
-                  f"is sized for a GPU and will be slow here; pass e.g. --num_envs 4 for a quick CPU run", flush=True)
+            given = getattr(args, "num_envs", None) is not None
+            whose = "that many are" if given else "the task's default is"
+            print(f"[legged_gente] {env_cfg.env.num_envs} robots on the CPU (no GPU in use): {whose} sized for a GPU "
+                  f"and will be slow here; pass e.g. --num_envs 4 for a quick CPU run", flush=True)
         # seed before the env draws anything (spawn yaw, commands, domain randomisation); one seed per rank
         torch.manual_seed(int(train_cfg.seed) + int(os.environ.get("RANK", "0")))
         env = env_class(env_cfg, device=device, train_cfg_steps_per_env=train_cfg.runner.num_steps_per_env)
