@@ -175,3 +175,17 @@ def test_the_slow_cpu_notice_says_whose_count_it_is(capsys, no_env, argv, whose)
     with pytest.raises(Built):
         train_script.main(["--task", "gente_biped_flat", "--device", "cpu", *argv])
     assert whose in capsys.readouterr().out
+
+
+def test_a_checkpoint_file_given_to_checkpoint_or_load_run_is_answered_with_the_two_flags(capsys, tmp_path):
+    """--checkpoint is an iteration in train, play and view (a file in gente-evaluate): a model_9.pt path given to
+    it, or to --load_run, says which two flags load that file."""
+    run = tmp_path / "myrun"
+    run.mkdir()
+    (run / "model_9.pt").write_bytes(b"")
+    line = one_line_error(capsys, [*CPU, "--resume", "--checkpoint", str(run / "model_9.pt")])
+    assert f"for this file give --load_run {run} --checkpoint 9" in line
+    from legged_gente.utils.checkpoints import find_checkpoint
+
+    with pytest.raises(FileNotFoundError, match=re.escape(f"--load_run {run} --checkpoint 9")):
+        find_checkpoint(tmp_path / "logs", str(run / "model_9.pt"), None)

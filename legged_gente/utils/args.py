@@ -8,6 +8,7 @@ import ast
 import logging
 import math
 import os
+import re
 import sys
 import tempfile
 import types
@@ -61,7 +62,8 @@ def build_parser(description: str, prog: str | None = None, training: bool = Tru
     parser.add_argument("--headless", action="store_true", help=headless)
     parser.add_argument(*flag("--load_run"), help="run folder name under logs/<experiment>/, or the path of a run "
                                                   "folder anywhere (default: the latest under logs/<experiment>/)")
-    parser.add_argument("--checkpoint", type=int, help="checkpoint iteration (default: the latest)")
+    parser.add_argument("--checkpoint", type=checkpoint_iteration,
+                        help="checkpoint iteration N, of model_N.pt in the run (default: the latest)")
     parser.add_argument(*flag("--experiment_name"), help="logs/<experiment_name>/")
     parser.add_argument("--seed", type=seed, help="random seed, in [0, 2**32)")
     parser.add_argument("--device", default=device,
@@ -72,6 +74,20 @@ def build_parser(description: str, prog: str | None = None, training: bool = Tru
                              "--set algorithm.learning_rate=3e-4 (train config: actor, critic, algorithm, runner)")
     add_verbose(parser)
     return parser
+
+
+def checkpoint_iteration(text: str) -> int:
+    """``--checkpoint`` of train, play and view: an iteration number. A checkpoint's file is named by its folder and
+    its number, which the refusal of a path says."""
+    try:
+        return int(text)
+    except ValueError:
+        path = Path(text)
+        match = re.fullmatch(r"model_(\d+)\.pt", path.name)
+        how = (f"--load_run {path.parent} --checkpoint {match.group(1)}" if match else
+               "--load_run RUN_FOLDER --checkpoint N")
+        raise argparse.ArgumentTypeError(f"{text!r} is not an iteration number: --checkpoint N loads model_N.pt of "
+                                         f"the run; for this file give {how}") from None
 
 
 def add_verbose(parser: argparse.ArgumentParser) -> None:

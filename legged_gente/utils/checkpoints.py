@@ -57,6 +57,11 @@ def _run(experiment_root: Path | None, load_run) -> Path:
     run = named if named is not None and named.is_dir() else Path(str(load_run)).expanduser()
     if not run.is_dir():
         runs = sorted(r.name for r in root.iterdir() if r.is_dir()) if root is not None and root.is_dir() else []
+        given = Path(str(load_run)).expanduser()
+        if given.is_file():  # a checkpoint's path: its folder and number are the two flags
+            number = re.fullmatch(r"model_(\d+)\.pt", given.name)
+            raise FileNotFoundError(f"run {load_run!r} is a file; --load_run takes its run folder: --load_run "
+                                    f"{given.parent}" + (f" --checkpoint {number.group(1)}" if number else ""))
         raise FileNotFoundError(f"run {load_run!r} is neither a run under {experiment_root} (runs: {runs}) nor a "
                                 f"folder; pass a run name or the path of a run folder.")
     if not _models(run):
