@@ -528,3 +528,19 @@ def test_resuming_on_another_terrain_than_the_run_s_is_said(runner, tmp_path, mo
     with warnings.catch_warnings():
         warnings.filterwarnings("error", message="--resume")
         train_script.main(argv)
+
+
+def test_train_writes_its_run_under_log_root_and_resumes_from_there(tmp_path, monkeypatch):
+    """gente-train --log_root, as gente-play and gente-view take it: the run goes there, and --resume finds it
+    there, not under $GENTE_LOG_ROOT."""
+    from legged_gente.scripts import train as train_script
+
+    monkeypatch.setenv("GENTE_LOG_ROOT", str(tmp_path / "elsewhere"))
+    root = tmp_path / "mine"
+    short = [*TINY[:6], "--max_iterations", "1", "--set", "runner.num_steps_per_env=2", "--set",
+             "algorithm.num_mini_batches=1", "--log_root", str(root)]
+    train_script.main([*short, "--set", "actor.hidden_dims=[8]", "--set", "critic.hidden_dims=[8]"])
+    runs = sorted((root / "gente_biped_flat").iterdir())
+    assert len(runs) == 1 and list(runs[0].glob("model_*.pt")) and not (tmp_path / "elsewhere").exists()
+    train_script.main([*short, "--resume"])  # the networks: the resumed run's config.json
+    assert len(sorted((root / "gente_biped_flat").iterdir())) == 2 and not (tmp_path / "elsewhere").exists()

@@ -113,12 +113,13 @@ def _stop_after_the_iteration(logger):
 
 def train(args) -> Path | None:
     started = time.monotonic()  # --max_minutes counts the env's build too, as a job's time limit does
-    check_log_root(None, default_log_root())
+    log_root = Path(args.log_root) if args.log_root else default_log_root()
+    check_log_root(args.log_root, default_log_root())
     _, named = task_registry.get_cfgs(args.task)  # the run's folder names, checked before the env is built
     apply_args(args, None, named)
     check_run_folder_names(named.runner)
     env, env_cfg = task_registry.make_env(args.task, args)
-    runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args)
+    runner, train_cfg, log_dir = task_registry.make_alg_runner(env, args.task, args, log_root=log_root)
     if train_cfg.runner.resume:
         resumed = Path(runner.loaded_checkpoint).parent / "config.json"
         try:
@@ -177,6 +178,8 @@ def build_train_parser():
                         help="stop after the iteration that passes this much wall-clock time since the env's "
                              "build began (kernel compilation included), saving a checkpoint to continue with "
                              "--resume (for time-limited jobs; no signal needed)")
+    parser.add_argument(*flag("--log_root"), default=None,
+                        help="where runs are written and --resume finds them (default: $GENTE_LOG_ROOT, else ./logs)")
     parser.add_argument("--pretrained", action="store_true",
                         help="start from the policy shipped for --task, or for the task it was registered with "
                              "pretrained_from (its actor; the critic, optimiser and curriculum start afresh, and the "

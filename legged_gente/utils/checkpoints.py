@@ -34,8 +34,8 @@ def _iteration(path: Path) -> int:
 
 def _runs(experiment_root: Path | None) -> list[Path]:
     if experiment_root is None or not Path(experiment_root).is_dir():
-        raise FileNotFoundError(f"no runs under {experiment_root}; train first, or pass --experiment_name (or "
-                                f"set $GENTE_LOG_ROOT) to point at the runs.")
+        raise FileNotFoundError(f"no runs under {experiment_root}; train first, or pass --experiment_name, "
+                                f"--log_root (or set $GENTE_LOG_ROOT) or --load_run RUN_FOLDER to point at the runs.")
     runs = sorted(p for p in Path(experiment_root).iterdir() if p.is_dir() and any(p.glob("model_*.pt")))
     if not runs:
         raise FileNotFoundError(f"no checkpoints (model_*.pt) in any run under {experiment_root}; train first.")
