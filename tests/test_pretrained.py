@@ -225,7 +225,7 @@ def test_a_task_of_one_s_own_fine_tunes_the_policy_it_is_registered_from(capsys)
 
     with pytest.raises(ValueError, match="no policy is shipped for 'gente_quadruped_flat'"):
         task_registry.register("my_biped_flat", env_class, MyCfg, train_cfg, pretrained_from="gente_quadruped_flat")
-    task_registry.tasks.pop("my_biped_flat")
+    assert "my_biped_flat" not in task_registry.tasks  # refused whole
     with pytest.raises(FileNotFoundError, match=r"pretrained_from="):
         task_registry.shipped_policy("my_biped_flat_unregistered")
     task_registry.register("my_biped_flat", env_class, MyCfg, train_cfg, pretrained_from=SHIPPED)

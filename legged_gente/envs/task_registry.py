@@ -212,7 +212,6 @@ class TaskRegistry:
             taken = ", ".join(cls.__name__ for cls in self.tasks[name])
             raise ValueError(f"task {name!r} is already registered ({taken}); register {env_cfg.__name__} under "
                              f"another name")
-        self.tasks[name] = task
         if pretrained_from is not None:
             from legged_gente.utils.checkpoints import shipped_tasks
 
@@ -220,6 +219,7 @@ class TaskRegistry:
                 raise ValueError(f"register({name!r}, ..., pretrained_from={pretrained_from!r}): no policy is shipped "
                                  f"for {pretrained_from!r}; shipped: {', '.join(shipped_tasks()) or 'none'}")
             self.pretrained_from[name] = pretrained_from
+        self.tasks[name] = task
 
     def get_cfgs(self, name: str) -> tuple[LeggedRobotCfg, LeggedRobotCfgPPO]:
         if name not in self.tasks:
