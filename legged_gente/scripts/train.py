@@ -44,8 +44,8 @@ def code_version() -> dict:
 
         if Path(git("rev-parse", "--show-toplevel")).resolve() != source:
             raise ValueError("legged_gente is not the checkout's top level")  # e.g. installed inside another repo
-        return {"git_commit": git("rev-parse", "HEAD"), "git_dirty": bool(git("status", "--porcelain", "--untracked-files=no")),
-                "package_version": package}
+        dirty = bool(git("status", "--porcelain", "--untracked-files=no"))
+        return {"git_commit": git("rev-parse", "HEAD"), "git_dirty": dirty, "package_version": package}
     except (OSError, ValueError, subprocess.SubprocessError):
         return {"git_commit": None, "package_version": package}
 
