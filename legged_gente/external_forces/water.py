@@ -4,11 +4,11 @@
 ``xfrc_applied`` at each slice's Gauss point and each slice's added mass (a scale and the point's offset from the
 tree's centre of mass); ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot;
 ``added_mass_kernel`` (worlds x points x dofs), launched after each of them for its own points, builds each point's
-tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which
-rebuilds it from scratch each substep), calls the passive callback in ``fwd_velocity`` and only then factorises M
-(``fwd_acceleration``) and builds the constraint solver's Hessian and the implicit integrators' matrices from it,
-so an addition made here is seen by the whole step: the added mass is implicit, acts in the same substep and cannot
-destabilise a light body (an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a
+tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M
+in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each substep), calls the passive callback in
+``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and builds the constraint solver's Hessian and
+the implicit integrators' matrices from it, so an addition made here is seen by the whole step: the added mass is
+implicit, acts in the same substep and cannot destabilise a light body (an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a
 exceeds the body's mass, and its finite-difference acceleration also sees contact impulses). The velocity-product
 part of the point's acceleration (Jdot qvel: centripetal and Coriolis terms) is applied explicitly.
 ``mjw.step1``/``step2`` factorise M before the callback and are not supported; ``Simulation`` splits the step after

@@ -57,7 +57,8 @@ class Param:
         if self.choices is not None:
             if value not in self.choices and not (self.registered is not None and value in self.registered):
                 more = "" if self.registered is None else f" ({self.doc})"  # the doc says how to register one
-                raise ValueError(f"{terrain}: {name}={value!r} is not one of {self.offered()}; pick one of those{more}.")
+                raise ValueError(f"{terrain}: {name}={value!r} is not one of {self.offered()}; pick one of "
+                                 f"those{more}.")
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ValueError(f"{terrain}: {name} must be a number ({self.unit}), got {type(value).__name__} {value!r}.")

@@ -486,7 +486,8 @@ def apply_overrides(overrides: list[str], env_cfg, train_cfg) -> None:
             prefix = ".".join(path[:i + 1])
             if owner is None and not hasattr(parent, part):
                 tops = [c for c in (env_cfg, train_cfg) if c is not None] if i == 0 else [parent]
-                sections = sorted({n for c in tops for n in dir(c) if not n.startswith("_") and _is_section(getattr(c, n))})
+                sections = sorted({n for c in tops for n in dir(c)
+                                   if not n.startswith("_") and _is_section(getattr(c, n))})
                 where = type(cfg).__name__ if i == 0 else ".".join(path[:i])
                 raise ValueError(f"--set {text!r}: {prefix} is not a config section of {where}; "
                                  + (f"its sections: {', '.join(sections)}" if sections else
