@@ -8,9 +8,10 @@ tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``. 
 in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each substep), calls the passive callback in
 ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and builds the constraint solver's Hessian and
 the implicit integrators' matrices from it, so an addition made here is seen by the whole step: the added mass is
-implicit, acts in the same substep and cannot destabilise a light body (an explicit reaction -m_a * a, from last substep's acceleration, diverges once m_a
-exceeds the body's mass, and its finite-difference acceleration also sees contact impulses). The velocity-product
-part of the point's acceleration (Jdot qvel: centripetal and Coriolis terms) is applied explicitly.
+implicit, acts in the same substep and cannot destabilise a light body (an explicit reaction -m_a * a, from last
+substep's acceleration, diverges once m_a exceeds the body's mass, and its finite-difference acceleration also sees
+contact impulses). The velocity-product part of the point's acceleration (Jdot qvel: centripetal and Coriolis terms)
+is applied explicitly.
 ``mjw.step1``/``step2`` factorise M before the callback and are not supported; ``Simulation`` splits the step after
 the passive callback instead, factorising in its second half as ``mjw.step`` does.
 
