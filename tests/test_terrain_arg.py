@@ -125,3 +125,17 @@ def test_a_spec_json_that_departs_from_the_format_is_refused(emitted, tmp_path, 
         apply_terrain_arg(str(path), GenteBipedCfg())
     assert str(refused.value) == (f"--terrain {path}: not a terrain spec document: {problem} Fix the file, or pass a "
                                   f"spec.json written by gente-generate")
+
+
+def test_a_set_of_the_tile_size_against_a_generated_module_is_refused_naming_the_set(emitted):
+    """A terrain_cfg.py of gente-generate repeats its spec's tile size: --set terrain.terrain_length=10.0 with it
+    failed later, at the tile's build, with a cell count that did not name the --set."""
+    from legged_gente.envs.task_registry import apply_terrain_with_overrides
+
+    cfg = GenteBipedCfg()
+    with pytest.raises(ValueError, match=r"generated terrain whose spec sets terrain.terrain_length to 20.0; leave "
+                                         r"out --set terrain.terrain_length=10.0"):
+        apply_terrain_with_overrides(str(emitted / "terrain_cfg.py"), cfg, ["terrain.terrain_length=10.0"])
+    cfg = GenteBipedCfg()
+    apply_terrain_with_overrides(str(emitted / "terrain_cfg.py"), cfg, ["terrain.num_rows=2"])  # others apply
+    assert cfg.terrain.num_rows == 2 and cfg.terrain.terrain_length == 20.0

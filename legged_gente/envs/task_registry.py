@@ -145,6 +145,8 @@ def apply_args(args: argparse.Namespace, env_cfg, train_cfg) -> None:
 
 # widened by --terrain <spec.json> to whole cells (by less than a cell): not a contradiction of a --set
 TERRAIN_ROUNDED = ("terrain.border_size",)
+SPEC_BOUND = ("terrain.terrain_length", "terrain.terrain_width", "terrain.resolution")
+"""A generated tile's size and cells: its spec's, which a terrain_cfg.py of gente-generate repeats."""
 
 
 def apply_terrain_with_overrides(terrain: str, env_cfg, overrides: list[str]) -> None:
@@ -162,7 +164,15 @@ def apply_terrain_with_overrides(terrain: str, env_cfg, overrides: list[str]) ->
     section, wanted = env_cfg.terrain, {text: value_of(text) for text in given}
     apply_terrain_arg(terrain, env_cfg)
     if env_cfg.terrain is not section:
+        # a module of generated terrain: its specs set the tile's size and cells, which a --set would contradict
+        bound = {f: getattr(env_cfg.terrain, f.split(".")[1]) for f in SPEC_BOUND} \
+            if env_cfg.terrain.mode == "generated" else {}
         apply_overrides(given, env_cfg, None)
+        for text in given:
+            field = text.partition("=")[0].strip()
+            if field in bound and value_of(text) != bound[field]:
+                raise ValueError(f"--terrain {terrain} is generated terrain whose spec sets {field} to "
+                                 f"{bound[field]!r}; leave out --set {text}")
         return
     for text, value in wanted.items():
         field = text.partition("=")[0].strip()
