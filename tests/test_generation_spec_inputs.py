@@ -92,3 +92,14 @@ def test_checker_does_not_call_a_heightmap_without_calls_empty(tmp_path):
     assert not [p for p in check_spec(path).problems if p.startswith("empty")]
     np.save(tmp_path / "array.npy", np.zeros((200, 200), np.int16))  # flat: empty, calls or not
     assert [p for p in check_spec(path).problems if p.startswith("empty")]
+
+
+def test_an_integer_too_long_for_python_is_named_without_python_s_advice():
+    """A model's (or a file's) 5000-digit integer: Python's parser refuses it and advises sys.set_int_max_str_digits,
+    which is no fix for the model; the refusal asks for a number below 2**53."""
+    from legged_gente.generation.validation import ValidationError, parse_json
+
+    with pytest.raises(ValidationError) as error:
+        parse_json('{"height": 1' + "0" * 5000 + "}", "the arguments", 1_000_000)
+    (message,) = error.value.messages
+    assert message == "the arguments hold an integer of more than 4300 digits; use a number below 2**53."

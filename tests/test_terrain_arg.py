@@ -139,3 +139,24 @@ def test_a_set_of_the_tile_size_against_a_generated_module_is_refused_naming_the
     cfg = GenteBipedCfg()
     apply_terrain_with_overrides(str(emitted / "terrain_cfg.py"), cfg, ["terrain.num_rows=2"])  # others apply
     assert cfg.terrain.num_rows == 2 and cfg.terrain.terrain_length == 20.0
+
+
+@pytest.mark.parametrize("height, said", [
+    ("[" * 100000 + "0" + "]" * 100000, "is nested too deeply to read"),
+    ("1" + "0" * 5000, "holds an integer of more than 4300 digits; use a number below 2**53"),
+])
+def test_a_spec_python_cannot_parse_is_one_line_naming_the_file(tmp_path, height, said):
+    """--terrain (train, play, view) and a generated terrain's spec read JSON themselves: a spec nested 100000 deep
+    was a RecursionError traceback, an integer of 5000 digits Python's advice to call sys.set_int_max_str_digits."""
+    path = tmp_path / "spec.json"
+    path.write_text('{"size_x": 2.0, "size_y": 2.0, "resolution": 0.1, "seed": 0, "calls": [{"tool": "flat", '
+                    '"region": "full", "params": {"height": ' + height + '}}]}')
+    with pytest.raises(ValueError) as error:
+        apply_terrain_arg(str(path), GenteBipedCfg())
+    assert str(error.value).startswith(f"--terrain {path} {said}") and "set_int_max_str_digits" not in str(error.value)
+    cfg = GenteBipedCfg()
+    cfg.terrain.mode, cfg.terrain.generated_specs, cfg.terrain.num_rows, cfg.terrain.num_cols = \
+        "generated", [str(path)], 1, 1
+    cfg.terrain.terrain_length = cfg.terrain.terrain_width = 2.0
+    with pytest.raises(ValueError, match=f"terrain spec {path} {said}".replace("*", r"\*")):
+        Terrain(cfg.terrain, 1)

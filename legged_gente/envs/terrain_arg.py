@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import importlib.util
 import inspect
-import json
 import math
 import traceback
 from pathlib import Path
 
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
-from legged_gente.terrain.composition import tile_spec_from_document
+from legged_gente.terrain.composition import read_json, tile_spec_from_document
 from legged_gente.terrain.terrain import whole_cells
 
 
@@ -27,10 +26,12 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
     if path.suffix == ".json":
         try:
-            document = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            document = read_json(path.read_text(), f"--terrain {value}")
+        except UnicodeDecodeError as exc:
             raise ValueError(f"--terrain {value} is not valid JSON ({exc}); pass a spec.json written by "
                              f"gente-generate") from None
+        except ValueError as exc:
+            raise ValueError(f"{exc}; pass a spec.json written by gente-generate") from None
         try:  # the terrain takes the spec's own tile size and resolution; its calls are checked when it is built
             spec = tile_spec_from_document(document, path.parent)
         except ValueError as exc:

@@ -101,6 +101,9 @@ def parse_json(text: str | bytes, what: str, limit: int) -> Any:
     except RecursionError:
         raise ValidationError([f"{what} are nested too deeply to parse; the limit is {MAX_DEPTH} levels."]) from None
     except ValueError as exc:  # JSONDecodeError, NaN/Infinity, integers with too many digits, bad UTF-8
+        if "integer string conversion" in str(exc):  # Python's own advice (sys.set_int_max_str_digits) is not theirs
+            raise ValidationError([f"{what} hold an integer of more than 4300 digits; use a number below 2**53."]) \
+                from None
         raise ValidationError([f"{what} are not valid JSON ({clip_text(str(exc), 160)}); send a JSON object."]) from None
 
 

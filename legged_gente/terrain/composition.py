@@ -17,6 +17,7 @@ spec, and changing one part does not reshuffle the others.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from pathlib import Path
 from typing import Any, Callable, Literal, Mapping
@@ -250,6 +251,19 @@ class Smoothing:
             raise ValueError(f"smoothing: axis {self.axis!r} must be 'x' or 'y'.")
         if not 0.0 < self.sigma <= MAX_SMOOTHING_SIGMA:
             raise ValueError(f"smoothing: sigma={self.sigma!r} m must be in (0, {MAX_SMOOTHING_SIGMA}] m.")
+
+
+def read_json(text: str, what: str) -> Any:
+    """``json.loads`` of a terrain document, its refusals one line naming ``what``: nesting too deep for Python's
+    parser, an integer too long for it to read, or no JSON at all."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(f"{what} is nested too deeply to read; a terrain spec nests a few levels") from None
+    except ValueError as exc:  # json.JSONDecodeError, or int() of more digits than Python reads
+        if "integer string conversion" in str(exc):
+            raise ValueError(f"{what} holds an integer of more than 4300 digits; use a number below 2**53") from None
+        raise ValueError(f"{what} is not valid JSON ({str(exc)[:160]})") from None
 
 
 TILE_DICT_KEYS = {"size_x", "size_y", "resolution", "seed", "parts", "smoothing"}

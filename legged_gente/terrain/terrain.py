@@ -16,7 +16,6 @@ the heights and each later one adds to them: ``"hills+rocks"`` is rocks on hills
 
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from pathlib import Path
@@ -24,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .composition import Operation, Part, Region, TileSpec, build_tile, tile_spec_from_document
+from .composition import Operation, Part, Region, TileSpec, build_tile, read_json, tile_spec_from_document
 from .materials import MaterialMap
 from .registry import ATOMIC_TERRAINS, MAX_DIFFICULTY
 
@@ -267,12 +266,10 @@ class Terrain:
         """(name, builder) of the tile of spec file ``path``, named by the spec's ``name`` (every gente-generate
         output is a ``spec.json``), or by the file's stem for a spec without one."""
         try:
-            document = json.loads(path.read_text())
+            document = read_json(path.read_text(), f"terrain spec {path}")
         except FileNotFoundError:
             raise FileNotFoundError(f"terrain spec {path} does not exist; list the spec.json files that "
                                     f"gente-generate wrote in cfg.generated_specs.") from None
-        except ValueError as exc:  # json.JSONDecodeError
-            raise ValueError(f"terrain spec {path}: {exc}") from None
         name = document.get("name") if isinstance(document, dict) else None
 
         def build():
