@@ -136,7 +136,7 @@ def test_invalid_call_is_corrected_on_second_turn():
 def test_retry_limit_fails_clearly():
     bad = _completion([_tool_call("test_nope", {"region": "full"}, 0)])
     with FakeServer([ok(bad)] * 3) as srv:
-        with pytest.raises(GenerationError, match=r"still invalid after 2 correction.*unknown tool \"test_nope\""):
+        with pytest.raises(GenerationError, match=r"no valid terrain after 2 correction.*unknown tool \"test_nope\""):
             _backend(srv, max_retries=2).generate(text="x")
         assert len(srv.requests) == 3  # first answer + 2 correction rounds, no more
 
@@ -290,7 +290,7 @@ def test_a_correction_round_must_answer_each_rejected_call_once():
                 "corrected call per rejected call, in their order, and do not repeat accepted calls.")
     assert replies == [expected, expected]
     with FakeServer([ok(first), ok(second)]) as srv:
-        with pytest.raises(GenerationError, match=r"still invalid after 1 correction.*2 new call\(s\) for 1 rejected"):
+        with pytest.raises(GenerationError, match=r"no valid terrain after 1 correction.*2 new call\(s\) for 1 rejected"):
             _backend(srv, max_retries=1).generate(text="x")
 
 

@@ -8,6 +8,9 @@ from legged_gente.generation.backends import GenerationResult
 from legged_gente.generation.spec import TerrainSpec, image_source, spec_name, text_source
 
 BACKENDS = ("planner", "openai")
+SERVER_DEFAULTS = {"timeout": 60.0, "max_retries": 3, "api_key_env": "GENTE_API_KEY"}
+"""The model server's settings and their defaults (``generate_spec``'s, gente-generate's flags'); the planner sends
+no request, so it refuses any other value of them."""
 
 
 def generate_spec(
@@ -24,9 +27,9 @@ def generate_spec(
     model: str | None = None,
     two_phase: bool = False,
     vision_model: str | None = None,
-    timeout: float = 60.0,
-    max_retries: int = 3,
-    api_key_env: str = "GENTE_API_KEY",
+    timeout: float = SERVER_DEFAULTS["timeout"],
+    max_retries: int = SERVER_DEFAULTS["max_retries"],
+    api_key_env: str = SERVER_DEFAULTS["api_key_env"],
     toolset: str = "ours",
 ) -> tuple[TerrainSpec, GenerationResult]:
     """Run ``backend`` on the inputs and return the validated spec and the backend's result (warnings, notes).
@@ -35,9 +38,10 @@ def generate_spec(
     """
     if toolset != "ours" and backend != "openai":
         raise ValueError(f"toolset {toolset!r} is for the openai backend; the planner calls our tools.")
-    if backend == "planner" and (base_url or model or two_phase or vision_model):
-        raise ValueError("base_url, model, two_phase and vision_model are for the openai backend; the planner sends "
-                         "no request.")
+    server = {"timeout": timeout, "max_retries": max_retries, "api_key_env": api_key_env}
+    if backend == "planner" and (base_url or model or two_phase or vision_model or server != SERVER_DEFAULTS):
+        raise ValueError("base_url, model, two_phase, vision_model, timeout, max_retries and api_key_env are for the "
+                         "openai backend; the planner sends no request.")
     if not text and image is None:
         raise ValueError("give a text description, an image, or both.")
     if backend not in BACKENDS:

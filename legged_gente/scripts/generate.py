@@ -21,9 +21,9 @@ from pathlib import Path
 
 from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, GenerationError
 from legged_gente.generation.backends.image import open_image
-from legged_gente.generation.backends.openai_backend import base_url_problem
+from legged_gente.generation.backends.openai_backend import base_url_problem, shown_url
 from legged_gente.generation.emit import DEFAULT_BASE, emit, resolve_base
-from legged_gente.generation.pipeline import BACKENDS, generate_spec
+from legged_gente.generation.pipeline import BACKENDS, SERVER_DEFAULTS, generate_spec
 from legged_gente.generation.validation import (
     MAX_STRING_CHARS,
     ValidationError,
@@ -53,10 +53,6 @@ def _positive(most: float = math.inf):
 def _error(exc: BaseException, code: int) -> int:
     print(f"gente-generate: error: {printable(one_line(exc))}", file=sys.stderr)
     return code
-
-
-SERVER_DEFAULTS = {"timeout": 60.0, "max_retries": 3, "api_key_env": "GENTE_API_KEY"}
-"""The model server's flags and their defaults; the planner sends no request, so it refuses them."""
 
 
 def build_parser() -> Parser:
@@ -99,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--backend openai needs --base-url and --model.")
     url_problem = args.base_url and base_url_problem(args.base_url)
     if url_problem:
-        parser.error(f"--base-url {printable(args.base_url[:200])}: {url_problem}.")
+        parser.error(f"--base-url {printable(shown_url(args.base_url)[:200])}: {url_problem}.")
     if args.backend == "planner" and (args.base_url or args.model or args.vision_model or args.two_phase
                                       or args.toolset != "ours"):
         parser.error("--base-url/--model/--vision-model/--two-phase/--toolset are for --backend openai.")

@@ -141,6 +141,17 @@ class _NoRedirect(urllib.request.HTTPRedirectHandler):
 _OPENER = urllib.request.build_opener(_NoRedirect)
 
 
+def shown_url(base_url: str) -> str:
+    """``base_url`` as an error may print it: a password in it replaced by ***."""
+    try:
+        parts = urllib.parse.urlsplit(base_url)
+        if parts.password is not None:
+            return urllib.parse.urlunsplit(parts._replace(netloc=parts.netloc.replace(f":{parts.password}@", ":***@")))
+    except ValueError:
+        pass
+    return base_url
+
+
 def base_url_problem(base_url: str) -> str | None:
     """Why ``base_url`` cannot be a server's API address (urllib would also open file:, data: and ftp: ones), or None."""
     try:
@@ -151,6 +162,10 @@ def base_url_problem(base_url: str) -> str | None:
     if not usable:
         return ("not an http:// or https:// address with a host; give the server's API address, e.g. "
                 "http://localhost:8000/v1")
+    if parts.username is not None or parts.password is not None:  # it would be printed in every error about it
+        return "carries a user name or password; give the address alone and the key with --api-key-env"
+    if parts.fragment:
+        return "has a #fragment, which no request sends; give the API's address alone"
     return None
 
 
@@ -187,16 +202,20 @@ class OpenAIBackend:
             raise ValueError("vision_model describes the image in two_phase; pass two_phase=True or leave it out.")
         problem = base_url_problem(base_url)
         if problem:
-            raise ValueError(f"base_url {printable(base_url[:200])}: {problem}.")
+            raise ValueError(f"base_url {printable(shown_url(base_url)[:200])}: {problem}.")
         self.toolset, self.resolution = toolset, resolution
         self.base_url, self.model = base_url, model
-        self.endpoint = base_url.rstrip("/") + "/chat/completions"
+        parts = urllib.parse.urlsplit(base_url)  # a query (Azure's ?api-version=...) stays after the path
+        self.endpoint = urllib.parse.urlunsplit(parts._replace(path=parts.path.rstrip("/") + "/chat/completions"))
         self.vision_model = vision_model or model
         self.max_retries, self.two_phase, self.timeout = max_retries, two_phase, timeout
         self.tool_choice, self.temperature = tool_choice, temperature
         self.size_x, self.size_y = size_x, size_y
         self.registry = ATOMIC_TERRAINS if registry is None else registry
         self.api_key_env, self.api_key = api_key_env, os.environ.get(api_key_env, "none")
+        if not self.api_key:
+            raise ValueError(f"the environment variable {api_key_env} is set but empty; set it to the key, or unset "
+                             f"it for a server without one.")
         if not re.fullmatch(r"[!-~]*", self.api_key):  # printable ASCII without spaces, as an HTTP header carries it
             raise ValueError(f"the API key in the environment variable {api_key_env} holds whitespace, control or "
                              f"non-ASCII characters (a trailing newline?); set {api_key_env} to the key alone.")
@@ -249,6 +268,9 @@ class OpenAIBackend:
             if isinstance(error.reason, TimeoutError):
                 raise timed_out
             raise GenerationError(f"could not reach {self.base_url} ({error.reason}); check --base-url and that the server runs.")
+        if isinstance(error, http.client.RemoteDisconnected):  # a server that crashed or closed mid-request
+            raise GenerationError(f"the server at {self.base_url} closed the connection without an answer; check "
+                                  f"that it runs and its log (out of memory? a request too large?).")
         if isinstance(error, http.client.HTTPException):  # a status line, headers or chunks that are not HTTP/1.x
             raise GenerationError(f"the server at {self.base_url} answered malformed HTTP ({error!r:.200}); point "
                                   f"--base-url at its OpenAI-compatible API, e.g. http://localhost:8000/v1.")
@@ -459,6 +481,6 @@ class OpenAIBackend:
                 return GenerationResult([c for s in slots for c in s.calls], warnings, notes, self.model)
             warnings += [f"round {round_}: rejected: {r}" for r in rejected]
         raise GenerationError(
-            f"the model's tool calls were still invalid after {self.max_retries} correction round(s): "
+            f"the model gave no valid terrain after {self.max_retries} correction round(s): "
             + " | ".join(rejected[:5]) + (f" | ... and {len(rejected) - 5} more" if len(rejected) > 5 else "")
         )
