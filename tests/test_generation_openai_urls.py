@@ -90,3 +90,25 @@ def test_the_planner_refuses_the_server_s_settings_from_python_too(setting):
 
     with pytest.raises(ValueError, match="are for the openai backend; the planner sends no request"):
         generate_spec("a hill", backend="planner", **setting)
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["--text", "a \udcff yard"], "--text is not valid UTF-8"),  # how Python passes a byte that is not UTF-8
+    (["--text", "a yard", "--backend", "openai", "--base-url", "http://127.0.0.1:1/v1", "--model", "m",
+      "--api-key-env", ""], "--api-key-env is empty"),
+])
+def test_gente_generate_refuses_text_it_cannot_store_and_an_empty_key_variable_name(argv, said, tmp_path, capsys):
+    from legged_gente.scripts import generate as generate_script
+
+    with pytest.raises(SystemExit) as exit_info:
+        generate_script.main([*argv, "--out", str(tmp_path / "o")])
+    assert exit_info.value.code == 2 and said in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, name", [("été plage", "ete_plage"), ("ﬁeld of snow", "field_snow"),
+                                        ("ǅungle river", "dzungle_river")])
+def test_a_default_name_keeps_letters_that_are_not_ascii_as_their_ascii_forms(text, name):
+    """'été plage' was named t_plage: the accented letters were dropped, not taken to their ASCII forms."""
+    from legged_gente.generation.spec import spec_name
+
+    assert spec_name(text) == name

@@ -28,6 +28,7 @@ import dataclasses
 import hashlib
 import json
 import re
+import unicodedata
 from pathlib import Path
 from typing import Any
 
@@ -58,8 +59,10 @@ def image_source(data: bytes, name: str | None = None) -> dict[str, Any]:
 
 def spec_name(text: str, default: str = "generated_terrain") -> str:
     """A snake_case identifier from the first words of ``text`` (used for spec and class names), cut to the longest
-    name a spec allows."""
-    words = [w for w in re.findall(r"[a-z0-9]+", text.lower()) if w not in ("a", "an", "the", "of", "with")]
+    name a spec allows. Letters are first taken to ASCII (compatibility forms split, accents dropped: "été plage" is
+    "ete_plage", the ligature "ﬁ" is "fi")."""
+    ascii_text = unicodedata.normalize("NFKD", text).encode("ascii", "ignore").decode()
+    words = [w for w in re.findall(r"[a-z0-9]+", ascii_text.lower()) if w not in ("a", "an", "the", "of", "with")]
     while words and not words[0][0].isalpha():  # a name starts with a letter: "123 rivers" is "rivers"
         words.pop(0)
     name = "_".join(words[:4])[: SPEC_SCHEMA["properties"]["name"]["maxLength"]]

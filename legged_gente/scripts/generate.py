@@ -85,6 +85,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     quiet_third_party(args.verbose)
+    if args.text is not None and any("\udc80" <= ch <= "\udcff" for ch in args.text):  # bytes not UTF-8
+        parser.error("--text is not valid UTF-8 (the shell passed bytes of another encoding); give it in UTF-8.")
+    if args.api_key_env is not None and not args.api_key_env.strip():
+        parser.error("--api-key-env is empty; name the environment variable that holds the key, e.g. GENTE_API_KEY.")
     if args.text is not None and not args.text.strip():
         parser.error("--text is empty; describe the scene, e.g. --text 'a knee-deep river in a forest'.")
     if not args.text and args.image is None:
