@@ -3,6 +3,7 @@ a live rollout opened at a step not recorded yet, and a live recording read half
 
 from __future__ import annotations
 
+import json
 import socket
 import time
 from pathlib import Path
@@ -244,3 +245,21 @@ def test_a_replayed_robot_shows_a_fall_only_when_it_fell(fell):
     assert rollout.qpos.shape[0] == (5 if fell else 4) and rollout.done[-1, 0] and bool(rollout.fell[-1, 0]) is fell
     assert bool(rollout.qpos[-1, 0, 2] == np.float32(0.3)) is fell
     assert not rollout.done[:-1].any() and not rollout.fell[:-1].any()
+
+
+def test_a_rollout_with_a_task_refuses_the_task_and_a_spec_s_refusal_names_the_source(capsys, monkeypatch, tmp_path):
+    """A rollout .npz names its own task: --task with it was silently ignored. A source spec that sets the field
+    a --set changes was refused as if given with --terrain, a flag the user never gave; an upper-case suffix
+    (SPEC.JSON) was no spec at all."""
+    steps = 2
+    rollout = Rollout("gente_biped_flat", 0.02, np.zeros((steps, 1, BIPED_NQ), np.float32), np.zeros((steps, 1, 3)),
+                      np.zeros((steps, 1, 3)), np.zeros((steps, 1), bool), np.zeros((steps, 1), bool), [],
+                      np.zeros((steps, 1, 0, 3), np.float32), np.zeros((steps, 1, 0, 3), np.float32),
+                      np.zeros((2, 2), np.float32), (0.0, 0.0), 1.0, MaterialMap.rigid((2, 2))).save(tmp_path / "r.npz")
+    line = one_line_error(capsys, monkeypatch, [str(rollout), "--task", "gente_quadruped"])
+    assert line == (f"gente-view: error: --task gente_quadruped: the rollout {rollout} is replayed with the robot it "
+                    f"was recorded with; leave out --task")
+    spec = tmp_path / "SPEC.JSON"
+    spec.write_text(json.dumps({"size_x": 2.0, "size_y": 2.0, "resolution": 0.1, "seed": 0, "calls": []}))
+    line = one_line_error(capsys, monkeypatch, [str(spec), "--set", "terrain.num_rows=3"])
+    assert line == f"gente-view: error: the source {spec} sets terrain.num_rows to 1; leave out --set terrain.num_rows=3"

@@ -149,10 +149,10 @@ SPEC_BOUND = ("terrain.terrain_length", "terrain.terrain_width", "terrain.resolu
 """A generated tile's size and cells: its spec's, which a terrain_cfg.py of gente-generate repeats."""
 
 
-def apply_terrain_with_overrides(terrain: str, env_cfg, overrides: list[str]) -> None:
+def apply_terrain_with_overrides(terrain: str, env_cfg, overrides: list[str], given_as: str = "--terrain") -> None:
     """``--terrain`` after the --set: a terrain_cfg.py replaces the terrain section, and the --set terrain.* apply
     to the new one; 'plane' and a spec set fields of it, and a --set of one of those to another value is refused
-    (it would be ignored)."""
+    (it would be ignored). ``given_as``: how the refusals name the terrain's file (gente-view's source)."""
     given = [text for text in overrides if text.partition("=")[0].strip().startswith("terrain.")]
 
     def value_of(text):
@@ -171,13 +171,13 @@ def apply_terrain_with_overrides(terrain: str, env_cfg, overrides: list[str]) ->
         for text in given:
             field = text.partition("=")[0].strip()
             if field in bound and value_of(text) != bound[field]:
-                raise ValueError(f"--terrain {terrain} is generated terrain whose spec sets {field} to "
+                raise ValueError(f"{given_as} {terrain} is generated terrain whose spec sets {field} to "
                                  f"{bound[field]!r}; leave out --set {text}")
         return
     for text, value in wanted.items():
         field = text.partition("=")[0].strip()
         if field not in TERRAIN_ROUNDED and value_of(text) != value:
-            raise ValueError(f"--terrain {terrain} sets {field} to {value_of(text)!r}; leave out --set {text}")
+            raise ValueError(f"{given_as} {terrain} sets {field} to {value_of(text)!r}; leave out --set {text}")
 
 
 NETWORK_SECTIONS = ("actor", "critic")

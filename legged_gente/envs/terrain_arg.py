@@ -24,7 +24,7 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
                          + (" or ".join(inside) if inside else "a spec .json or a terrain_cfg.py"))
     if not path.is_file():
         raise FileNotFoundError(f"--terrain {value!r}: no such file; pass 'plane', a spec .json or a terrain_cfg.py")
-    if path.suffix == ".json":
+    if path.suffix.lower() == ".json":
         try:
             document = read_json(path.read_text(), f"--terrain {value}")
         except UnicodeDecodeError as exc:
@@ -48,7 +48,7 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
         terrain.border_size = whole_cells(terrain.border_size, terrain.resolution)
         terrain.num_rows = terrain.num_cols = 1
         return
-    if path.suffix == ".py":
+    if path.suffix.lower() == ".py":
         spec = importlib.util.spec_from_file_location(f"gente_terrain_{abs(hash(path.resolve()))}", path)
         module = importlib.util.module_from_spec(spec)
         try:
@@ -66,7 +66,7 @@ def apply_terrain_arg(value: str, env_cfg) -> None:
                              f"LeggedRobotCfg.terrain ({names}); keep only the one to train on")
         env_cfg.terrain = classes[0]()
         return
-    if path.suffix == ".npy":
+    if path.suffix.lower() == ".npy":
         raise ValueError(f"--terrain {value}: a bare heightmap has no cell size or height scale; pass a spec .json "
                          f"naming it: {{..., \"resolution\": <cell m>, \"heightmap\": {{\"file\": \"{path.name}\", "
                          f"\"vertical_scale\": <m per unit>}}}} (docs/terrain.md)")

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from legged_gente.utils.args import (
-    USER_ERRORS, build_parser, check_output, error_text, flag, import_mujoco, one_line, parse_args)
+    DEFAULT_TASK, USER_ERRORS, build_parser, check_output, error_text, flag, import_mujoco, one_line, parse_args)
 from legged_gente.utils.signals import take_back
 
 import_mujoco("gente-view")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
@@ -60,6 +60,7 @@ def build_arg_parser():
     p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
     p.add_argument("--step", type=int, help="open the rollout paused at this policy step")
     p.add_argument(*flag("--log_root"), default=None, help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
+    p.set_defaults(task=None)  # given or not: a rollout .npz names its own (check_flags); else gente_biped
     return p
 
 
@@ -73,7 +74,7 @@ def _task_terrain(args, terrain_arg=None):
         env_cfg, _ = task_registry.get_cfgs(args.task)
         apply_args(args, env_cfg, None)
         if terrain_arg:
-            apply_terrain_with_overrides(str(terrain_arg), env_cfg, args.overrides)
+            apply_terrain_with_overrides(str(terrain_arg), env_cfg, args.overrides, given_as="the source")
         return Terrain(env_cfg.terrain, num_robots=1)
 
     return build
@@ -194,6 +195,7 @@ def main(argv=None) -> None:
     if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --policy zero, --load_run and --checkpoint")
     check_flags(parser, args, source)
+    args.task = args.task or DEFAULT_TASK
     play_steps = args.steps or DEFAULT_STEPS
     rollout, mjm, play, stop_play = None, None, None, threading.Event()
     try:
@@ -220,7 +222,7 @@ def main(argv=None) -> None:
                 if rollout.qpos.shape[-1] != mjm.nq:  # traces.npz does not name its task
                     raise ValueError(f"{args.traces} holds robots of {rollout.qpos.shape[-1]} qpos values, the "
                                      f"--task {args.task} robot {mjm.nq}; pass the --task it was evaluated with.")
-        elif source.suffix == ".npz":
+        elif source.suffix.lower() == ".npz":
             rollout = Rollout.load(source)
             items = [TerrainItem(source.stem, lambda: BareTerrain(rollout.heights, rollout.material,
                                                                   rollout.resolution, rollout.origin))]
@@ -229,7 +231,7 @@ def main(argv=None) -> None:
                 raise ValueError(f"{source} holds robots of {rollout.qpos.shape[-1]} qpos values, the robot of its "
                                  f"task {rollout.task} {mjm.nq}: it was recorded with another robot model; record it "
                                  f"again.")
-        elif source.suffix in (".json", ".py"):
+        elif source.suffix.lower() in (".json", ".py"):
             items = [TerrainItem(source.parent.name or source.stem,
                                  _task_terrain(args, source))]
         else:
@@ -283,8 +285,11 @@ def check_flags(parser, args, source: Path | None) -> None:
     if args.terrain and source is not None:
         parser.error(f"--terrain {args.terrain} and the source {args.source} both give the terrain; give one (a "
                      f"rollout .npz brings its own)")
-    if args.overrides and source is not None and source.suffix == ".npz":
+    if args.overrides and source is not None and source.suffix.lower() == ".npz":
         parser.error(f"--set {args.overrides[0]}: the rollout {args.source} is replayed as recorded; leave out --set")
+    if args.task is not None and source is not None and source.suffix.lower() == ".npz":
+        parser.error(f"--task {args.task}: the rollout {args.source} is replayed with the robot it was recorded "
+                     f"with; leave out --task")
     if args.record and not args.play:
         parser.error("--record writes the rollout of --play: add --play")
     if args.record and not args.record.endswith(".npz"):  # numpy would add it, and a rollout is opened by it
@@ -300,7 +305,8 @@ def check_flags(parser, args, source: Path | None) -> None:
                      "(gente-view gente100 --traces eval/traces.npz)")
     if args.item and not args.traces:
         parser.error("--item picks the item of --traces to replay: add --traces")
-    if args.step is not None and not (args.play or args.traces or (source is not None and source.suffix == ".npz")):
+    replay = source is not None and source.suffix.lower() == ".npz"
+    if args.step is not None and not (args.play or args.traces or replay):
         parser.error("--step opens a rollout paused: give a rollout .npz, --traces or --play")
     if args.seconds is not None and not args.seconds >= 0:  # NaN too
         parser.error(f"--seconds {args.seconds} must be >= 0")

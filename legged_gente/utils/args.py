@@ -18,6 +18,10 @@ from fnmatch import fnmatchcase
 from pathlib import Path
 
 
+DEFAULT_TASK = "gente_biped"
+"""The task a command runs without --task."""
+
+
 def flag(name: str) -> tuple[str, ...]:
     """A long option in both spellings, ``--num_envs`` and ``--num-envs``: every gente-* command accepts either
     (argparse names the value after the first)."""
@@ -53,7 +57,7 @@ def build_parser(description: str, prog: str | None = None, training: bool = Tru
     training uses (--max_iterations, --resume, --run_name); ``headless``: what --headless means to the command;
     ``device``: the command's own default device (else cuda when there is one)."""
     parser = Parser(prog=prog, description=description)
-    parser.add_argument("--task", default="gente_biped", help="registered task name")
+    parser.add_argument("--task", default=DEFAULT_TASK, help="registered task name")
     parser.add_argument(*flag("--num_envs"), type=int, help="number of parallel robots (worlds)")
     if training:
         parser.add_argument(*flag("--max_iterations"), type=int, help="PPO iterations to run")
