@@ -257,8 +257,8 @@ def test_a_rollout_with_a_task_refuses_the_task_and_a_spec_s_refusal_names_the_s
                       np.zeros((steps, 1, 0, 3), np.float32), np.zeros((steps, 1, 0, 3), np.float32),
                       np.zeros((2, 2), np.float32), (0.0, 0.0), 1.0, MaterialMap.rigid((2, 2))).save(tmp_path / "r.npz")
     line = one_line_error(capsys, monkeypatch, [str(rollout), "--task", "gente_quadruped"])
-    assert line == (f"gente-view: error: --task gente_quadruped: the rollout {rollout} is replayed with the robot it "
-                    f"was recorded with; leave out --task")
+    assert line == (f"gente-view: error: --task gente_quadruped: the rollout {rollout} was recorded with task "
+                    f"gente_biped_flat, whose robot it replays; leave out --task")
     spec = tmp_path / "SPEC.JSON"
     spec.write_text(json.dumps({"size_x": 2.0, "size_y": 2.0, "resolution": 0.1, "seed": 0, "calls": []}))
     line = one_line_error(capsys, monkeypatch, [str(spec), "--set", "terrain.num_rows=3"])

@@ -60,7 +60,7 @@ def build_arg_parser():
     p.add_argument("--item", help="--traces: the item id to replay (default: the first)")
     p.add_argument("--step", type=int, help="open the rollout paused at this policy step")
     p.add_argument(*flag("--log_root"), default=None, help="where runs are (default: $GENTE_LOG_ROOT, else ./logs)")
-    p.set_defaults(task=None)  # given or not: a rollout .npz names its own (check_flags); else gente_biped
+    p.set_defaults(task=None)  # given or not: a rollout .npz names its own (main); else DEFAULT_TASK
     return p
 
 
@@ -195,7 +195,7 @@ def main(argv=None) -> None:
     if args.pretrained and (args.policy == "zero" or args.load_run or args.checkpoint is not None):
         parser.error("--pretrained plays the shipped policy; leave out --policy zero, --load_run and --checkpoint")
     check_flags(parser, args, source)
-    args.task = args.task or DEFAULT_TASK
+    given_task, args.task = args.task, args.task or DEFAULT_TASK  # a rollout .npz names its own
     play_steps = args.steps or DEFAULT_STEPS
     rollout, mjm, play, stop_play = None, None, None, threading.Event()
     try:
@@ -224,6 +224,9 @@ def main(argv=None) -> None:
                                      f"--task {args.task} robot {mjm.nq}; pass the --task it was evaluated with.")
         elif source.suffix.lower() == ".npz":
             rollout = Rollout.load(source)
+            if given_task not in (None, rollout.task):
+                raise ValueError(f"--task {given_task}: the rollout {source} was recorded with task {rollout.task}, "
+                                 f"whose robot it replays; leave out --task")
             items = [TerrainItem(source.stem, lambda: BareTerrain(rollout.heights, rollout.material,
                                                                   rollout.resolution, rollout.origin))]
             mjm = robot_model(rollout.task)
@@ -287,9 +290,6 @@ def check_flags(parser, args, source: Path | None) -> None:
                      f"rollout .npz brings its own)")
     if args.overrides and source is not None and source.suffix.lower() == ".npz":
         parser.error(f"--set {args.overrides[0]}: the rollout {args.source} is replayed as recorded; leave out --set")
-    if args.task is not None and source is not None and source.suffix.lower() == ".npz":
-        parser.error(f"--task {args.task}: the rollout {args.source} is replayed with the robot it was recorded "
-                     f"with; leave out --task")
     if args.record and not args.play:
         parser.error("--record writes the rollout of --play: add --play")
     if args.record and not args.record.endswith(".npz"):  # numpy would add it, and a rollout is opened by it
