@@ -97,8 +97,8 @@ def test_the_planner_refuses_the_servers_arguments(kwargs):
     """The planner sends no request: an argument for the server would be silently ignored."""
     with pytest.raises(ValueError) as info:
         generate_spec("a lake", backend="planner", **kwargs)
-    assert str(info.value) == ("base_url, model, two_phase and vision_model are for the openai backend; the planner "
-                               "sends no request.")
+    assert str(info.value) == ("base_url, model, two_phase, vision_model, timeout, max_retries and api_key_env are "
+                               "for the openai backend; the planner sends no request.")
 
 
 def test_an_api_key_variable_named_but_unset_is_refused(capsys, monkeypatch, tmp_path):

@@ -35,8 +35,9 @@ def test_two_phase_description_with_a_nonstandard_finish_reason():
 
 
 @pytest.mark.parametrize("message, expected", [
-    ({"role": "assistant", "content": None, "tool_calls": "many"}, "answered JSON that is not a chat completion"),
-    ("text", "answered JSON that is not a chat completion"),
+    ({"role": "assistant", "content": None, "tool_calls": "many"},
+     r"off OpenAI's format \(choices\[0\]\.message\.tool_calls: Input should be a valid list"),
+    ("text", r"off OpenAI's format \(choices\[0\]\.message: Input should be a valid dictionary"),
 ])
 def test_a_message_that_is_not_one_is_still_refused(message, expected):
     answer = _completion(content="x")

@@ -112,3 +112,15 @@ def test_a_default_name_keeps_letters_that_are_not_ascii_as_their_ascii_forms(te
     from legged_gente.generation.spec import spec_name
 
     assert spec_name(text) == name
+
+
+def test_a_tool_call_off_the_format_is_named_by_its_field():
+    """A server that sends a call's arguments as an object (OpenAI sends a JSON string): the error named '3
+    validation errors for ChatCompletionMessage', not the field."""
+    answer = _completion([_tool_call("test_bumps", {"height": 0.2, "region": "full"})])
+    answer["choices"][0]["message"]["tool_calls"][0]["function"]["arguments"] = {"height": 0.2, "region": "full"}
+    with FakeServer([ok(answer)]) as srv:
+        with pytest.raises(GenerationError) as error:
+            OpenAIBackend(srv.url, "m", registry=REGISTRY, timeout=5.0).generate(text="x")
+    assert "off OpenAI's format (choices[0].message.tool_calls[0].function.arguments: Input should be a valid " \
+        "string" in str(error.value)

@@ -320,6 +320,13 @@ class OpenAIBackend:
                 raise ValueError("'choices' is not a list of objects")
             return ChatCompletionMessage.model_validate(choices[0].get("message")), choices[0].get("finish_reason")
         except ValueError as exc:  # pydantic's ValidationError is a ValueError
+            errors = exc.errors() if hasattr(exc, "errors") else []
+            if errors:  # pydantic's: the first field at fault, which its one-line summary does not name
+                fields = [p for p in errors[0]["loc"] if not (isinstance(p, str) and p[:1].isupper())]  # no types
+                where = ("choices[0].message" + "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in fields)
+                         + f": {errors[0]['msg'][:80]}" + (f", and {len(errors) - 1} more" if len(errors) > 1 else ""))
+                raise GenerationError(f"the server at {self.base_url} answered a chat completion off OpenAI's "
+                                      f"format ({printable(where)}); check the server's OpenAI compatibility.") from None
             raise GenerationError(
                 f"the server at {self.base_url} answered JSON that is not a chat completion ({str(exc).splitlines()[0][:120]}; "
                 f"starting {text[:80]!r}); check --base-url and --model."
