@@ -191,8 +191,8 @@ def test_set_terrain_applies_to_a_terrain_cfg_source(tmp_path):
 def test_a_set_the_spec_source_overrides_is_refused(capsys, monkeypatch):
     """`gente-view flat.json --set terrain.num_rows=3`: the spec is one tile and set num_rows back to 1 silently."""
     line = one_line_error(capsys, monkeypatch, [str(FLAT_SPEC), "--set", "terrain.num_rows=3"])
-    # the message of gente-train's --terrain, whose rule the source follows
-    assert line == (f"gente-view: error: --terrain {FLAT_SPEC} sets terrain.num_rows to 1; leave out --set "
+    # the rule of gente-train's --terrain, the file named as what it is here: the source
+    assert line == (f"gente-view: error: the source {FLAT_SPEC} sets terrain.num_rows to 1; leave out --set "
                     f"terrain.num_rows=3")
 
 
