@@ -28,6 +28,12 @@ def default_log_root() -> Path:
     return Path(os.environ.get("GENTE_LOG_ROOT") or "logs").absolute()
 
 
+def log_root_of(args) -> Path:
+    """Where a command's runs are: its ``--log_root`` if given, else ``default_log_root()``."""
+    given = getattr(args, "log_root", None)
+    return Path(given) if given else default_log_root()
+
+
 # PPO's settings outside which rsl-rl trains on without complaint but learns nothing sensible: (field, test, bound)
 PPO_RANGES = (
     ("learning_rate", lambda v: v > 0, "> 0"),

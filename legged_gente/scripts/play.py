@@ -17,7 +17,7 @@ from legged_gente.utils.args import (
 
 import_mujoco("gente-play")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
-from legged_gente.envs.task_registry import apply_args, check_run_folder_names, default_log_root, task_registry
+from legged_gente.envs.task_registry import apply_args, check_run_folder_names, log_root_of, task_registry
 from legged_gente.utils.export import deployment_metadata, export_onnx
 
 
@@ -81,12 +81,12 @@ def play(args) -> dict:
         check_offscreen_rendering()
     if getattr(args, "pretrained", False):
         task_registry.shipped_policy(args.task)  # a task without a shipped policy: say so before building anything
-        check_log_root(args.log_root, default_log_root())  # its exports go there
+        check_log_root(args.log_root, log_root_of(args))  # its exports go there
     env_cfg, train_cfg = task_registry.get_play_cfgs(args.task, 16)
     apply_args(args, env_cfg, train_cfg)
     check_run_folder_names(train_cfg.runner)  # before building: --pretrained's exports go there too
     env, _ = task_registry.make_env(args.task, args, env_cfg=env_cfg)
-    log_root = Path(args.log_root) if getattr(args, "log_root", None) else default_log_root()
+    log_root = log_root_of(args)
     if getattr(args, "pretrained", False):
         runner, checkpoint = task_registry.make_pretrained_runner(env, args.task, train_cfg)
         # a shipped policy has no run folder of its own: its exports go beside the user's runs of the task

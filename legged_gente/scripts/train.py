@@ -21,7 +21,7 @@ import_mujoco("gente-train")  # before the imports below load it (a MUJOCO_GL it
 
 from legged_gente.envs.base.base_config import class_to_dict
 from legged_gente.envs.task_registry import (
-    apply_args, check_run_folder_names, default_log_root, is_one_folder_name, task_registry)
+    apply_args, check_run_folder_names, is_one_folder_name, log_root_of, task_registry)
 from legged_gente.terrain.soil import SOIL_PRESETS
 from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
 
@@ -113,8 +113,8 @@ def _stop_after_the_iteration(logger):
 
 def train(args) -> Path | None:
     started = time.monotonic()  # --max_minutes counts the env's build too, as a job's time limit does
-    log_root = Path(args.log_root) if args.log_root else default_log_root()
-    check_log_root(args.log_root, default_log_root())
+    log_root = log_root_of(args)
+    check_log_root(args.log_root, log_root)
     _, named = task_registry.get_cfgs(args.task)  # the run's folder names, checked before the env is built
     apply_args(args, None, named)
     check_run_folder_names(named.runner)

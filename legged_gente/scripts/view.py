@@ -28,7 +28,7 @@ from legged_gente.utils.signals import take_back
 
 import_mujoco("gente-view")  # before the imports below load it (a MUJOCO_GL it cannot use: one line)
 
-from legged_gente.envs.task_registry import apply_args, default_log_root
+from legged_gente.envs.task_registry import apply_args, log_root_of
 
 DEFAULT_ROBOTS = 4
 """Robots drawn by ``--play`` when ``--robots`` is not given (fewer if ``--num_envs`` is smaller)."""
@@ -156,7 +156,7 @@ def _make_play(args):
         policy = runner.get_inference_policy(device=env.device)
     else:
         train_cfg.runner.resume = True
-        log_root = args.log_root or default_log_root()
+        log_root = log_root_of(args)
         runner, _, _ = task_registry.make_alg_runner(env, args.task, args, train_cfg=train_cfg, log_root=log_root,
                                                      policy_only=True)
         policy = runner.get_inference_policy(device=env.device)
