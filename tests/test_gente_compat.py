@@ -141,7 +141,7 @@ def test_heightmap_overflow_detection():
 def test_gente_schemas_are_gentes_tool_lists():
     multi = {t["function"]["name"]: t["function"] for t in gente_tool_schemas("multi")}
     single = {t["function"]["name"]: t["function"] for t in gente_tool_schemas("single")}
-    assert set(multi) == {n for n, t in GENTE_TOOLS.items() if "multi" in t.schemas}
+    assert set(multi) == {n for n, t in GENTE_TOOLS.items() if "multi" in t.schemas} - {"random_gaussian_terrain"}
     assert "natural_ground_terrain" in single and "natural_ground_terrain" not in multi
     assert "part" in multi["sloped_terrain"]["parameters"]["properties"]
     assert "part" not in single["sloped_terrain"]["parameters"]["properties"]
@@ -356,3 +356,28 @@ def test_live_gente_toolset_spec_is_smoothed_across_its_seams_as_gente_smooths(t
     assert all(f["sigma"] == pytest.approx(0.2) for f in spec.smoothing)
     heights, _ = spec.build()
     assert np.isfinite(heights).all()
+
+
+def test_a_live_model_is_offered_only_tools_that_translate_and_told_what_to_call_instead():
+    """A live model (``--toolset gente``) is never offered a tool whose every call is refused; a call of one (or of
+    a tool never offered) is answered with the tools to call, all of them, and the refusal's reason comes first."""
+    offered = {t["function"]["name"] for t in gente_tool_schemas("multi")}
+    assert "random_gaussian_terrain" not in offered and "random_uniform_terrain" in offered
+    assert offered == {n for n, t in GENTE_TOOLS.items() if "multi" in t.schemas and t.translate is not None}
+    gaussian = translate_call("random_gaussian_terrain", {"mean_height": 0, "std_dev": 0.1, "part": 1}, live=True)
+    assert gaussian.blocked and "random_uniform_terrain" in gaussian.issues[0].message
+    assert "reported" not in gaussian.issues[0].message
+    invented = translate_call("volcano_terrain_" + "x" * 200, {"part": 1}, live=True)
+    message = invented.issues[0].message
+    assert all(name in message for name in offered) and "random_gaussian_terrain" not in message
+    calls = [_gcall("volcano_terrain_" + "x" * 200, {"part": 1}, 0), _gcall("random_gaussian_terrain", {"mean_height": 0, "std_dev": 0.1, "part": 2}, 1),
+             _gcall("stairs_terrain", {"step_width": 0.3, "step_height": 5.0}, 2)]
+    with FakeServer([ok(_completion(calls)), ok(_completion([]))]) as srv:
+        with pytest.raises(GenerationError):
+            OpenAIBackend(srv.url, "m", toolset="gente", timeout=5.0, max_retries=1).generate(text="x")
+        replies = {m["tool_call_id"]: m["content"] for m in srv.requests[1]["messages"] if m["role"] == "tool"}
+    assert all(name in replies["g0"] for name in offered) and "characters in all" not in replies["g0"]  # not cut
+    assert "random_uniform_terrain" in replies["g1"]
+    # the refusal's reason first, the note that part 1 was taken after it
+    assert replies["g2"].startswith("REJECTED: stairs_terrain: step_height=5"), replies["g2"]
+    assert "default part 1" in replies["g2"]

@@ -363,7 +363,8 @@ GENTE_TOOLS: dict[str, GenteTool] = {t.name: t for t in [
               {"terrain": HANDLE, "mean_height": GenteArg("number", "mean height [m]", True),
                "std_dev": GenteArg("number", "standard deviation of the heights", True),
                "step": GenteArg("number", "height quantum"), "downsampled_scale": GenteArg("number", "sampling distance")},
-              MULTI, None, "no equivalent (GenTe declares it but has no implementation; ours has no Gaussian noise): reported"),
+              MULTI, None, "no equivalent (GenTe declares it without an implementation, and ours has no Gaussian noise); "
+              "random_uniform_terrain draws random heights"),
     GenteTool("generate_river_terrain", "A river channel lower than its surroundings.",
               {"terrain": HANDLE, "river_width": GenteArg("number", "river width [m]", True),
                "river_depth": GenteArg("number", "depth below the surroundings [m]", True),
@@ -437,15 +438,19 @@ GENTE_TOOLS: dict[str, GenteTool] = {t.name: t for t in [
 PART_ARG = GenteArg("integer", "which quarter of the map the terrain goes in: 1, 2, 3 or 4 (default 1)", enum=None)
 
 
-def gente_tool_schemas(schema: str = "multi") -> list[dict[str, Any]]:
-    """OpenAI ``tools`` in GenTe's names and arguments: exactly the tools of GenTe's ``single`` or ``multi`` list
-    (``multi`` adds ``part``), described in our words from :data:`GENTE_TOOLS`."""
+def offered_tools(schema: str) -> list[GenteTool]:
+    """The tools of GenTe's ``single`` or ``multi`` list that a model is offered: all but those without a translation
+    (``random_gaussian_terrain``, which GenTe declares without an implementation), whose every call is refused."""
     if schema not in ("single", "multi"):
         raise ValueError(f"schema {schema!r}: use 'single' or 'multi'.")
+    return [t for t in GENTE_TOOLS.values() if schema in t.schemas and t.translate is not None]
+
+
+def gente_tool_schemas(schema: str = "multi") -> list[dict[str, Any]]:
+    """OpenAI ``tools`` in GenTe's names and arguments: the tools of GenTe's ``single`` or ``multi`` list (``multi``
+    adds ``part``) that translate (:func:`offered_tools`), described in our words from :data:`GENTE_TOOLS`."""
     tools = []
-    for tool in GENTE_TOOLS.values():
-        if schema not in tool.schemas:
-            continue
+    for tool in offered_tools(schema):
         args = dict(tool.args) | ({"part": PART_ARG} if schema == "multi" else {})
         props = {}
         for name, arg in args.items():
@@ -532,6 +537,11 @@ def translate_call(
     tool_name = tool_name[:80]
     issues = Issues(live)
     tool = GENTE_TOOLS.get(name) if isinstance(name, str) else None
+    if tool is None and live:  # the whole list, within a rejection's MAX_MESSAGE_CHARS: the name shown is cut short
+        shown = tool_name if len(tool_name) <= 24 else tool_name[:24] + "..."
+        offered = ", ".join(sorted(t.name for t in offered_tools(schema or "multi")))
+        issues.append(Issue("invented_tool", f"{shown!r} is not a tool offered here; call one of {offered}."))
+        return Translation(tool_name, [], issues)
     if tool is None:
         issues.append(Issue("invented_tool", f"{tool_name!r} is not a tool GenTe declares; GenTe's tools are {sorted(GENTE_TOOLS)}."))
         return Translation(tool_name, [], issues)

@@ -338,12 +338,12 @@ class OpenAIBackend:
         Raises ValidationError with what the model must change.
         """
         if self.toolset == "gente":
-            from legged_gente.generation.gente_compat import translate_call
+            from legged_gente.generation.gente_compat import BLOCKING, translate_call
 
             translation = translate_call(name, arguments, "multi", self.size_x, self.size_y, live=True,
                                          resolution=self.resolution)
-            if translation.blocked:
-                raise ValidationError([i.message for i in translation.issues])
+            if translation.blocked:  # why first, then the notes (a part defaulted, an argument ignored)
+                raise ValidationError([i.message for i in sorted(translation.issues, key=lambda i: i.kind not in BLOCKING)])
             return translation.calls, [f"{translation.gente_tool}: {i.message}" for i in translation.issues]
         return [validate_call(name, arguments, self.size_x, self.size_y, self.registry, self.resolution)], []
 
