@@ -600,10 +600,9 @@ class TerrainForces:
     def contact_filter(self, m, d):
         """The depth cap, ground friction and soil ruts on MuJoCo's terrain contacts, then the analytic sole
         contacts. Where no foot is among MuJoCo's contacts (``feet_apart_from_filter``) the feet's cells are found
-        beside the first (parallel branches on a GPU, ``_in_parallel``): neither reads what the other writes. The
-        launches are recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU
-        packing the sole kernel's ~60 arguments every substep would cost more than the heightfield collision it
-        replaces."""
+        beside the first (parallel branches on a GPU, ``_in_parallel``): neither reads what the other writes. The launches are recorded once per (m, d) and replayed: their arguments are persistent arrays, and
+        on the CPU packing the sole kernel's ~60 arguments every substep would cost more than the heightfield
+        collision it replaces."""
         cells, contacts, *soles = self._recorded_filter(m, d)
         if self.feet_apart_from_filter:
             self._in_parallel(cells.launch, contacts.launch)
@@ -770,29 +769,41 @@ class TerrainForces:
 
     def after_substep(self):
         """After each ``mjw.step``: sum the feet's (and rut legs') normal forces, low-pass their loads, update slip
-        since touchdown and lift-off (the feet's and the rut legs' ruts)."""
+        since touchdown and lift-off (the feet's and the rut legs' ruts). The feet and the rut legs are independent
+        groups (parallel branches on a GPU, ``_in_parallel``)."""
         if not self.nfoot:
             return
-        m, d, dev = self.m, self.d, self.device
-        c = d.contact
         load_alpha = min(self.dt / float(self.cfg.sinkage_load_tau), 1.0)
-        # summed into arrays cleared before: the feet's at the substep's start, the rut legs' once read
-        for geom_limb, limb_fn in ((self.geom_foot, self.foot_fn), (self.geom_leg, self.leg_fn))[:1 + self.has_rut_legs]:
-            wp.launch(
-                K.normal_force_kernel, dim=d.naconmax, device=dev,
-                inputs=[int(m.opt.cone), d.nacon, geom_limb, c.frame, c.friction, c.dim, c.efc_address,
-                        c.adhesion, c.geom, c.worldid, d.efc.force, d.njmax, limb_fn],
-            )
         if self.has_rut_legs:
-            wp.launch(K.leg_state_kernel, dim=(self.nworld, self.nleg), device=dev,
-                      inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha, float(self.cfg.liftoff_time),
-                              self.leg_fn, self.legs, self.leg_air])
+            self._in_parallel(lambda: self._feet_state(load_alpha), lambda: self._legs_state(load_alpha))
+        else:
+            self._feet_state(load_alpha)
+
+    def _normal_forces(self, geom_limb, limb_fn):
+        """Sum the normal forces of the contacts of each limb (``geom_limb``: a geom's limb, else -1) into ``limb_fn``,
+        cleared before: the feet's at the substep's start, the rut legs' once read."""
+        m, d = self.m, self.d
+        c = d.contact
         wp.launch(
-            K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=dev, block_dim=LIMB_BLOCK_DIM,
+            K.normal_force_kernel, dim=d.naconmax, device=self.device,
+            inputs=[int(m.opt.cone), d.nacon, geom_limb, c.frame, c.friction, c.dim, c.efc_address,
+                    c.adhesion, c.geom, c.worldid, d.efc.force, d.njmax, limb_fn],
+        )
+
+    def _feet_state(self, load_alpha: float):
+        self._normal_forces(self.geom_foot, self.foot_fn)
+        wp.launch(
+            K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=self.device, block_dim=LIMB_BLOCK_DIM,
             inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha, self.foot_fn, self.foot_vel,
                     float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip, self.foot_air, self.foot_load,
                     self.foot_sinkage],
         )
+
+    def _legs_state(self, load_alpha: float):
+        self._normal_forces(self.geom_leg, self.leg_fn)
+        wp.launch(K.leg_state_kernel, dim=(self.nworld, self.nleg), device=self.device,
+                  inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha, float(self.cfg.liftoff_time),
+                          self.leg_fn, self.legs, self.leg_air])
 
     def observe(self):
         """After a step's last substep (its ``after_substep``): the privileged observation of its state. Once per
