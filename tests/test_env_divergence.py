@@ -135,3 +135,22 @@ def test_masked_reset_restores_every_reset_buffer(env):
     assert (env.episode_length_buf[m] == 0).all() and (env.episode_length_buf[k] == 17).all()
     assert torch.equal(env.sim.qpos[k], before_q[k]) and torch.equal(env.sim.qvel[k], before_v[k])
     assert not torch.equal(env.sim.qpos[m], before_q[m])
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_a_world_given_non_finite_actions_is_diverged_and_the_others_are_not_touched(env, bad):
+    """A NaN or inf action must not drive the joints (a NaN position target once gave every joint its negative
+    torque limit, with nothing flagged): the world holds its default pose for the step and is reset as diverged."""
+    for _ in range(2):
+        zero_step(env)
+    actions = torch.zeros(env.num_envs, env.num_actions)
+    actions[1, 0] = bad
+    _, reward, done, extras = env.step(actions)
+    assert done.tolist() == [False, True, False, False, False]
+    assert extras["time_outs"][1] and reward[1] == 0.0
+    assert extras["episode"]["diverged_resets"].item() == 1.0
+    assert torch.isfinite(env.torques).all() and torch.isfinite(env.actions).all()
+    assert (env.actions[1] == 0).all()
+    assert env.terrain_levels[1] == 1
+    _, _, done, extras = zero_step(env)
+    assert not done.any() and extras["episode"]["diverged_resets"].item() == 0.0

@@ -342,6 +342,7 @@ class LeggedRobot(VecEnv):
         self.reset_buf = torch.ones(n, dtype=torch.bool, device=dev)
         self.time_out_buf = torch.zeros(n, dtype=torch.bool, device=dev)
         self.diverged_buf = torch.zeros(n, dtype=torch.bool, device=dev)
+        self.nonfinite_actions = torch.zeros(n, dtype=torch.bool, device=dev)  # the step's action had a NaN or inf
         self.rew_buf = torch.zeros(n, device=dev)
         self.commands = torch.zeros(n, 4, device=dev)  # vx, vy, yaw rate, heading
         # each world's state at the end of the last step's physics and the commands it ran under, copied before
@@ -523,7 +524,11 @@ class LeggedRobot(VecEnv):
         """Everything a step does on the device (what StepRunner compiles and captures)."""
         # in place: rebound here, under rsl-rl's inference_mode, it would become an inference tensor that a reset
         # outside it (a curriculum restored after a rollout) could not write
-        self.actions.copy_(torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions))
+        # a world given a NaN or inf action holds its default pose for the step and is reset as diverged (a NaN
+        # position target would otherwise reach the actuators, which clamp it to a torque limit)
+        finite = torch.isfinite(self._step_actions).all(1, keepdim=True)
+        self.nonfinite_actions.copy_(~finite[:, 0])
+        self.actions.copy_(torch.where(finite, torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions), 0.0))
         self.sim.ctrl[:] = self.default_dof_pos + self.action_scale * self.actions
         self.sim.step(self.decimation)
         self._post_physics_step()
@@ -575,10 +580,11 @@ class LeggedRobot(VecEnv):
 
     def _diverged(self) -> torch.Tensor:
         """Worlds whose state is non-finite or absurdly fast, or whose constraint rows overflowed ``njmax`` (MuJoCo
-        counts the rows it wanted, so ``nefc > njmax`` means rows were dropped): reset as time-outs."""
+        counts the rows it wanted, so ``nefc > njmax`` means rows were dropped), or that were given a non-finite
+        action: reset as time-outs."""
         # "not <=" is also true for NaN, which amax propagates
         bad = ~(self.sim.qvel.abs().amax(1) <= self.max_qvel) | ~torch.isfinite(self.sim.qpos).all(1)
-        return bad | (self.sim.nefc > self.njmax)
+        return bad | (self.sim.nefc > self.njmax) | self.nonfinite_actions
 
     def _update_state(self) -> None:
         """Base and joint state in the frames the observations and rewards use (views, no copies of sim)."""
