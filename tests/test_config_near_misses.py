@@ -79,3 +79,23 @@ def test_a_train_config_slip_is_named_too():
         warnings.simplefilter("always")
         validate_cfgs(None, Mine())
     assert [str(w.message).rsplit(" ", 1)[-1] for w in caught] == ["train_cfg.algorithm.learning_rate?"]
+
+
+def test_a_slip_set_on_a_config_instance_in_a_script_is_named_too(recwarn):
+    """``cfg.domain_rand.push_robot = False`` on the instance ``get_cfgs`` returns is as silent as one in a subclass."""
+    cfg, train_cfg = task_registry.get_cfgs("gente_biped_flat")
+    cfg.env.num_envs = 1
+    cfg.domain_rand.push_robot = False  # meant: push_robots, which stays True
+    cfg.rewards.my_own_setting = 3.0  # far from every setting: the user's own
+    train_cfg.algorithm.lerning_rate = 1e-4
+    assert near_misses(cfg, "cfg", OPEN) == [
+        "cfg.domain_rand.push_robot was set on the config instance but is not a setting of its class, so nothing "
+        "reads it; did you mean cfg.domain_rand.push_robots?"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        validate_cfgs(None, train_cfg)
+    assert [str(w.message).rsplit(" ", 1)[-1] for w in caught] == ["train_cfg.algorithm.learning_rate?"]
+    env, _ = task_registry.make_env("gente_biped_flat", env_cfg=cfg, args=argparse.Namespace(device="cpu"))
+    slips = [str(w.message) for w in recwarn if "nothing reads it" in str(w.message)]
+    assert slips == ["cfg.domain_rand.push_robot was set on the config instance but is not a setting of its class, so "
+                     "nothing reads it; did you mean cfg.domain_rand.push_robots?"]

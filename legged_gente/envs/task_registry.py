@@ -90,7 +90,7 @@ def validate_cfgs(env_cfg: LeggedRobotCfg | None, train_cfg: LeggedRobotCfgPPO |
             bound = f"> {low}" if kind is float else f">= {low}"
             raise ValueError(f"{name}={value!r}: must be {bound} (--set {name}=...)")
     if train_cfg is not None:
-        for message in near_misses(type(train_cfg), "train_cfg"):
+        for message in near_misses(train_cfg, "train_cfg"):
             warnings.warn(message, stacklevel=2)
         a = train_cfg.algorithm
         for field, test, bound in PPO_RANGES:

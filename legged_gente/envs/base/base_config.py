@@ -66,25 +66,40 @@ def update_from_dict(obj: object, values: dict, path: str = "cfg") -> None:
             setattr(obj, key, value)
 
 
-def near_misses(cls: type, path: str, open_sections: tuple[str, ...] = ()) -> list[str]:
+def near_misses(cfg: type | object, path: str, open_sections: tuple[str, ...] = ()) -> list[str]:
     """Names a config class (or a nested section class of it) brings in that none of its bases has, but that lie
     a slip or two (``typing_slips``) from one its bases declare, each as a sentence. A misspelt field in a subclass
     (``paper_drag_aera = True``) is a new attribute to Python, which nothing reads, while the parent's value stays
-    in force; a name further from every declared one is the user's own setting and is left alone.
-    ``open_sections`` (dotted paths below ``path``) hold the user's own names (reward scales, observation terms)
-    and are not looked into."""
+    in force; a name further from every declared one is the user's own setting and is left alone. Given a config
+    instance, also the names set on it and its sections that their classes do not declare
+    (``cfg.domain_rand.push_robot = False`` in a script). ``open_sections`` (dotted paths below ``path``) hold the
+    user's own names (reward scales, observation terms) and are not looked into."""
+    cls = cfg if inspect.isclass(cfg) else type(cfg)
     found = []
     inherited = {n for base in cls.__mro__[1:] for n in dir(base) if not n.startswith("_")}
     for name in (n for n in vars(cls) if not n.startswith("_") and n not in inherited):
-        close = [d for d in inherited if typing_slips(name, d) <= (2 if len(d) >= 6 else 1)]
-        if close:
+        meant = _closest(name, inherited)
+        if meant:
             found.append(f"{path}.{name} (in {cls.__qualname__}) is not a setting its parents declare, so nothing "
-                         f"reads it; did you mean {path}.{min(close, key=lambda d: typing_slips(name, d))}?")
+                         f"reads it; did you mean {path}.{meant}?")
+    if not inspect.isclass(cfg):
+        declared = {n for n in dir(cls) if not n.startswith("_")}
+        for name in (n for n in vars(cfg) if not n.startswith("_") and n not in declared):
+            meant = _closest(name, declared)
+            if meant:
+                found.append(f"{path}.{name} was set on the config instance but is not a setting of its class, so "
+                             f"nothing reads it; did you mean {path}.{meant}?")
     for name in (n for n in dir(cls) if not n.startswith("_")):
-        value, here = getattr(cls, name), f"{path}.{name}"
-        if inspect.isclass(value) and here.split(".", 1)[-1] not in open_sections:
-            found += near_misses(value, here, open_sections)
+        here = f"{path}.{name}"
+        if inspect.isclass(getattr(cls, name)) and here.split(".", 1)[-1] not in open_sections:
+            found += near_misses(getattr(cfg, name), here, open_sections)
     return found
+
+
+def _closest(name: str, declared: set[str]) -> str | None:
+    """The declared name ``name`` is a slip or two from (one for names shorter than 6 letters), if any."""
+    close = [d for d in declared if typing_slips(name, d) <= (2 if len(d) >= 6 else 1)]
+    return min(close, key=lambda d: (typing_slips(name, d), d)) if close else None
 
 
 def typing_slips(a: str, b: str) -> int:
