@@ -156,3 +156,16 @@ def test_running_out_of_memory_while_loading_is_not_called_a_corrupt_file(tmp_pa
     monkeypatch.setattr(torch, "load", out_of_memory)
     with pytest.raises(torch.OutOfMemoryError):
         load_checkpoint(path, map_location="cpu")
+
+
+def test_a_policy_that_observes_a_term_this_env_leaves_out_is_named_with_what_the_term_needs():
+    """The shipped gente_biped policy observes the height scan; on a plane the env leaves that term out, and the
+    error says so, instead of advising other network settings."""
+    env_cfg, _ = task_registry.get_cfgs("gente_biped")
+    env_cfg.env.num_envs = 1
+    env_cfg.terrain.mesh_type = "plane"
+    args = parse_args(build_parser("test"), ["--task", "gente_biped", "--device", "cpu"])
+    env, _ = task_registry.make_env("gente_biped", args, env_cfg=env_cfg)
+    message = one_line_error(lambda: task_registry.make_pretrained_runner(env, "gente_biped"))
+    assert "height_scan" in message and "heightfield terrain" in message, message
+    assert "hidden_dims" not in message, message

@@ -205,16 +205,23 @@ def _actor_outputs(state: dict) -> int | str:
 
 
 def check_checkpoint_fits(loaded: dict, path, task: str | None, num_actions: int, actor_state: dict,
-                          strict: bool = True) -> None:
+                          strict: bool = True, left_out: dict[str, str] | None = None) -> None:
     """A checkpoint made for another task (another robot or observation set) or another network size is a
-    one-line error naming both, instead of torch's 'size mismatch' list."""
+    one-line error naming both, instead of torch's 'size mismatch' list. ``left_out``: the policy observation
+    terms this env leaves out and what each needs (``LeggedRobot.left_out_observations``), named when the
+    checkpoint's actor takes more observations than this env makes."""
     saved = loaded["actor_state_dict"]
     infos = loaded.get("infos") or {}
     saved_task = infos.get("task")
     saved_actions = infos.get("num_actions", _actor_outputs(saved))
+    inputs, saved_inputs = _actor_inputs(actor_state), _actor_inputs(saved)
+    if left_out and saved_actions == num_actions and isinstance(inputs, int) and isinstance(saved_inputs, int) \
+            and saved_inputs > inputs:
+        terms = "; ".join(f"{name}, which needs {need}" for name, need in left_out.items())
+        raise CheckpointError(f"checkpoint {path}'s actor takes {saved_inputs} observations, this env makes {inputs}: "
+                              f"it leaves out {terms}. Run the policy where those terms exist.")
     if saved_actions != num_actions or (saved_task and task and saved_task != task
                                         and _shapes(saved) != _shapes(actor_state)):
-        inputs, saved_inputs = _actor_inputs(actor_state), _actor_inputs(saved)
         why = (f", whose actor takes {inputs} inputs, the checkpoint's {saved_inputs} (another observation set)"
                if saved_actions == num_actions and inputs != saved_inputs else "")
         raise CheckpointError(f"checkpoint {path} is for {checkpoint_summary(loaded)}; this task is "

@@ -200,7 +200,7 @@ class GenteOnPolicyRunner(OnPolicyRunner):
 
         loaded = load_checkpoint(path, map_location or self.device)
         check_checkpoint_fits(loaded, path, self.task_name, self.env.num_actions, self.alg.get_policy().state_dict(),
-                              strict)
+                              strict, getattr(self.env, "left_out_observations", None))
         wanted = {"critic": True, "optimizer": True, "iteration": True} if load_cfg is None else load_cfg  # rsl-rl's
         if "critic_state_dict" not in loaded and wanted.get("critic"):
             raise CheckpointError(

@@ -26,7 +26,7 @@ from tensordict import TensorDict
 from legged_gente.envs.base.base_config import near_misses
 from legged_gente.envs.base.legged_robot_config import LeggedRobotCfg
 from legged_gente.envs.base.step_runner import StepRunner
-from legged_gente.envs.base.terms import obs_terms
+from legged_gente.envs.base.terms import NEEDS, obs_terms
 from legged_gente.sim.assembly import build_model, owns_sole_contacts
 from legged_gente.sim.backend import Simulation
 from legged_gente.terrain.terrain import check_ground_friction
@@ -185,7 +185,7 @@ class LeggedRobot(VecEnv):
             if not ok:
                 raise ValueError(message + ".")
         check_ground_friction(cfg.terrain.static_friction)  # a plane builds no terrain grid, which checks it too
-        for message in near_misses(type(cfg), "cfg", open_sections=("observations",)):  # its terms: the user's
+        for message in near_misses(cfg, "cfg", open_sections=("observations",)):  # its terms: the user's
             warnings.warn(message, stacklevel=2)
 
     def _foot_terrain_view(self) -> torch.Tensor:
@@ -446,12 +446,15 @@ class LeggedRobot(VecEnv):
         available = {None: True, "heightfield": self.height_points is not None, "forces": self._force_obs is not None}
         level = float(self.cfg.noise.noise_level)
         self.observation_names: dict[str, list[str]] = {}
+        self.left_out_observations: dict[str, str] = {}  # policy terms this env cannot make -> what they need
         self._obs_groups = {}
         for group in ("policy", "critic"):
             path = f"cfg.observations.{group}"
             entries = []
             for name, term in obs_terms(getattr(self.cfg.observations, group), path):
                 if not available[term.when]:
+                    if group == "policy":
+                        self.left_out_observations[name] = NEEDS[term.when]
                     continue
                 method = getattr(self, f"_obs_{term.fn}", None)
                 if method is None:

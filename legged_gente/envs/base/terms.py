@@ -13,6 +13,9 @@ import inspect
 from dataclasses import dataclass
 
 WHEN = (None, "heightfield", "forces")  # the conditions a term may depend on
+NEEDS = {"heightfield": "a heightfield terrain (a plane has no height scan)",
+         "forces": "the terrain force fields (a heightfield terrain, and forces.foot_geom_names or leg_geom_names)"}
+"""What a conditional term needs, for the errors that name a term an env leaves out."""
 
 
 @dataclass
