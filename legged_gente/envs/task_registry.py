@@ -269,15 +269,16 @@ class TaskRegistry:
         env_cfg.sim.torch_compile = False  # for a few robots the compile (~20 s) costs more than it saves
         return env_cfg, train_cfg
 
-    def make_env(self, name: str, args=None, env_cfg: LeggedRobotCfg | None = None):
-        """The task's env with ``args`` (argparse namespace from utils.args) applied to its config."""
+    def make_env(self, name: str, args=None, env_cfg: LeggedRobotCfg | None = None, device: str | None = None):
+        """The task's env with ``args`` (argparse namespace from utils.args) applied to its config; ``device``
+        (``cpu``, ``cuda``, ``cuda:N``): the one given, else ``args.device``, else the CPU."""
         default_env_cfg, train_cfg = self.get_cfgs(name)
         env_class = self.tasks[name][0]
         env_cfg = env_cfg or default_env_cfg
         if args is not None:
             apply_args(args, env_cfg, train_cfg)
         validate_cfgs(env_cfg, train_cfg)
-        device = getattr(args, "device", None) or "cpu"
+        device = device or getattr(args, "device", None) or "cpu"
         if device == "cpu" and env_cfg.env.num_envs > CPU_MANY_ENVS:
             given = getattr(args, "num_envs", None) is not None
             whose = "that many are" if given else "the task's default is"
