@@ -2,6 +2,7 @@
 friction, each with its expected value worked out by hand."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -122,3 +123,23 @@ def test_a_ground_friction_that_is_not_a_coefficient_is_refused(friction):
     with pytest.raises(ValueError, match=rf"^terrain.static_friction={friction} must be a finite coefficient >= 0"):
         Terrain(cfg(static_friction=friction), 1)
     assert Terrain(cfg(static_friction=0.0), 1).material.friction.max() == 0.0  # frictionless ground is allowed
+
+
+def test_a_terrain_selected_on_a_plane_is_warned_of_not_built_silently():
+    """mesh_type "plane" builds flat tiles whatever the mode: a selected terrain left unbuilt is said."""
+    class PitOnPlane(FlatCfg):
+        mesh_type = "plane"
+        selected_terrain = "pit"
+        selected_params = {"depth": 0.3}
+
+    with pytest.warns(UserWarning, match=r"selected_terrain='pit'.*mesh_type='plane'.*mesh_type='heightfield'"):
+        terrain = Terrain(PitOnPlane(), 4)
+    assert (terrain.height_field == 0).all()
+
+    class PlainPlane(FlatCfg):
+        mesh_type = "plane"
+        mode = "curriculum"
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Terrain(PlainPlane(), 4)

@@ -111,6 +111,10 @@ def check_grid_settings(cfg: Any) -> None:
     mode = "plane" if cfg.mesh_type == "plane" else cfg.mode
     if mode not in MODES:
         raise ValueError(f"terrain mode {cfg.mode!r} is not one of {MODES}.")
+    if mode == "plane" and cfg.mode == "selected" and getattr(cfg, "selected_terrain", None) is not None:
+        warnings.warn(f"terrain mode 'selected' with selected_terrain={cfg.selected_terrain!r} builds nothing with "
+                      f"mesh_type='plane' (every tile flat); set terrain.mesh_type='heightfield' to build it.",
+                      stacklevel=3)
     if cfg.num_rows < 1 or cfg.num_cols < 1:
         raise ValueError(f"num_rows={cfg.num_rows} and num_cols={cfg.num_cols} must both be >= 1.")
     for name in ("terrain_length", "terrain_width", "border_size"):  # NaN passes every comparison below
