@@ -43,3 +43,22 @@ def test_on_a_plane_every_foot_reads_zero():
     feet = env.foot_terrain()
     assert feet["normal_force"].shape == (2, 2) and not feet["on_soil"].any()
     assert all(not value.any() for value in feet.values())
+
+
+def test_the_force_field_observation_names_each_foot_and_value():
+    """env.observation_names["critic"]: force_fields' columns as <foot body>.<value>, in the kernel's order."""
+    env_cfg, _ = task_registry.get_cfgs("gente_biped")
+    env_cfg.env.num_envs = 1
+    env_cfg.terrain.num_rows, env_cfg.terrain.num_cols = 2, 2
+    env, _ = task_registry.make_env("gente_biped", env_cfg=env_cfg, device="cpu")
+    names = [n for n in env.observation_names["critic"] if n.startswith("force_fields")]
+    feet = env.forces.foot_names
+    assert len(feet) == 2 and len(names) == 2 * 12
+    assert names[:6] == [f"force_fields.{feet[0]}.{v}" for v in
+                         ("water_depth", "flow_x", "flow_y", "on_soil", "sinkage", "normal_force_100N")]
+    assert names[12] == f"force_fields.{feet[1]}.water_depth" and names[-1] == f"force_fields.{feet[1]}.K_cm"
+    # the names follow the values: a foot's sinkage column is the foot_terrain() sinkage
+    column = env.observation_names["critic"].index(f"force_fields.{feet[1]}.sinkage")
+    critic = env.get_observations()["critic"]
+    assert critic.shape[1] == len(env.observation_names["critic"])
+    assert torch.allclose(critic[0, column], env.foot_terrain()["sinkage"][0, 1])

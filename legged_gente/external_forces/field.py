@@ -345,6 +345,7 @@ class TerrainForces:
 
         bodies, groups = foot_groups(mjm, cfg.foot_geom_names)
         self.nfoot = len(bodies)
+        self.foot_names = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}" for b in bodies]
         self.foot_body = arr(np.asarray(bodies, np.int32), int)
         # sole centre in the foot body's frame: the mean of its geoms' centres
         offsets = [mjm.geom_pos[g].mean(0) for g in groups] or np.zeros((1, 3))
@@ -837,5 +838,9 @@ class TerrainForces:
     def privileged_obs(self):
         """Torch view (nworld, n_feet * 12), per foot: water depth (m), flow vx, vy (m/s), on-soil flag,
         sinkage (m), normal force / 100 N, kc/1e4, kphi/1e6, n, cohesion c/1e4 (Pa), mu = tan(phi), K (cm); written by
-        ``observe``."""
+        ``observe``. Its columns' names: ``privileged_obs_names``."""
         return wp.to_torch(self.obs)
+
+    def privileged_obs_names(self) -> list[str]:
+        """``<foot body>.<value>`` for each column of ``privileged_obs`` (``left_foot.water_depth``, ...)."""
+        return [f"{foot}.{value}" for foot in self.foot_names for value in K.OBS_NAMES]

@@ -21,8 +21,11 @@ from mujoco_warp._src.types import vec5
 KC, KPHI, N, COH, MU, K, BULL_C, BULL_G, ZETA, MODEL = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
 NSOILPARAM = 10
 """The columns of ``soil.preset_table``: its PARAM_NAMES, then the model (1: RFT)."""
-OBS_PER_FOOT = 12
-"""Privileged observation values per foot, see :meth:`field.TerrainForces.privileged_obs`."""
+OBS_NAMES = ("water_depth", "flow_x", "flow_y", "on_soil", "sinkage", "normal_force_100N", "kc_1e4", "kphi_1e6", "n",
+             "cohesion_1e4Pa", "tan_phi", "K_cm")
+"""Privileged observation values per foot, in ``foot_obs_kernel``'s order and scale (``_1e4``: divided by 1e4),
+see :meth:`field.TerrainForces.privileged_obs`."""
+OBS_PER_FOOT = len(OBS_NAMES)
 
 PI = wp.constant(3.14159265358979)
 

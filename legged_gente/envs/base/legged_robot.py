@@ -472,8 +472,10 @@ class LeggedRobot(VecEnv):
                                      f"give one number or {width}.")
                 scale = scale.expand(width).clone()
                 entries.append((name, method, scale, term.clip, scale * term.noise * level))
+                columns = getattr(self, f"_obs_{term.fn}_names", lambda: None)()  # a term may name its columns
                 self.observation_names.setdefault(group, []).extend(
-                    [name] if width == 1 else [f"{name}[{i}]" for i in range(width)])
+                    [f"{name}.{c}" for c in columns] if columns is not None and len(columns) == width
+                    else [name] if width == 1 else [f"{name}[{i}]" for i in range(width)])
             self._obs_groups[group] = entries
         self._noise_scale = torch.cat([e[4] for e in self._obs_groups["policy"]])
         self.observation_names["critic"] = self.observation_names["policy"] + self.observation_names.get("critic", [])
@@ -871,6 +873,10 @@ class LeggedRobot(VecEnv):
 
     def _obs_force_fields(self):
         return self._force_obs
+
+    def _obs_force_fields_names(self) -> list[str]:
+        """``force_fields``' columns: each foot's values (``TerrainForces.privileged_obs_names``)."""
+        return self.forces.privileged_obs_names()
 
     # ------------------------------------------------------------------------------------------------------
     # helpers for rewards
