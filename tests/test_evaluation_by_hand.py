@@ -253,3 +253,20 @@ def test_figure_b_titles_each_panel_with_its_whole_terrain_id(tmp_path, monkeypa
     titles = [ax.get_title() for ax in drawn[0][0]]
     assert [t.replace("\n", "") for t in titles] == ids
     assert all(len(line) <= 24 for t in titles for line in t.split("\n"))
+
+
+def test_robots_scored_over_a_short_part_of_the_episode_are_said_so():
+    """A tile too small for the episode: the robots reach its edge early and are scored over that part alone
+    (a 3 m tile, 2.5 s of a 10 s episode scored 100 %): the run says how much of the episode was measured."""
+    from legged_gente.evaluation.report import short_measure_note
+
+    metrics = {"left_tile": np.array([True, True, True, False, True]),
+               "time_s": np.array([2.0, 3.0, 2.5, 10.0, 1.0]),
+               "standing": np.array([False, False, False, False, True])}
+    note = short_measure_note(metrics, episode_length_s=10.0)
+    # the moving robots: 3 of 4 reached the edge, after (2 + 3 + 2.5) / 3 = 2.5 s; the standing one is not counted
+    assert note is not None and note.startswith("3 of 4 moving robots reached their tile's edge after 2.5 s")
+    assert "10 s episode" in note and "--tile_edge_margin off" in note
+    late = dict(metrics, time_s=np.array([6.0, 7.0, 8.0, 10.0, 1.0]))  # most of the episode measured: no note
+    assert short_measure_note(late, episode_length_s=10.0) is None
+    assert short_measure_note(dict(metrics, left_tile=np.zeros(5, bool)), episode_length_s=10.0) is None

@@ -106,6 +106,26 @@ def summarize_robots(metrics: dict[str, np.ndarray], ok: np.ndarray) -> dict[str
     }
 
 
+SHORT_MEASURE = 0.5
+"""Share of the episode under which the robots that reached their tile's edge are said to be scored on a short part."""
+
+
+def short_measure_note(metrics: dict[str, np.ndarray], episode_length_s: float) -> str | None:
+    """A sentence when the robots with a moving command that reached their tile's edge did so, on average, within
+    the first ``SHORT_MEASURE`` of the episode: their success and progress are over that part alone (a tile small
+    for the commanded speed and the episode), else None."""
+    moving = ~metrics.get("standing", np.zeros_like(metrics["left_tile"])).astype(bool)
+    left = metrics["left_tile"].astype(bool) & moving
+    if not left.any():
+        return None
+    measured = float(metrics["time_s"][left].mean())
+    if measured >= SHORT_MEASURE * episode_length_s:
+        return None
+    return (f"{int(left.sum())} of {int(moving.sum())} moving robots reached their tile's edge after {measured:.1f} s "
+            f"on average, of the {episode_length_s:g} s episode, and are scored over that part alone; a larger tile "
+            f"measures more of it (--tile_edge_margin off walks them on past the edge).")
+
+
 def check_success_rule(tracking_threshold: float, min_progress: float) -> None:
     """The success rule's thresholds, or a one-line error: a tracking error bound in m/s, a share of the distance."""
     if not tracking_threshold > 0:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -141,7 +142,7 @@ def evaluate(args) -> dict:
     from legged_gente.evaluation.benchmark import load_benchmark
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.evaluation.evaluator import Evaluation, check_settle, episode_steps, load_policy_and_file
-    from legged_gente.evaluation.report import build_report, check_success_rule, write_reports
+    from legged_gente.evaluation.report import build_report, check_success_rule, short_measure_note, write_reports
     from legged_gente.evaluation.tasks import check_task_settings, waypoint_episode_s
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
@@ -202,6 +203,9 @@ def evaluate(args) -> dict:
           f"stopped at their tile's edge {o['left_tile']}")
     for name, g in report["groups"].items():
         print(f"  {name:18s} success {rate(g['success_rate']):>6s}  ({g['terrains']} terrains)")
+    note = short_measure_note(result.metrics, report["meta"]["episode_length_s"])
+    if note:
+        warnings.warn(note, stacklevel=1)
     print(f"wrote {json_path}, {csv_path}, {Path(args.out) / 'traces.npz'}")
     return report
 
