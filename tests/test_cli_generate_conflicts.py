@@ -38,3 +38,11 @@ def test_a_tile_the_planner_cannot_lay_out_is_bad_input(capsys, tmp_path):
     err = capsys.readouterr().err
     assert err.startswith("gente-generate: error: planner cue 'stairs' does not fit on a 200 m x 200 m tile: ask for a "
                           "smaller tile") and "Traceback" not in err and not (tmp_path / "o").exists()
+
+
+def test_generating_into_a_folder_that_holds_a_terrain_says_it_was_replaced(tmp_path, capsys):
+    out = tmp_path / "creek"
+    assert generate_script.main(["--text", "a muddy field", "--size", "4", "--out", str(out)]) == 0
+    assert "replaced" not in capsys.readouterr().err
+    assert generate_script.main(["--text", "a river", "--size", "4", "--out", str(out)]) == 0
+    assert f"note: replaced the terrain {out} held" in capsys.readouterr().err

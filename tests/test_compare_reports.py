@@ -122,3 +122,30 @@ def test_compare_takes_the_out_folders_and_names_the_metrics_unit(tmp_path, caps
     _evaluation(tmp_path / "b", B_ROWS)
     main([str(a.parent), str(tmp_path / "b"), "--metric", "tracking_error"])
     assert capsys.readouterr().out.startswith("tracking_error, per terrain, B - A (m/s)")
+
+
+def test_a_terrain_changed_between_two_evaluations_is_not_compared(tmp_path):
+    """gente-generate --out over a benchmark item's folder changes the terrain under the same name: the reports'
+    terrain digests (report.json) differ and the comparison is refused, naming the terrain; a report without
+    digests (made before they were kept) is compared as before."""
+    a = _evaluation(tmp_path / "a", A_ROWS, terrain_digests={"t0": "aa", "t1": "bb", "i0": "cc", "i1": "dd"})
+    same = _evaluation(tmp_path / "s", B_ROWS, terrain_digests={"t0": "aa", "t1": "bb", "i0": "cc", "i1": "dd"})
+    assert compare_reports(a, same)["all"]["terrains"] == 4
+    changed = _evaluation(tmp_path / "c", B_ROWS, terrain_digests={"t0": "aa", "t1": "XX", "i0": "cc", "i1": "dd"})
+    with pytest.raises(ValueError, match=r"built different terrains under the same name \(t1: their spec changed"):
+        compare_reports(a, changed)
+    older = _evaluation(tmp_path / "o", B_ROWS)
+    assert compare_reports(a, older)["all"]["terrains"] == 4
+
+
+def test_the_terrain_digest_follows_what_builds_the_terrain(tmp_path):
+    from legged_gente.generation.spec import TerrainSpec
+
+    doc = {"version": 1, "name": "creek", "size_x": 8.0, "size_y": 8.0, "resolution": 0.1, "seed": 0,
+           "calls": [{"tool": "soil", "region": "left", "params": {"preset": "mud"}}],
+           "source": {"text": "a muddy creek"}, "backend": "planner", "model": None}
+    digest = TerrainSpec.from_dict(doc).terrain_digest()
+    renamed = TerrainSpec.from_dict(doc | {"name": "other", "source": {"text": "words"}}).terrain_digest()
+    reseeded = TerrainSpec.from_dict(doc | {"seed": 1}).terrain_digest()
+    sand = TerrainSpec.from_dict(doc | {"calls": [{"tool": "soil", "region": "left", "params": {"preset": "dry_sand"}}]})
+    assert digest == renamed and len({digest, reseeded, sand.terrain_digest()}) == 3

@@ -84,6 +84,12 @@ def check_made_alike(a: Path, b: Path) -> None:
     if differ:
         raise ValueError(f"the two evaluations were scored differently ({'; '.join(differ)}, from their "
                          f"report.json); evaluate both with the same flags.")
+    digests = [meta.get("terrain_digests") or {} for meta in metas]  # none in a report from before they were kept
+    changed = sorted(name for name in digests[0].keys() & digests[1].keys() if digests[0][name] != digests[1][name])
+    if changed:
+        raise ValueError(f"the two evaluations built different terrains under the same name ({', '.join(changed[:5])}"
+                         f"{' and more' if len(changed) > 5 else ''}: their spec changed between them, from their "
+                         f"report.json); evaluate both on the same spec files.")
 
 
 def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") -> dict[str, dict]:

@@ -148,6 +148,16 @@ class TerrainSpec:
         except ValidationError as exc:
             raise ValidationError([f"{path}: {m}" for m in exc.messages]) from None
 
+    def terrain_digest(self) -> str:
+        """A short sha256 of what builds the terrain (sizes, seed, calls, smoothing, the heightmap's scale and its
+        file's bytes), not of its name or source: two reports compare the same terrain when their digests agree."""
+        d = self.to_dict()
+        built = {k: d[k] for k in ("size_x", "size_y", "resolution", "seed", "calls", "smoothing", "heightmap") if k in d}
+        digest = hashlib.sha256(json.dumps(built, sort_keys=True).encode())
+        if self.heightmap is not None:
+            digest.update(((self.base_dir or Path.cwd()) / self.heightmap["file"]).read_bytes())
+        return digest.hexdigest()[:16]
+
     def to_tile_spec(self):
         """The terrain library's ``TileSpec``: one ``Part`` per call, in call order (read as training reads it)."""
         from legged_gente.terrain.composition import tile_spec_from_document

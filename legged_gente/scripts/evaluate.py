@@ -187,7 +187,8 @@ def evaluate(args) -> dict:
             "policy": args.checkpoint or args.exported or args.baseline or "pretrained",
             "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed,
-            "tile_edge_margin": args.tile_edge_margin, "items": [item.id for item in items]}
+            "tile_edge_margin": args.tile_edge_margin, "items": [item.id for item in items],
+            "terrain_digests": {item.id: item.spec().terrain_digest() for item in items}}
     report = build_report(result, items, meta=meta, **rule)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)

@@ -158,7 +158,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {call.tool}({json.dumps(call.arguments())})")
         for warning in result.warnings:
             print(f"warning: {printable(warning)}", file=sys.stderr)
+        replaced = Path(args.out, "spec.json").is_file()  # a benchmark item's folder, perhaps: say it changed
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
+        if replaced:
+            print(f"note: replaced the terrain {args.out} held (its spec.json and the files beside it); evaluations "
+                  f"of the old one are no longer comparable with new ones there", file=sys.stderr)
     except (ValidationError, GenerationError) as exc:  # the server or the model failed; the planner asks none, so
         if args.verbose:
             raise
