@@ -199,3 +199,16 @@ def test_modifier_binds_to_the_following_noun():
     assert {c.params["flow"] for c in calls if c.tool == "water"} == {"still"}
     snowy = plan_text("a snowy hillside dotted with pine trees").calls
     assert [c.params["preset"] for c in snowy if c.tool == "soil"] == ["snow"]
+
+
+def test_numbers_the_planner_does_not_read_and_the_words_it_did_are_said():
+    """The planner sets sizes from words: "20 cm steps" or "2 m deep" was dropped without a word, and a warning
+    about "a high staircase" named the modifier 'tall', a word the user never wrote."""
+    warnings = plan_text("stairs with 20 cm steps, then a lake 2 m deep and a slope of 30 degrees").warnings
+    said = [w for w in warnings if "numbers" in w]
+    assert len(said) == 1 and all(q in said[0] for q in ("'20 cm'", "'2 m'", "'30 degrees'")), warnings
+    assert not [w for w in plan_text("a 1.5 m wide ditch of mud").warnings if "'1.5'" in w]  # the quantity is whole
+    assert [w for w in plan_text("a 1.5 m wide ditch of mud").warnings if "'1.5 m'" in w]
+    assert not [w for w in plan_text("a muddy field").warnings if "numbers" in w]
+    assert plan_text("a high staircase").warnings == ["modifier 'high' (tall) does not apply to stairs; ignored."]
+    assert plan_text("a field of tall grass").warnings == ["modifier 'tall' does not apply to grass; ignored."]

@@ -382,6 +382,8 @@ SLOT_LAYOUTS = {
 
 _NEGATORS = "no|not|without|never|avoid"
 """Words that negate the cue or noun at most two words after them (one list for both)."""
+_QUANTITY = re.compile(r"(?<![\w.])\d+(?:[.,]\d+)?\s*(?:cm|mm|km|m|metres?|meters?|deg(?:rees?)?|°|%|percent)(?!\w)")
+"""A number with a unit ("20 cm", "2 m", "30 degrees"), which the planner does not read: it is said so."""
 _NEGATION = re.compile(rf"\b({_NEGATORS})\s+(\w+\s+){{0,2}}$")
 _SENTENCE_END = re.compile(r"[.;!?]")
 _PHRASE_END = re.compile(r"[,.;:!?]")
@@ -590,10 +592,18 @@ def _bind_all(text: str, warnings: list[str]) -> tuple[list[tuple[int, Cue]], di
     cue_mentions = [m for m in cue_mentions if m[2].name in kept]
     per_cue: dict[str, list[Modifier]] = {c.name: [] for _, c in cues}
     sentence_ends = [m.start() for m in _SENTENCE_END.finditer(lower)]
+    quantities = [m.group(0) for m in _QUANTITY.finditer(lower)]
+    if quantities:
+        warnings.append(f"the planner reads words, not numbers: {', '.join(repr(q) for q in quantities[:6])} "
+                        f"{'is' if len(quantities) == 1 else 'are'} not applied (it sets depths, heights and sizes from "
+                        f"words: knee-deep, tall, steep, wide); check the spec's values, edit its spec.json, or use "
+                        f"--backend openai.")
     for mention in mod_mentions:
         target, aimed = _bind(lower, mention, cue_mentions, sentence_ends)
         if target is None:
-            warnings.append(f"modifier '{mention[2].name}' does not apply to {aimed.name if aimed else 'anything'}; ignored.")
+            written = lower[mention[0]:mention[1]]  # the word the user wrote, and the modifier it is a keyword of
+            name = f"'{written}'" + (f" ({mention[2].name})" if written != mention[2].name else "")
+            warnings.append(f"modifier {name} does not apply to {aimed.name if aimed else 'anything'}; ignored.")
         elif mention[2] not in per_cue[target.name]:
             per_cue[target.name].append(mention[2])
     for negation in _negations(lower):
