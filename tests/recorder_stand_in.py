@@ -27,6 +27,8 @@ def stand_in_env(n: int, yaw: float = 0.0, vx: float = 0.0, penalized_bodies: tu
 
 
 def record_step(recorder, env, done):
-    """A step's record: the env's reset_buf is the step's dones (what LeggedRobot.step returns)."""
+    """A step's record: the env's reset_buf is the step's dones (what LeggedRobot.step returns), and its
+    terminal_commands the commands the step ran under (kept before its resets, as LeggedRobot keeps them)."""
     env.reset_buf = done
+    env.terminal_commands = env.commands.clone()
     recorder.record(env, done)

@@ -270,3 +270,25 @@ def test_robots_scored_over_a_short_part_of_the_episode_are_said_so():
     late = dict(metrics, time_s=np.array([6.0, 7.0, 8.0, 10.0, 1.0]))  # most of the episode measured: no note
     assert short_measure_note(late, episode_length_s=10.0) is None
     assert short_measure_note(dict(metrics, left_tile=np.zeros(5, bool)), episode_length_s=10.0) is None
+
+
+def test_the_step_a_robot_falls_in_counts_the_command_it_ran_under_not_its_next_episodes():
+    """A world reset in a step holds its next episode's commands, drawn by the env, when the step is recorded. Robot 0
+    is told to stand (0 m/s) and robot 1 to walk at 0.5 m/s; both fall in step 2 and the env draws 0.8 m/s for their
+    next episodes, which the task overwrites before step 3. The standing robot has no commanded distance (progress
+    none, as a stand-still command's is), not one step of 0.8 m/s (progress 0); the walker's distance is 3 steps of
+    0.5 m/s, not 0.5 + 0.8 + 0.5."""
+    env = stand_in_env(2)
+    env.commands[:, 0] = torch.tensor([0.0, 0.5])
+    recorder = Recorder(env, settle_s=0.0, trace_robots=torch.tensor([0]))
+    for k in range(1, 4):
+        fell = k == 2
+        told = env.commands.clone()
+        env.terminal_commands = told  # what the step ran under, kept before its resets
+        if fell:
+            env.commands = told.clone()
+            env.commands[:, 0] = 0.8  # the env's draw for the worlds it reset
+        recorder.record(env, torch.tensor([fell, fell]))
+        env.commands = told  # the task's commands again, before the next step
+    assert recorder.fell.tolist() == [True, True]
+    assert recorder.cmd_distance.tolist() == pytest.approx([0.0, 3 * 0.5 * 0.02], abs=1e-7)

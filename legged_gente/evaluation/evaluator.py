@@ -153,15 +153,17 @@ class Recorder:
         self.diverged |= diverged
         af = alive.float()
         xy = env.base_pos[:, :2]
-        err = torch.norm(env.commands[:, :2] - env.base_lin_vel[:, :2], dim=1)
+        # the commands the step ran under: a world the step reset already holds its next episode's, drawn by the env
+        command = torch.where(dones[:, None], env.terminal_commands[:, :2], env.commands[:, :2])
+        err = torch.norm(command - env.base_lin_vel[:, :2], dim=1)
         counted = af * float(self.step > self.settle_steps)
         self.err_sum += torch.where(alive, err, 0.0) * counted
         self.err_steps += counted
-        cmd_speed = torch.norm(env.commands[:, :2], dim=1)
+        cmd_speed = torch.norm(command, dim=1)
         self._turn_reference(env)
         # the base's world velocity (free joint) in the reference frame, where the command is given
         velocity = quat_rotate_inverse(yaw_quat(self.reference_yaw), env.sim.qvel[:, 0:3])[:, :2]
-        along = torch.sum(velocity * env.commands[:, :2], dim=1) / cmd_speed.clamp(min=1e-6)
+        along = torch.sum(velocity * command, dim=1) / cmd_speed.clamp(min=1e-6)
         self.along_cmd += torch.where(alive, along, 0.0) * self.dt * counted
         # a fallen robot stays told to walk: its progress is over the whole episode's commanded distance (over its
         # live steps alone, a lunge before a fall scored above walking); one that reached its tile's edge stops
