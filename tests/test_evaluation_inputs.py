@@ -131,3 +131,23 @@ def test_one_generated_terrain_is_evaluated_through_its_spec_json(tmp_path, caps
           "--no_progress"])
     rows = (tmp_path / "b" / "report.csv").read_text().splitlines()
     assert rows[1].startswith("terrain,mud_creek,text,soil,1,")
+
+
+def test_all_robots_told_to_stand_names_the_flag_that_scores_moving_ones(tmp_path, capsys):
+    from legged_gente.scripts.evaluate import main
+
+    main(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(BENCHMARK), "--items", ITEM,
+          "--stand_fraction", "1", "--robots_per_terrain", "2", "--episode_s", "0.1", "--settle_s", "0",
+          "--device", "cpu", "--out", str(tmp_path), "--no_progress"])
+    out = capsys.readouterr().out
+    assert "lower --stand_fraction below 1 to score moving ones" in out and "--robots_per_terrain" not in out
+
+
+def test_an_unusable_opengl_backend_says_when_leaving_it_unset_helps(capsys, monkeypatch):
+    from legged_gente.utils.args import _opengl_error
+
+    monkeypatch.setenv("MUJOCO_GL", "osmesa")
+    with pytest.raises(SystemExit):
+        _opengl_error("gente-play", OSError("libOSMesa.so: cannot open shared object file"))
+    err = capsys.readouterr().err
+    assert "MUJOCO_GL=egl" in err and "unset for a run that renders nothing (no --video" in err

@@ -194,8 +194,10 @@ def evaluate(args) -> dict:
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)
     o = report["overall"]
     if o["robots"] == 0 and args.mode == "velocity":
+        fix = ("lower --stand_fraction below 1" if settings["stand_fraction"] >= 1
+               else "raise --robots_per_terrain")
         print(f"no robot had a moving command (all were told to stand still, --stand_fraction "
-              f"{settings['stand_fraction']}); raise --robots_per_terrain to score the moving ones.")
+              f"{settings['stand_fraction']}); {fix} to score moving ones.")
     heading = o.get("heading_error")
     heading = f"heading error {heading:.1f} deg; " if heading is not None and math.isfinite(heading) else ""
     rate = lambda value: "-" if math.isnan(value) else f"{100 * value:.1f}%"  # noqa: E731  (nan: no robot scored)
