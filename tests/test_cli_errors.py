@@ -550,8 +550,8 @@ def view_error(capsys, monkeypatch, tmp_path, argv) -> str:
     (["--task", "nope"], "gente-view: error: unknown task 'nope'; registered tasks: ["),
     (["--record", "r.npz"], "gente-view: error: --record writes the rollout of --play: add --play"),
     (["--traces", "TEXT.npz"], "gente-view: error: --traces replays gente-evaluate's robots on their benchmark: "
-                               "give its folder as the source (gente-view gente100 --traces eval/traces.npz)"),
-    ([str(FLAT_SPEC), "--traces", "TEXT.npz"], "gente-view: error: --traces replays gente-evaluate's robots"),
+                               "give its folder, or the spec.json it evaluated, as the source (gente-view gente100 "
+                               "--traces eval/traces.npz)"),
     (["--item", "x"], "gente-view: error: --item picks the item of --traces"),
     (["ROLLOUT.npz", "--step", "-5"], "gente-view: error: --step -5: the rollout has steps 0..4"),
     (["ROLLOUT.npz", "--step", "99999"], "gente-view: error: --step 99999: the rollout has steps 0..4"),

@@ -151,3 +151,33 @@ def test_an_unusable_opengl_backend_says_when_leaving_it_unset_helps(capsys, mon
         _opengl_error("gente-play", OSError("libOSMesa.so: cannot open shared object file"))
     err = capsys.readouterr().err
     assert "MUJOCO_GL=egl" in err and "unset for a run that renders nothing (no --video" in err
+
+
+def test_gente_view_replays_the_traces_of_one_evaluated_spec_json(tmp_path):
+    """gente-evaluate --benchmark spec.json scores one terrain; gente-view refused that spec.json with --traces ("give
+    its folder") and the folder ("pass its spec.json"). The spec.json replays now."""
+    from legged_gente.scripts.evaluate import main as evaluate
+    from legged_gente.scripts.view import _benchmark_items, build_arg_parser
+    from legged_gente.utils.args import parse_args
+
+    spec = tmp_path / "creek" / "spec.json"
+    spec.parent.mkdir()
+    spec.write_text(json.dumps({
+        "version": 1, "name": "creek", "size_x": 8.0, "size_y": 8.0, "resolution": 0.1, "seed": 0,
+        "calls": [{"tool": "soil", "region": "left", "params": {"preset": "mud"}}],
+        "source": {"text": "a muddy creek"}, "backend": "planner", "model": None}))
+    evaluate(["--task", "gente_biped", "--baseline", "zero", "--benchmark", str(spec), "--device", "cpu",
+              "--robots_per_terrain", "1", "--episode_s", "0.1", "--settle_s", "0", "--out", str(tmp_path / "ev"),
+              "--no_progress"])
+    args = parse_args(build_arg_parser(), [str(spec), "--traces", str(tmp_path / "ev" / "traces.npz")])
+    items, trace = _benchmark_items(spec, args)
+    assert [item.label for item in items] == ["creek"] and trace["qpos"].shape[0] == 5  # 0.1 s of 0.02 s steps
+    import socket
+
+    from legged_gente.scripts.view import main as view
+
+    with socket.socket() as free:
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+    view([str(spec), "--traces", str(tmp_path / "ev" / "traces.npz"), "--headless", "--seconds", "0",
+          "--port", str(port)])  # served and stopped: no "give its folder" refusal

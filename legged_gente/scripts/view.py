@@ -213,7 +213,7 @@ def main(argv=None) -> None:
                                     daemon=True)
         elif source is None:
             items = [TerrainItem(args.task, _task_terrain(args))]
-        elif source.is_dir():
+        elif source.is_dir() or args.traces:  # a benchmark folder, or the one spec.json an evaluation scored
             items, trace = _benchmark_items(source, args)
             if trace is not None:
                 terrain = items[0].build()
@@ -300,9 +300,9 @@ def check_flags(parser, args, source: Path | None) -> None:
                  if value is not None]
     if play_only and not args.play:
         parser.error(f"{', '.join(play_only)} set{'s' if len(play_only) == 1 else ''} how --play rolls out: add --play")
-    if args.traces and (source is None or not source.is_dir()):
-        parser.error("--traces replays gente-evaluate's robots on their benchmark: give its folder as the source "
-                     "(gente-view gente100 --traces eval/traces.npz)")
+    if args.traces and (source is None or not (source.is_dir() or source.suffix.lower() == ".json")):
+        parser.error("--traces replays gente-evaluate's robots on their benchmark: give its folder, or the spec.json "
+                     "it evaluated, as the source (gente-view gente100 --traces eval/traces.npz)")
     if args.item and not args.traces:
         parser.error("--item picks the item of --traces to replay: add --traces")
     replay = source is not None and source.suffix.lower() == ".npz"
