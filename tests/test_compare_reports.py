@@ -32,7 +32,8 @@ def test_paired_difference_and_its_standard_error(tmp_path):
     assert every["terrains"] == 4
     assert every["a"] == pytest.approx(0.65) and every["b"] == pytest.approx(0.70)
     assert every["difference"] == pytest.approx(0.05) and every["se"] == pytest.approx(sd / 2)
-    assert not every["resolved"]  # 0.05 < 2 x 0.065
+    assert not every["resolved"]  # 0.05 < t(0.975, 3 dof) 3.18 x 0.065
+    assert every["t"] == pytest.approx(3.1824, abs=1e-4)  # Student's t table, 3 degrees of freedom
     water = rows["water"]  # t0 and i0: +0.1 and +0.2
     assert water["terrains"] == 2 and water["difference"] == pytest.approx(0.15)
     assert water["se"] == pytest.approx(math.sqrt(2 * 0.05**2) / math.sqrt(2))
@@ -149,3 +150,21 @@ def test_the_terrain_digest_follows_what_builds_the_terrain(tmp_path):
     reseeded = TerrainSpec.from_dict(doc | {"seed": 1}).terrain_digest()
     sand = TerrainSpec.from_dict(doc | {"calls": [{"tool": "soil", "region": "left", "params": {"preset": "dry_sand"}}]})
     assert digest == renamed and len({digest, reseeded, sand.terrain_digest()}) == 3
+
+
+def test_two_terrains_get_no_verdict_and_small_metrics_keep_their_digits(tmp_path, capsys):
+    """Two terrains with alike differences have a standard error of about 0: "resolved" on nothing. And a
+    tracking error 3 mm/s apart printed as -0.00 SE 0.00."""
+    a = _report(tmp_path / "a.csv", [("t0", "text", "water", 0.5), ("t1", "text", "water", 0.5)])
+    b = _report(tmp_path / "b.csv", [("t0", "text", "water", 0.75), ("t1", "text", "water", 0.75)])
+    water = compare_reports(a, b)["water"]
+    assert water["se"] == 0.0 and water["difference"] == pytest.approx(0.25) and not water["resolved"]
+    main([str(a), str(b)])
+    assert "too few terrains (< 3)" in capsys.readouterr().out
+    slow = tmp_path / "slow.csv"
+    slow.write_text(HEADER + "".join(f"terrain,t{i},text,water,64,0.5,{0.1 + 0.003 + 0.001 * i}\n" for i in range(4)))
+    fast = tmp_path / "fast.csv"
+    fast.write_text(HEADER + "".join(f"terrain,t{i},text,water,64,0.5,0.1\n" for i in range(4)))
+    main([str(slow), str(fast), "--metric", "tracking_error"])
+    row = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("all")][0]
+    assert "-0.0045" in row, row  # mean of -(0.003, 0.004, 0.005, 0.006)

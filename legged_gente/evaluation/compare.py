@@ -5,7 +5,9 @@ within what two evaluations of one policy already differ by?
 
 For each terrain the difference B - A of the metric; their mean (each terrain weighs the same) and its standard
 error, sample SD / sqrt(n) (a paired comparison: the terrains' own difficulty cancels). Per group too: the item
-kinds and the categories of ``report.py``. A difference is "resolved" when it exceeds two standard errors.
+kinds and the categories of ``report.py``. A difference is "resolved" when it exceeds Student's t quantile for a
+two-sided 95 % (n - 1 degrees of freedom: 2.0 for many terrains, 3.2 for 4, 12.7 for 2) times its standard error;
+a group of fewer than ``MIN_TERRAINS`` terrains gets no verdict.
 Choose between training candidates on ``gente_val`` this way, and report on gente100 and gente_original.
 """
 
@@ -16,14 +18,18 @@ import json
 import math
 from pathlib import Path
 
+from scipy.stats import t as student_t
+
 from legged_gente.evaluation.benchmark import KINDS
 from legged_gente.evaluation.report import CATEGORIES, METRIC_COLUMNS
 
 METRIC_UNITS = {"tracking_error": " (m/s)", "heading_error": " (deg)", "distance": " (m)", "displacement": " (m)",
                 "energy_per_m": " (J/m)"}
 """The unit of a compared metric, for the table's title (rates are in points)."""
-RESOLVED_AT = 2.0
-"""A mean difference counts as resolved beyond this many standard errors (about 95 % two-sided)."""
+CONFIDENCE = 0.95
+"""Two-sided: a mean difference is resolved beyond Student's t quantile (1 + CONFIDENCE) / 2 times its standard error."""
+MIN_TERRAINS = 3
+"""Fewer terrains than this in a group: no verdict (two differences alike give a standard error of about 0)."""
 
 
 SCORING_SETTINGS = ("task_mode", "tracking_threshold", "min_progress", "min_speed", "stand_fraction",
@@ -116,8 +122,10 @@ def compare_reports(a: str | Path, b: str | Path, metric: str = "success_rate") 
         differences = [y - x for x, y in chosen]
         mean = sum(differences) / n
         se = math.sqrt(sum((d - mean) ** 2 for d in differences) / (n - 1) / n) if n > 1 else math.nan
+        t = float(student_t.ppf((1 + CONFIDENCE) / 2, n - 1)) if n > 1 else math.nan
         out[group] = {"terrains": n, "a": sum(x for x, _ in chosen) / n, "b": sum(y for _, y in chosen) / n,
-                      "difference": mean, "se": se, "resolved": bool(abs(mean) > RESOLVED_AT * se)}
+                      "difference": mean, "se": se, "t": t,
+                      "resolved": bool(n >= MIN_TERRAINS and abs(mean) > t * se)}
     return out
 
 
@@ -133,12 +141,14 @@ def main(argv=None) -> None:
     def show(args) -> None:
         rows = compare_reports(args.a, args.b, args.metric)
         scale, unit = (100.0, " points") if args.metric.endswith("_rate") else (1.0, METRIC_UNITS.get(args.metric, ""))
+        digits = 2 if scale == 100.0 or args.metric == "heading_error" else 4  # m/s, m, J/m: a few mm(/s) show
         print(f"{args.metric}, per terrain, B - A{unit} (A: {args.a}, B: {args.b})")
-        print(f"{'group':>18} {'terrains':>8} {'A':>8} {'B':>8} {'B - A':>8} {'SE':>7}")
+        print(f"{'group':>18} {'terrains':>8} {'A':>9} {'B':>9} {'B - A':>9} {'SE':>8}")
         for group, r in rows.items():
-            verdict = "resolved" if r["resolved"] else "not resolved"
-            print(f"{group:>18} {r['terrains']:>8d} {scale * r['a']:>8.2f} {scale * r['b']:>8.2f} "
-                  f"{scale * r['difference']:>+8.2f} {scale * r['se']:>7.2f}  {verdict}")
+            verdict = ("resolved" if r["resolved"] else "not resolved") if r["terrains"] >= MIN_TERRAINS else \
+                f"too few terrains (< {MIN_TERRAINS})"
+            print(f"{group:>18} {r['terrains']:>8d} {scale * r['a']:>9.{digits}f} {scale * r['b']:>9.{digits}f} "
+                  f"{scale * r['difference']:>+9.{digits}f} {scale * r['se']:>8.{digits}f}  {verdict}")
 
     run_command(parser.prog, show, args)
 
