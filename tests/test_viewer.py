@@ -253,3 +253,21 @@ def test_vertex_colours_reach_the_browser_linear(grid):
         assert not (np.abs(colours - sand).max(axis=1) <= 1).any()  # never the sRGB values themselves
     finally:
         viewer.stop()
+
+
+def test_a_preview_tells_bare_ground_from_soil_by_colour():
+    """Bare ground was coloured by elevation in matplotlib's 'terrain' map: a 0.5 m block turned as brown as mud beside
+    it, low grass as yellow as sand. Bare ground is grey now (shade and lightness: elevation), soil keeps its tint."""
+    from legged_gente.terrain.materials import MaterialMap
+    from legged_gente.terrain.terrain import preview_rgb
+
+    heights = np.zeros((40, 40), np.float32)
+    heights[20:30, 5:15] = 0.5  # a block
+    material = MaterialMap.rigid(heights.shape)
+    material.soil[5:15, 20:35] = material.soil_index("mud")
+    rgb = preview_rgb(heights, material, 0.1)[::-1].transpose(1, 0, 2)  # (ny, nx) with y up -> (nx, ny)
+    spread = lambda cells: float((cells.max(-1) - cells.min(-1)).max())  # noqa: E731  (0: grey)
+    assert spread(rgb[22:28, 7:13]) < 0.01 and spread(rgb[32:38, 30:38]) < 0.01  # the block and bare ground: grey
+    assert rgb[22:28, 7:13].mean() > rgb[32:38, 30:38].mean() + 0.05  # the block lighter: higher
+    mud = rgb[7:13, 23:32].reshape(-1, 3).mean(0)
+    assert mud[0] - mud[2] > 0.08  # brown: red over blue

@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from .materials import MaterialMap
-from .terrain import CUSTOM_SOIL_COLOUR, LOW_FRICTION_COLOUR, LOW_FRICTION_TINT_BELOW, SOIL_COLOURS, WATER_COLOUR, preview_rgb
+from .terrain import (
+    CUSTOM_SOIL_COLOUR, GROUND_GREY, LOW_FRICTION_COLOUR, LOW_FRICTION_TINT_BELOW, SOIL_COLOURS, WATER_COLOUR, preview_rgb)
 
 
 def material_legend(material: MaterialMap) -> list[tuple[str, tuple[float, float, float]]]:
@@ -69,9 +70,12 @@ def save_preview_figure(heights: np.ndarray, material: MaterialMap, resolution: 
     ax.add_artist(AnchoredSizeBar(ax.transData, -bar, f"{bar:g} m", "lower right", pad=0.5, color="black",
                                   frameon=True, size_vertical=resolution * 1.5))
     handles = [Patch(facecolor=c, edgecolor="0.3", label=label) for label, c in material_legend(material)]
-    handles.insert(0, Patch(facecolor=matplotlib.colormaps["terrain"](0.55), edgecolor="0.3",
-                            label="ground (shade: elevation)"))
+    handles.insert(0, Patch(facecolor=str(sum(GROUND_GREY) / 2), edgecolor="0.3", label="bare ground (grey)"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
+    # the ground's lightness against height (before the hillshade, which darkens slopes facing away from the light)
+    greys = matplotlib.colors.LinearSegmentedColormap.from_list("ground", [str(GROUND_GREY[0]), str(GROUND_GREY[1])])
+    scale = matplotlib.cm.ScalarMappable(matplotlib.colors.Normalize(lo, hi if hi > lo else lo + 1e-3), greys)
+    fig.colorbar(scale, ax=ax, location="bottom", fraction=0.04, pad=0.08, label="bare ground's height (m)")
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -412,7 +412,7 @@ class Terrain:
 SOIL_COLOURS = {
     "dry_sand": (0.93, 0.83, 0.56),
     "wet_sand": (0.72, 0.60, 0.38),
-    "snow": (0.97, 0.98, 1.00),
+    "snow": (0.86, 0.93, 1.00),  # blue-white: told apart from the grey of high bare ground
     "mud": (0.40, 0.28, 0.17),
     "clay_loam": (0.62, 0.40, 0.26),
     "poppy_seeds_rft": (0.45, 0.47, 0.52),
@@ -425,19 +425,23 @@ LOW_FRICTION_TINT_BELOW = 0.5
 """Cells with friction below this coefficient are tinted cyan in previews."""
 
 
+GROUND_GREY = (0.35, 0.85)
+"""Lightness of bare ground in previews, from the tile's lowest to its highest cell: grey, so that only materials
+(soil, low friction, water) carry colour."""
+
+
 def preview_rgb(heights: np.ndarray, material: MaterialMap, resolution: float) -> np.ndarray:
-    """Hillshaded, elevation-coloured heights tinted by material; (ny, nx, 3) with x right and y up.
+    """Hillshaded heights, bare ground grey (lighter: higher, ``GROUND_GREY``), tinted by material; (ny, nx, 3)
+    with x right and y up.
 
     Hillshade: Lambert shading of the surface normal (-dh/dx, -dh/dy, 1) under a light from the north-west at
     45 degrees elevation (the usual cartographic convention).
     """
-    from matplotlib import colormaps
-
     h = heights.astype(np.float64)
     lo, hi = float(h.min()), float(h.max())
     elevation = (h - lo) / (hi - lo) if hi > lo else np.full_like(h, 0.5)
-    # The land part of matplotlib's "terrain" colormap (its lowest quarter is sea blue, reserved for water).
-    rgb = colormaps["terrain"](0.3 + 0.65 * elevation)[..., :3]
+    grey = GROUND_GREY[0] + (GROUND_GREY[1] - GROUND_GREY[0]) * elevation
+    rgb = np.repeat(grey[..., None], 3, axis=-1)
     gx, gy = np.gradient(h, resolution) if min(h.shape) > 1 else (np.zeros_like(h), np.zeros_like(h))
     normal = np.stack([-gx, -gy, np.ones_like(h)], -1)
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
