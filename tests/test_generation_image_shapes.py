@@ -214,3 +214,14 @@ def test_a_photo_splits_back_and_front_at_the_middle_of_the_tile_it_builds():
     soil = {(c.params["preset"], c.rect(40.0, 40.0)[0]) for c in calls if c.tool == "soil"}
     assert ("dry_sand", 20.0) in soil  # the sand lies on the front half (x0 = 20 m)
     assert not any(preset == "snow" and x0 >= 20.0 for preset, x0 in soil)  # the snow is not 20 m further out
+
+
+def test_a_sketch_in_other_proportions_than_its_tile_is_said_to_be_stretched():
+    """A 2:1 sketch on a square tile was stretched to it with no note: its top row is the tile's front (x), its
+    columns y, so a sketch W x H pixels fits a size_x x size_y tile unstretched when H / W = size_x / size_y."""
+    wide = np.concatenate([_canvas(), _canvas("mud")], axis=1)  # 96 rows x 192 columns
+    warnings = plan_image(_png(wide), size_x=SIZE, size_y=SIZE).warnings
+    said = [w for w in warnings if "stretched" in w]
+    assert len(said) == 1 and "192 x 96" in said[0] and "20 x 20 m" in said[0] and "2.00 times more along x" in said[0], warnings
+    assert not [w for w in plan_image(_png(wide), size_x=10.0, size_y=20.0).warnings if "stretched" in w]
+    assert not [w for w in plan_image(_png(_canvas())).warnings if "stretched" in w]

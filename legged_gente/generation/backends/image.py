@@ -817,6 +817,10 @@ def _plan_photo(img: Image.Image, size_x: float, size_y: float, notes: list[str]
     return out
 
 
+SKETCH_STRETCH = 0.05
+"""A sketch whose proportions differ from its tile's by more than this share is said to be stretched to it."""
+
+
 def plan_image(
     image: str | Path | bytes | Image.Image,
     size_x: float = 20.0,
@@ -832,6 +836,13 @@ def plan_image(
     warnings: list[str] = []
     notes: list[str] = []
     if is_sketch(img):
+        # its top row is the tile's front: rows run along x, columns along y
+        stretch = (img.height / img.width) / (size_x / size_y)
+        if abs(stretch - 1.0) > SKETCH_STRETCH:
+            warnings.append(f"the sketch is {img.width} x {img.height} pixels (width along y, height along x) and the "
+                            f"tile {size_x:g} x {size_y:g} m: it is stretched {max(stretch, 1 / stretch):.2f} times "
+                            f"more along {'y' if stretch > 1 else 'x'}; draw it in the tile's proportions (height / width = "
+                            f"{size_x / size_y:g}) to keep its shapes.")
         steps = _plan_sketch(img, size_x, size_y, notes, warnings)
     elif img.width * img.height < PW * PH:  # upsampled, it has no sky texture, speckle or edges to read
         raise ValueError(f"{name} is a {img.width} x {img.height} pixel photo, fewer pixels than the {PW} x {PH} the "
