@@ -225,3 +225,19 @@ def test_a_sketch_in_other_proportions_than_its_tile_is_said_to_be_stretched():
     assert len(said) == 1 and "192 x 96" in said[0] and "20 x 20 m" in said[0] and "2.00 times more along x" in said[0], warnings
     assert not [w for w in plan_image(_png(wide), size_x=10.0, size_y=20.0).warnings if "stretched" in w]
     assert not [w for w in plan_image(_png(_canvas())).warnings if "stretched" in w]
+
+
+@pytest.mark.parametrize("quality", [90, 75])
+def test_a_jpeg_sketch_reads_as_its_png(quality):
+    """JPEG's ringing at a colour edge makes pixels between two legend colours (red beside grass reads as mud): a red
+    rectangle became three flights of stairs and two mud patches at its corners. Pixels far from every legend colour
+    do not vote, so the JPEG gives the PNG's calls."""
+    sketch = np.full((128, 128, 3), LEGEND["grass"].rgb, np.uint8)  # resized to the reader's grid of 96
+    sketch[10:31, 90:111] = LEGEND["obstacle"].rgb
+    sketch[70:121, 80:121] = LEGEND["stairs"].rgb
+    sketch[8:49, 8:57] = LEGEND["water"].rgb
+    sketch[80:128, 0:51] = LEGEND["mud"].rgb
+    buf = io.BytesIO()
+    Image.fromarray(sketch.astype(np.uint8)).save(buf, format="JPEG", quality=quality)
+    png, jpeg = plan_image(_png(sketch)).calls, plan_image(buf.getvalue()).calls
+    assert [(c.tool, c.region_json()) for c in jpeg] == [(c.tool, c.region_json()) for c in png]

@@ -117,6 +117,9 @@ FLAT_RANGE = 12.0
 GRID = 96  # sketch analysis resolution (pixels per side)
 SKETCH_BLOCK = 4  # pixels per block of a sketch: 24 blocks per side (0.8 m on a 20 m tile)
 MIN_FRACTION = 0.02  # a sketch class covering less of the image is ignored
+SKETCH_SURE = 30.0
+"""RGB distance (0-255 units) to its nearest legend colour within which a sketch pixel votes for its block's class:
+a third of the closest two legend colours' distance (rock and mud, 88)."""
 MAX_CALLS = 21
 """Most calls a photo gives (GenTe asks for 3-20; water is two: its basin and itself)."""
 
@@ -237,11 +240,20 @@ def _to_metres(rect, shape, size_x: float, size_y: float) -> dict[str, float]:
 
 def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str], warnings: list[str]) -> list[tuple[Step, dict]]:
     """Steps and regions of a sketch map: legend classes pooled into blocks, covered by rectangles."""
-    classes, _ = _legend_distance(np.asarray(img.resize((GRID, GRID), Image.Resampling.NEAREST), np.float32))
+    classes, distance = _legend_distance(np.asarray(img.resize((GRID, GRID), Image.Resampling.NEAREST), np.float32))
     notes.append("read as a colour-coded sketch map")
     bs, nb = SKETCH_BLOCK, GRID // SKETCH_BLOCK
-    blocks = classes.reshape(nb, bs, nb, bs).transpose(0, 2, 1, 3).reshape(nb, nb, -1)
-    block_class = np.stack([(blocks == k).sum(-1) for k in range(len(CLASSES))], -1).argmax(-1)
+    to_blocks = lambda a: a.reshape(nb, bs, nb, bs).transpose(0, 2, 1, 3).reshape(nb, nb, -1)  # noqa: E731
+    # A lossy codec (JPEG, WebP) leaves a pixel or two at a colour edge between the two colours, some near a third
+    # legend colour (red beside grass reads as mud): a pixel votes only if it is near its legend colour and inside
+    # a 3 x 3 patch of its class (an opening of the class's pixels), which such a seam is too thin to hold.
+    kept = np.zeros_like(classes, bool)
+    for k in np.unique(classes):
+        kept |= ndimage.binary_opening(classes == k, np.ones((3, 3), bool), border_value=1)
+    blocks, sure = to_blocks(classes), to_blocks(kept & (distance <= SKETCH_SURE))
+    sure |= ~sure.any(-1, keepdims=True)  # a block of seams only: all of its pixels vote
+    block_class = np.stack([((blocks == k) & sure).sum(-1) for k in range(len(CLASSES))], -1).argmax(-1)
+    classes = np.where(distance <= SKETCH_SURE, classes, -1)  # an obstacle's own pixels, placed exactly
     coverage = {c: float((block_class == k).mean()) for k, c in enumerate(CLASSES)}
     coverage["obstacle"] = float((classes == CLASSES.index("obstacle")).mean())  # placed exactly, at any size
     present = [c for c in CLASSES if coverage[c] >= MIN_FRACTION or (c == "obstacle" and coverage[c] > 0)]
