@@ -127,10 +127,11 @@ def _keep_figure(monkeypatch):
     return kept
 
 
-def test_figure_c_draws_the_tile_in_metres_with_x_to_the_right(tmp_path, monkeypatch):
-    """A 20 m x 10 m tile at 0.1 m (200 x 100 cells) with a 1 m block at x >= 15 m: the picture spans x 0..20 m
-    horizontally and y 0..10 m vertically, and the block shows at x = 17 m, y = 5 m (pixel row 50, column 170),
-    not at the bottom or the left. The path and the waypoints are drawn at their xy."""
+def test_figure_c_draws_the_tile_as_its_preview_does_in_metres(tmp_path, monkeypatch):
+    """A 20 m x 10 m tile at 0.1 m (200 x 100 cells) with a 1 m block at x >= 15 m, drawn as preview.png draws it:
+    +x (forward) up, +y (left) to the left, axes in metres. The picture spans y 10..0 m left to right and x 0..20 m
+    bottom to top; the block shows in its top quarter (pixel rows 0-49), at x = 17 m, y = 5 m (row 30, column 50).
+    The path and the waypoints are drawn at (y, x)."""
     heights = np.zeros((200, 100), np.float32)
     heights[150:, :] = 1.0
     path = np.array([[2.0, 5.0], [3.0, 5.5], [4.0, 6.0]])
@@ -139,11 +140,13 @@ def test_figure_c_draws_the_tile_in_metres_with_x_to_the_right(tmp_path, monkeyp
     figures.plot_trajectories(heights, 0.1, {1.0: {"pos": path, "waypoints": waypoints}}, tmp_path / "c.png")
     ax = kept[0].axes[0]
     image = ax.images[0]
-    assert image.get_extent() == pytest.approx([0.0, 20.0, 0.0, 10.0])
+    assert image.get_extent() == pytest.approx([10.0, 0.0, 0.0, 20.0])  # left, right, bottom, top
     shown = np.asarray(image.get_array())
-    assert shown.shape == (100, 200) and shown[50, 170] == 1.0 and shown[50, 30] == 0.0
-    assert np.allclose(ax.lines[0].get_xydata(), path)
-    assert np.allclose(ax.lines[-1].get_xydata(), waypoints)
+    assert shown.shape == (200, 100) and (shown[:50] == 1.0).all() and (shown[50:] == 0.0).all()
+    assert shown[30, 50] == 1.0 and shown[170, 50] == 0.0
+    assert np.allclose(ax.lines[0].get_xydata(), path[:, ::-1])
+    assert np.allclose(ax.lines[-1].get_xydata(), waypoints[:, ::-1])
+    assert ax.get_xlabel().startswith("y (m)") and ax.get_ylabel().startswith("x (m)")
 
 
 def test_figure_d_plots_each_terrains_success_rate_over_its_moving_robots(tmp_path, monkeypatch):

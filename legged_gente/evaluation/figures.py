@@ -117,19 +117,23 @@ def plot_tracking(traces: str | Path, out: str | Path, ids: list[str] | None = N
 # ------------------------------------------------------------------------------- (c) waypoint trajectories
 def plot_trajectories(heights: np.ndarray, resolution: float, runs: dict[float, dict], out: str | Path,
                       title: str = "") -> Path:
-    """One panel per reach distance d: the tile's heights in grey, the path, start, end and waypoints (tile frame)."""
+    """One panel per reach distance d: the tile's heights in grey, the path, start, end and waypoints (tile frame),
+    drawn as preview.png draws the tile: +x (forward) up, +y (left) to the left, axes in metres."""
     plt = _plt()
-    fig, axes = plt.subplots(1, len(runs), figsize=(2.6 * len(runs), 2.9), squeeze=False)
-    extent = (0, heights.shape[0] * resolution, 0, heights.shape[1] * resolution)
+    fig, axes = plt.subplots(1, len(runs), figsize=(2.6 * len(runs), 3.1), squeeze=False)
+    size_x, size_y = heights.shape[0] * resolution, heights.shape[1] * resolution
     for ax, (d, run) in zip(axes[0], runs.items()):
-        ax.imshow(heights.T, origin="lower", extent=extent, cmap="Greys_r")
+        # row 0 the front edge (largest x), column 0 the left edge (largest y)
+        ax.imshow(heights[::-1, ::-1], extent=(size_y, 0, 0, size_x), cmap="Greys_r")
         pos, wp = run["pos"], run["waypoints"]
-        ax.plot(pos[:, 0], pos[:, 1], color="tab:orange", lw=1.2)
-        ax.plot(*pos[0], "go", ms=5, label="start")
-        ax.plot(*pos[-1], "rs", ms=5, label="end")
-        ax.plot(wp[:, 0], wp[:, 1], "b*", ms=7, label="waypoints")
+        ax.plot(pos[:, 1], pos[:, 0], color="tab:orange", lw=1.2)
+        ax.plot(pos[0, 1], pos[0, 0], "go", ms=5, label="start")
+        ax.plot(pos[-1, 1], pos[-1, 0], "rs", ms=5, label="end")
+        ax.plot(wp[:, 1], wp[:, 0], "b*", ms=7, label="waypoints")
         ax.set_title(f"d = {d:g} m" + (" (reached)" if run.get("finished") else ""), fontsize=8)
-        ax.set_xticks([]), ax.set_yticks([])
+        ax.set_xlabel("y (m), +y to the left", fontsize=7)
+        ax.tick_params(labelsize=6)
+    axes[0, 0].set_ylabel("x (m), +x forward", fontsize=7)
     axes[0, 0].legend(fontsize=6, loc="lower left")
     if title:
         fig.suptitle(title, fontsize=9)
