@@ -114,6 +114,12 @@ def test_evaluate_writes_reports(tmp_path, mode):
     assert list(traces["ids"]) == ITEMS
     assert traces["fell"].dtype == bool and traces["fell"].shape == (2,)  # the traced robot of each terrain
     assert all(fell <= row["falls"] for fell, row in zip(traces["fell"], report["terrains"]))
+    assert traces["heading"].shape == (2, steps) and traces["world_vel"].shape == (2, steps, 3)
+    # the world velocity is the one progress integrates: its xy moves the base as pos records (within a step's
+    # change of velocity over 0.02 s)
+    moved = np.diff(traces["pos"], axis=1)
+    live = traces["active"][:, 1:].astype(bool) & traces["active"][:, :-1].astype(bool)
+    np.testing.assert_allclose(moved[live], traces["world_vel"][:, 1:, :2][live] * 0.02, atol=0.01)
     if mode == "waypoints":
         assert traces["waypoints"].shape == (2, 4, 2)
 

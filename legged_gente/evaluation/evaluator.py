@@ -137,7 +137,8 @@ class Recorder:
         self.last_xy = self.start_xy.clone()
         self.step = 0
         self.trace_robots = trace_robots
-        self.trace: dict[str, list[torch.Tensor]] = {"cmd": [], "vel": [], "pos": [], "active": [], "qpos": []}
+        self.trace: dict[str, list[torch.Tensor]] = {"cmd": [], "heading": [], "vel": [], "world_vel": [], "pos": [],
+                                                     "active": [], "qpos": []}
 
     def record(self, env, dones: torch.Tensor) -> None:
         """One policy step: ``dones`` is the step's output, everything else the env's state after the step.
@@ -191,7 +192,9 @@ class Recorder:
         self.active = alive
         r = self.trace_robots
         self.trace["cmd"].append(env.commands[r, :3].clone())
+        self.trace["heading"].append(env.commands[r, 3].clone())  # the commanded heading (heading mode), rad
         self.trace["vel"].append(torch.cat([env.base_lin_vel[r, :2], env.base_ang_vel[r, 2:3]], 1))
+        self.trace["world_vel"].append(env.sim.qvel[r, 0:3].clone())  # the free joint's: world frame
         # a world the step reset (not a diverged one): the pose its episode ended in, which gente-view replays
         qpos, _, _ = env.episode_end(r)
         self.trace["pos"].append(qpos[:, :2])
