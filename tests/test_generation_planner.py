@@ -59,7 +59,7 @@ SCENES = {
 def test_scenes_give_sensible_tools(text, expected):
     result = plan_text(text)
     assert expected <= {c.tool for c in result.calls}
-    assert result.warnings == []
+    assert [w for w in result.warnings if "flight of stairs" not in w] == []  # a flight's end drops: said (below)
     # geometry before materials
     kinds = [ATOMIC_TERRAINS[c.tool].kind for c in result.calls]
     assert kinds == sorted(kinds, key=lambda k: k == "physical")
@@ -108,7 +108,7 @@ def test_modifier_out_of_range_is_clamped_with_a_warning():
 
 def test_modifier_that_does_not_apply_warns():
     assert plan_text("deep snow").warnings == ["modifier 'deep' does not apply to snow; ignored."]
-    assert plan_text("steep stairs").warnings == []  # 0.12 m * 1.8 = 0.216 m is in range
+    assert [w for w in plan_text("steep stairs").warnings if "flight" not in w] == []  # 0.12 m * 1.8 = 0.216 m: in range
 
 
 def test_deterministic_and_round_trip(tmp_path):
@@ -210,5 +210,14 @@ def test_numbers_the_planner_does_not_read_and_the_words_it_did_are_said():
     assert not [w for w in plan_text("a 1.5 m wide ditch of mud").warnings if "'1.5'" in w]  # the quantity is whole
     assert [w for w in plan_text("a 1.5 m wide ditch of mud").warnings if "'1.5 m'" in w]
     assert not [w for w in plan_text("a muddy field").warnings if "numbers" in w]
-    assert plan_text("a high staircase").warnings == ["modifier 'high' (tall) does not apply to stairs; ignored."]
+    assert plan_text("a high staircase").warnings[0] == "modifier 'high' (tall) does not apply to stairs; ignored."
     assert plan_text("a field of tall grass").warnings == ["modifier 'tall' does not apply to grass; ignored."]
+
+
+def test_a_flight_of_stairs_whose_ends_are_drops_is_said_so():
+    """'stairs, then ice': the flight across the back half (10 m of 0.35 m treads, 0.12 m risers: 15 treads either
+    side of the middle one, 1.8 m) ends 1.44-1.56 m above and below the ground beside it, with no word."""
+    (said,) = [w for w in plan_text("stairs, then ice").warnings if "flight of stairs" in w]
+    assert "on back:" in said and "up to 1.56 m below" in said and "up to 1.56 m above" in said
+    heights, _ = TerrainSpec(plan_text("stairs, then ice").calls, size_x=20.0, size_y=20.0, resolution=0.1).build()
+    assert heights[:100].min() < -1.4 and heights[:100].max() > 1.4  # what it says is there

@@ -48,6 +48,9 @@ WATER_MARGIN = 2.0 * SEAM_BAND + 0.2
 ``SEAM_BAND`` past it (over the band where the depression blends into the ground), and a neighbouring cue's part
 blends into this slot over another ``SEAM_BAND``, which can pull a rim there down below the waterline (stairs
 falling away, a quay); two more 0.1 m cells between the two bands keep the rim whole."""
+STAIRS_END_DROP = 0.3
+"""m: a flight of stairs whose end stands higher or lower than this beside the ground is warned of (the highest
+step the terrain library's stairs have)."""
 DEPRESSIONS = ("river", "pit", "basin")
 """Geometric terrains that hold water: their ``depth`` below the ground (a ``flat`` below 0 m on part of a slot,
 a quay's floor, holds it too)."""
@@ -658,6 +661,14 @@ def plan_text(
                                            f"is left; ask for a larger tile or fewer cues, or write the calls yourself "
                                            f"in a spec."])
             name = next((n for n, r in regions.items() if r == rect), None)
+            if step.tool == "stairs":  # one flight across its part: its ends stand above and below the ground there
+                low, high = terrain.bounds({**{k: p.default for k, p in terrain.params.items()}, **args},
+                                           rect[2] - rect[0], rect[3] - rect[1])
+                if max(-low, high) > STAIRS_END_DROP:
+                    warnings.append(f"planner cue '{cue.name}' on {slot_name}: one flight of stairs across it, its "
+                                    f"back end up to {-low:.2f} m below and its front end up to {high:.2f} m above "
+                                    f"the ground beside it: drops a robot cannot step; more cues give it a shorter "
+                                    f"part, or edit the spec.")
             args["region"] = name or dict(zip(("x0", "y0", "x1", "y1"), rect))
             if terrain.kind == "geometric":
                 args["mode"] = step.mode
