@@ -7,7 +7,6 @@ import json
 import time
 import types
 
-import torch
 import warp as wp
 
 from legged_gente.envs.task_registry import task_registry
