@@ -38,6 +38,8 @@ def registered_test_soils():
                          bulldoze_c=1.4e4, bulldoze_g=2.6e5)
     register_custom_soil("t_mud_bull", kc=0.77e3, kphi=51.91e3, n=0.5, c=5.17e3, mu=tan(11.0), K=0.05,
                          bulldoze_c=2.87e4, bulldoze_g=4.79e4)
+    register_custom_soil("t_clay", kc=41.6e3, kphi=2471e3, n=0.73, c=6.1e3, mu=tan(26.6), K=0.01,  # clay loam
+                         bulldoze_c=0.0, bulldoze_g=0.0)
     # closely packed poppy seeds under resistive force theory (Li et al. 2013): zeta = 0.464 N/cm^3
     register_custom_soil("t_rft", kc=0.0, kphi=4.64e5, n=1.0, c=0.0, mu=tan(28.0), K=0.025, bulldoze_c=0.0,
                          bulldoze_g=0.0, zeta=4.64e5, model="rft")
@@ -46,7 +48,7 @@ def registered_test_soils():
     register_custom_soil("t_rft_slick", kc=0.0, kphi=4.64e5, n=1.0, c=0.0, mu=1e-3, K=0.025, bulldoze_c=0.0,
                          bulldoze_g=0.0, zeta=4.64e5, model="rft")
     yield
-    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull", "t_mud_bull", "t_rft", "t_rft_slick"):
+    for name in ("t_sand", "t_snow", "t_mud", "t_sand_bull", "t_mud_bull", "t_clay", "t_rft", "t_rft_slick"):
         SOIL_PRESETS.pop(name)
 
 
@@ -183,11 +185,11 @@ def test_slip_survives_load_dips_and_resets_at_liftoff():
         d.qvel.zero_()
         run(m, d, f, 1)
 
-    lifted(1)  # one substep without load (5 ms < liftoff_time 20 ms): same stance
+    lifted(1)  # one substep without load (5 ms < liftoff_time 50 ms): same stance
     assert f.foot_slip.numpy()[0, 0] >= 0.05 and f.foot_sinkage.numpy()[0, 0] >= rut
-    lifted(3)  # 15 ms
+    lifted(8)  # 40 ms: a sliding foot's hop (MuJoCo's sliding contacts push the body up)
     assert f.foot_slip.numpy()[0, 0] >= 0.05
-    lifted(5)  # 25 ms in the air: lift-off, a new stance starts from a fresh rut and no slip
+    lifted(11)  # 55 ms in the air: lift-off, a new stance starts from a fresh rut and no slip
     assert f.foot_slip.numpy()[0, 0] < 1e-3 and f.foot_sinkage.numpy()[0, 0] < rut
 
 
@@ -659,3 +661,24 @@ def test_rut_legs_are_checked(leg, problem):
     else:
         with pytest.raises(ValueError, match=problem):
             TerrainForces(*args, seed=1)
+
+
+def test_a_foot_pushed_below_its_traction_limit_on_a_firm_soil_stops():
+    """A 41.5 kg foot resting on a clay loam (c = 6.1 kPa, phi = 26.6 deg, K = 1 cm; no bulldozing) pushed at once
+    with 0.95 T, T = c A + W tan(phi) = 6100 x 0.0198 + 407.1 x 0.5008 = 324.6 N. It slides while Janosi-Hanamoto's
+    traction mobilises, then holds: as a dynamic friction limit, where the push's work past T(j) is spent,
+    0.05 j = K (1 - exp(-j / K)), j ~ 20 K = 0.2 m. While it slid, MuJoCo's sliding contact hopped the foot off for
+    20-30 ms at a time; with a 20 ms lift-off each hop forgot the slip, the traction restarted from 0, and the foot
+    accelerated to 3 m/s within 1 s, across the map (12 m/s after 4 s on a longer strip)."""
+    mjm = foot_world(41.5)
+    weight = float(sum(mjm.body_mass)) * 9.81
+    limit = 6.1e3 * SOLE_AREA + weight * math.tan(math.radians(26.6))
+    m, d, f = make(mjm, soil_map("t_clay"))
+    qpos = d.qpos.numpy()
+    qpos[:, 0] = -1.5
+    d.qpos.assign(qpos)
+    run(m, d, f, 400)
+    start = float(d.qpos.numpy()[0, 0])
+    run(m, d, f, 300, push=0.95 * limit)
+    assert float(d.qpos.numpy()[0, 0]) - start < 0.5  # it held: within a few 20 K
+    assert abs(float(d.qvel.numpy()[0, 0])) < 0.05

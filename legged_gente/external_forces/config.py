@@ -46,7 +46,8 @@ class ForcesConfig:
                           since touchdown, its lift-off); the env's ``foot_contacts()``, which the gait rewards read,
                           is legged_gym's vertical contact force above 1 N, not this
     liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
-                          off: its slip and rut are forgotten (shorter dips are solver chatter, not lift-off)
+                          off: its slip and rut are forgotten (shorter dips are solver chatter, or the 20-30 ms
+                          hops of a contact sliding on a firm soil, not lift-off; a gait's swing is ten times longer)
     min_friction: float   a ground contact whose friction is below this is made frictionless (condim 1): as mu -> 0
                           MuJoCo's pyramidal cone holds a tangential load by inflating the normal force (the foot
                           is launched) and its elliptic cone divides by mu
@@ -106,7 +107,7 @@ class ForcesConfig:
     sole_length: float | None = None
     sole_width: float | None = None
     contact_threshold = 1.0
-    liftoff_time = 0.02
+    liftoff_time = 0.05
     soil_friction_cap = 2.0
     min_friction = 0.01
     sole_contact = True
