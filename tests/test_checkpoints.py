@@ -344,6 +344,11 @@ def test_runs_go_to_the_working_directory_and_record_how_they_were_made(terminat
         head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True).stdout
         assert code["git_commit"] == head.strip()
     assert config["terrain"] == {"mode": "plane"}
+    assert config["world_size"] == 1 and config["resumed_from"] is None  # one process, a fresh run
+    import torch
+
+    assert config["platform"]["device"] == "cpu" and config["platform"]["libraries"]["torch"] == torch.__version__
+    assert len(code["source_sha256"]) == 64
     assert "Module " not in out  # Warp's per-module load lines stay quiet without --verbose
 
 
@@ -481,22 +486,29 @@ def test_the_code_version_counts_changes_to_tracked_files_only(tmp_path, monkeyp
     import shutil
     import subprocess
 
-    from legged_gente.scripts import train as train_script
+    from legged_gente.utils import provenance
 
     repo = tmp_path / "checkout"
-    (repo / "legged_gente" / "scripts").mkdir(parents=True)
+    (repo / "legged_gente" / "utils").mkdir(parents=True)
     (repo / "legged_gente" / "__init__.py").write_text("")
-    shutil.copy(train_script.__file__, repo / "legged_gente" / "scripts" / "train.py")
+    shutil.copy(provenance.__file__, repo / "legged_gente" / "utils" / "provenance.py")
     git = lambda *cmd: subprocess.run(["git", "-C", str(repo), *cmd], check=True, capture_output=True)  # noqa: E731
     git("init", "-q")
     git("add", ".")
     git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "c")
-    monkeypatch.setattr(train_script, "__file__", str(repo / "legged_gente" / "scripts" / "train.py"))
+    monkeypatch.setattr(provenance, "__file__", str(repo / "legged_gente" / "utils" / "provenance.py"))
     (repo / "terrains").mkdir()
     (repo / "terrains" / "spec.json").write_text("{}")
-    assert train_script.code_version()["git_dirty"] is False
+    clean = provenance.code_version()
+    assert clean["git_dirty"] is False
     (repo / "legged_gente" / "__init__.py").write_text("# changed\n")
-    assert train_script.code_version()["git_dirty"] is True
+    dirty = provenance.code_version()
+    assert dirty["git_dirty"] is True
+    # the source digest tells the two states apart (a dirty flag does not), and names code outside git too
+    assert dirty["source_sha256"] != clean["source_sha256"] and len(clean["source_sha256"]) == 64
+    shutil.rmtree(repo / ".git")
+    outside = provenance.code_version()
+    assert outside["git_commit"] is None and outside["source_sha256"] == dirty["source_sha256"]
 
 
 def test_resuming_on_another_terrain_than_the_run_s_is_said(runner, tmp_path, monkeypatch):
@@ -544,3 +556,6 @@ def test_train_writes_its_run_under_log_root_and_resumes_from_there(tmp_path, mo
     assert len(runs) == 1 and list(runs[0].glob("model_*.pt")) and not (tmp_path / "elsewhere").exists()
     train_script.main([*short, "--resume"])  # the networks: the resumed run's config.json
     assert len(sorted((root / "gente_biped_flat").iterdir())) == 2 and not (tmp_path / "elsewhere").exists()
+    # the resumed run names the checkpoint it continued from: "latest" changes as runs are added
+    continued = json.loads((sorted((root / "gente_biped_flat").iterdir())[1] / "config.json").read_text())
+    assert continued["resumed_from"] == str((runs[0] / "model_0.pt").resolve())

@@ -62,6 +62,13 @@ def test_evaluate_pretrained_records_the_file(tmp_path, capsys):
     assert report["meta"]["policy"] == "pretrained" and report["meta"]["tile_edge_margin"] == 0.5
     assert report["meta"]["policy_file"] == str(policies_root() / SHIPPED / "model.pt")
     assert json.loads((tmp_path / "report.json").read_text())["meta"]["policy_file"].endswith("model.pt")
+    # what reproduces it: the scored policy's bytes, the command, the code and the platform
+    import hashlib
+
+    shipped = (policies_root() / SHIPPED / "model.pt").read_bytes()
+    assert report["meta"]["policy_sha256"] == hashlib.sha256(shipped).hexdigest()
+    assert report["meta"]["command"] and len(report["meta"]["code"]["source_sha256"]) == 64
+    assert report["meta"]["platform"]["device"] == "cpu"
 
 
 def test_a_task_without_a_shipped_policy(capsys):

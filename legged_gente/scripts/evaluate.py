@@ -143,6 +143,7 @@ def evaluate(args) -> dict:
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.evaluation.evaluator import Evaluation, check_settle, episode_steps, load_policy_and_file
     from legged_gente.evaluation.report import build_report, check_success_rule, short_measure_note, write_reports
+    from legged_gente.utils.provenance import code_version, command_line, file_sha256, platform_record
     from legged_gente.evaluation.tasks import check_task_settings, waypoint_episode_s
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
@@ -188,7 +189,10 @@ def evaluate(args) -> dict:
             "policy_file": str(policy_file) if policy_file else None,
             "robots_per_terrain": args.robots_per_terrain, "device": device, "seed": args.seed,
             "tile_edge_margin": args.tile_edge_margin, "items": [item.id for item in items],
-            "terrain_digests": {item.id: item.spec().terrain_digest() for item in items}}
+            "terrain_digests": {item.id: item.spec().terrain_digest() for item in items},
+            # what reproduces it: the policy's bytes (a later export may overwrite its path), the code, the platform
+            "policy_sha256": file_sha256(policy_file) if policy_file else None, "command": command_line(),
+            "code": code_version(), "platform": platform_record(device)}
     report = build_report(result, items, meta=meta, **rule)
     json_path, csv_path = write_reports(report, args.out)
     np.savez_compressed(Path(args.out) / "traces.npz", ids=np.array([i.id for i in items]), **result.traces)

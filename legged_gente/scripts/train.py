@@ -5,9 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import shlex
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -24,30 +22,7 @@ from legged_gente.envs.task_registry import (
     apply_args, check_run_folder_names, is_one_folder_name, log_root_of, task_registry)
 from legged_gente.terrain.soil import SOIL_PRESETS
 from legged_gente.utils.episode_logger import StopRequested, TimeLimitReached
-
-
-def code_version() -> dict:
-    """The code a run was made with: the git commit (and whether the checkout's tracked files had changes: the
-    terrains, runs and outputs a user writes inside it are untracked and not counted) when legged_gente runs from a
-    git checkout, else the installed package's version."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        package = version("legged_gente")
-    except PackageNotFoundError:
-        package = None
-    source = Path(__file__).resolve().parents[2]
-    try:
-        def git(*cmd):
-            return subprocess.run(["git", "-C", str(source), *cmd], capture_output=True, text=True, timeout=10,
-                                  check=True).stdout.strip()
-
-        if Path(git("rev-parse", "--show-toplevel")).resolve() != source:
-            raise ValueError("legged_gente is not the checkout's top level")  # e.g. installed inside another repo
-        dirty = bool(git("status", "--porcelain", "--untracked-files=no"))
-        return {"git_commit": git("rev-parse", "HEAD"), "git_dirty": dirty, "package_version": package}
-    except (OSError, ValueError, subprocess.SubprocessError):
-        return {"git_commit": None, "package_version": package}
+from legged_gente.utils.provenance import code_version, command_line, platform_record
 
 
 def resolved_terrain(env) -> dict:
@@ -86,10 +61,13 @@ def terrain_change(before: dict | None, now: dict) -> str | None:
             f"on its terrain")
 
 
-def run_record(task: str, env, env_cfg, train_cfg) -> dict:
-    """config.json of a run: enough to reproduce it."""
-    return {"task": task, "command": shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]]), "code": code_version(),
-            "terrain": resolved_terrain(env), "env": class_to_dict(env_cfg), "train": class_to_dict(train_cfg)}
+def run_record(task: str, env, env_cfg, train_cfg, resumed_from: Path | None = None) -> dict:
+    """config.json of a run: enough to reproduce it. ``world_size``: the processes of a torchrun launch (each with
+    ``env.num_envs`` robots and its own seed, ``seed + rank``); ``resumed_from``: the checkpoint a --resume loaded."""
+    return {"task": task, "command": command_line(), "world_size": int(os.environ.get("WORLD_SIZE", "1")),
+            "resumed_from": str(resumed_from) if resumed_from is not None else None, "code": code_version(),
+            "platform": platform_record(env.device), "terrain": resolved_terrain(env), "env": class_to_dict(env_cfg),
+            "train": class_to_dict(train_cfg)}
 
 
 class Terminated(KeyboardInterrupt):
@@ -136,8 +114,9 @@ def train(args) -> Path | None:
         except FileExistsError:
             raise ValueError(f"run folder {log_dir} was created by another run starting at the same moment; start this "
                              f"one again, or give it a --run_name") from None
-        (Path(log_dir) / "config.json").write_text(json.dumps(run_record(args.task, env, env_cfg, train_cfg),
-                                                              indent=1, default=str))
+        resumed_from = Path(runner.loaded_checkpoint).resolve() if train_cfg.runner.resume else None
+        record = run_record(args.task, env, env_cfg, train_cfg, resumed_from)
+        (Path(log_dir) / "config.json").write_text(json.dumps(record, indent=1, default=str))
         print(f"Logging to {log_dir}")
     main_thread = threading.current_thread() is threading.main_thread()  # only it may set signal handlers
     stop_signals = (signal.SIGINT, signal.SIGTERM) if main_thread else ()
