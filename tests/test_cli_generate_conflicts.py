@@ -44,5 +44,7 @@ def test_generating_into_a_folder_that_holds_a_terrain_says_it_was_replaced(tmp_
     out = tmp_path / "creek"
     assert generate_script.main(["--text", "a muddy field", "--size", "4", "--out", str(out)]) == 0
     assert "replaced" not in capsys.readouterr().err
+    assert generate_script.main(["--text", "a muddy field", "--size", "4", "--out", str(out)]) == 0
+    assert "replaced" not in capsys.readouterr().err  # the same terrain again: nothing replaced
     assert generate_script.main(["--text", "a river", "--size", "4", "--out", str(out)]) == 0
     assert f"note: replaced the terrain {out} held" in capsys.readouterr().err

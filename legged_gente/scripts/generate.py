@@ -158,9 +158,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {call.tool}({json.dumps(call.arguments())})")
         for warning in result.warnings:
             print(f"warning: {printable(warning)}", file=sys.stderr)
-        replaced = Path(args.out, "spec.json").is_file()  # a benchmark item's folder, perhaps: say it changed
+        held = Path(args.out, "spec.json")  # a benchmark item's folder, perhaps: say when its terrain changed
+        before = held.read_bytes() if held.is_file() else None
         out = emit(spec, args.out, base=args.base, mesh=args.mesh)
-        if replaced:
+        if before is not None and before != held.read_bytes():
             print(f"note: replaced the terrain {args.out} held (its spec.json and the files beside it); evaluations "
                   f"of the old one are no longer comparable with new ones there", file=sys.stderr)
     except (ValidationError, GenerationError) as exc:  # the server or the model failed; the planner asks none, so
