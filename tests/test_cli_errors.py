@@ -622,7 +622,8 @@ def test_mujoco_not_installed_says_so_not_opengl(capsys, monkeypatch):
 
 
 def test_gente_generate_takes_verbose_for_the_traceback(tmp_path, monkeypatch, capsys):
-    """As the other gente-* commands: an error is one line, and --verbose shows its traceback instead."""
+    """As the other gente-* commands: an error is one line, and --verbose shows its traceback before it, with the
+    same exit status."""
     def fail(*args, **kwargs):
         raise ValueError("the output folder cannot be written")
 
@@ -630,5 +631,19 @@ def test_gente_generate_takes_verbose_for_the_traceback(tmp_path, monkeypatch, c
     argv = ["--text", "a hill", "--out", str(tmp_path / "o")]
     assert generate_script.main(argv) == 2
     assert capsys.readouterr().err.strip() == "gente-generate: error: the output folder cannot be written"
-    with pytest.raises(ValueError, match="cannot be written"):
-        generate_script.main([*argv, "--verbose"])
+    assert generate_script.main([*argv, "--verbose"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" in err and err.strip().endswith("gente-generate: error: the output folder cannot be written")
+
+
+def test_verbose_keeps_a_usage_error_s_exit_status(capsys):
+    """gente-train --task gente_bipd exits 2; with --verbose it exited 1 (the exception re-raised): the traceback
+    now comes before the one line, and the status stays 2."""
+    from legged_gente.scripts import train as train_script
+
+    for extra in ([], ["--verbose"]):
+        with pytest.raises(SystemExit) as stop:
+            train_script.main(["--task", "gente_biped_flat", "--device", "cpu", "--set", "sim.dt=0", *extra])
+        assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" in err and err.strip().splitlines()[-1].startswith("gente-train: error:")

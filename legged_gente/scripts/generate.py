@@ -17,6 +17,7 @@ import json
 import math
 import os
 import sys
+import traceback
 from pathlib import Path
 
 from legged_gente.generation.backends import MAX_RETRIES, MAX_TIMEOUT, GenerationError
@@ -166,11 +167,11 @@ def main(argv: list[str] | None = None) -> int:
                   f"of the old one are no longer comparable with new ones there", file=sys.stderr)
     except (ValidationError, GenerationError) as exc:  # the server or the model failed; the planner asks none, so
         if args.verbose:
-            raise
+            traceback.print_exc()
         return _error(exc, 1 if args.backend == "openai" else 2)  # its refusal is of the text, image or tile
     except (ValueError, OSError) as exc:  # the user's input (e.g. the API key's variable) or the output folder
         if args.verbose:
-            raise
+            traceback.print_exc()
         return _error(exc, 2)
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0

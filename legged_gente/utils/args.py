@@ -11,6 +11,7 @@ import os
 import re
 import sys
 import tempfile
+import traceback
 import types
 import typing
 import warnings
@@ -233,12 +234,13 @@ def check_log_root(given: str | None, default: Path) -> None:
 
 def run_command(prog: str, main, args: argparse.Namespace):
     """``main(args)``, with a user's mistake reported as ``prog: error: ...`` (exit 2) instead of a traceback;
-    ``--verbose`` shows the traceback."""
+    ``--verbose`` shows the traceback before that line (the exit status stays 2: a script telling a usage error
+    from a crash by it works with and without the flag)."""
     try:
         return main(args)
     except USER_ERRORS as error:
         if getattr(args, "verbose", False):
-            raise
+            traceback.print_exc()
         print(f"{prog}: error: {one_line(error_text(error))}", file=sys.stderr)
         sys.exit(2)
 
