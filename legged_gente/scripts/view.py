@@ -17,6 +17,7 @@ import signal
 import sys
 import threading
 import time
+import traceback
 import webbrowser
 from pathlib import Path
 
@@ -246,7 +247,7 @@ def main(argv=None) -> None:
         viewer = Viewer(items, host=args.host, port=args.port, shadows=not args.no_shadows)
     except USER_ERRORS as error:
         if args.verbose:
-            raise
+            traceback.print_exc()
         parser.exit(2, f"gente-view: error: {one_line(error_text(error))}\n")
     if rollout is not None:
         player = viewer.attach_rollout(rollout, mjm, play=args.step is None)
