@@ -120,6 +120,20 @@ def test_resume_falls_back_to_the_newest_readable_checkpoint(runner, tmp_path, c
         load_newest_readable(runner, root, load_run=newer.name, checkpoint=9)
 
 
+def test_resume_names_the_later_run_folders_it_skips_for_holding_no_checkpoint(runner, tmp_path, capsys):
+    """A run stopped before its first iteration leaves a folder with a config.json alone: --resume takes the latest
+    run that has a checkpoint, and now says which later folders it passed over."""
+    root = tmp_path / "gente_biped_flat"
+    done, stopped = root / "2026-01-01_00-00-00", root / "2026-01-02_00-00-00"
+    done.mkdir(parents=True)
+    stopped.mkdir()
+    (stopped / "config.json").write_text("{}")
+    runner.save(str(done / "model_3.pt"))
+    assert load_newest_readable(runner, root) == done / "model_3.pt"
+    assert (f"the run folder(s) {stopped.name} after {done.name} hold no checkpoint; resuming from {done.name}"
+            in capsys.readouterr().out)
+
+
 def saved_as_on_a_gpu(path: Path) -> None:
     """Rewrite a CPU checkpoint as ``torch.save`` writes one from a GPU: every storage's location tag reads
     cuda:0, so a plain ``torch.load`` on a machine without CUDA refuses it."""

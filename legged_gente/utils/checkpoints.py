@@ -51,7 +51,12 @@ def _run(experiment_root: Path | None, load_run) -> Path:
     when no run there has that name, ``load_run`` as a path to a run folder anywhere (e.g. copied from another
     machine)."""
     if load_run in (-1, "-1", None):
-        return _runs(experiment_root)[-1]
+        latest = _runs(experiment_root)[-1]
+        empty = sorted(p.name for p in Path(experiment_root).iterdir() if p.is_dir() and p.name > latest.name)
+        if empty:  # runs stopped before their first iteration: nothing of them to resume
+            print(f"[legged_gente] the run folder(s) {', '.join(empty)} after {latest.name} hold no checkpoint; "
+                  f"resuming from {latest.name} (--load_run names a run)")
+        return latest
     root = Path(experiment_root) if experiment_root is not None else None
     named = root / str(load_run) if root is not None else None
     run = named if named is not None and named.is_dir() else Path(str(load_run)).expanduser()
