@@ -647,3 +647,14 @@ def test_verbose_keeps_a_usage_error_s_exit_status(capsys):
         assert stop.value.code == 2
     err = capsys.readouterr().err
     assert "Traceback" in err and err.strip().splitlines()[-1].startswith("gente-train: error:")
+
+
+@pytest.mark.parametrize("name", ["a/b", ".", ".."])
+def test_a_run_name_that_is_not_one_folder_says_which_names_are_refused(name, capsys):
+    """'..' was told to drop a '/' it did not have."""
+    from legged_gente.scripts import train as train_script
+
+    with pytest.raises(SystemExit) as stop:
+        train_script.main(["--task", "gente_biped_flat", "--device", "cpu", "--run_name", name])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.strip().endswith("give a name without '/' that is not '.' or '..'")

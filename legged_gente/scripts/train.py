@@ -182,7 +182,7 @@ def main(argv=None) -> None:
                      "training starts from scratch)")
     if args.run_name and not is_one_folder_name(args.run_name):
         parser.error(f"--run_name {args.run_name!r}: a run is one folder under logs/<experiment>/ (--resume looks "
-                     f"for it there); give a name without '/'")
+                     f"for it there); give a name without '/' that is not '.' or '..'")
     if args.pretrained and args.resume:
         parser.error("--pretrained starts a new run from the shipped policy; --resume continues a run of your own: "
                      "pick one")
