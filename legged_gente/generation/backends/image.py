@@ -245,12 +245,12 @@ def _plan_sketch(img: Image.Image, size_x: float, size_y: float, notes: list[str
     bs, nb = SKETCH_BLOCK, GRID // SKETCH_BLOCK
     to_blocks = lambda a: a.reshape(nb, bs, nb, bs).transpose(0, 2, 1, 3).reshape(nb, nb, -1)  # noqa: E731
     # A lossy codec (JPEG, WebP) leaves a pixel or two at a colour edge between the two colours, some near a third
-    # legend colour (red beside grass reads as mud): a pixel votes only if it is near its legend colour and inside
-    # a 3 x 3 patch of its class (an opening of the class's pixels), which such a seam is too thin to hold.
-    kept = np.zeros_like(classes, bool)
+    # legend colour (red beside grass reads as mud): a pixel votes only if it is near its legend colour and is no
+    # such seam, a pixel beside two classes other than its own (a thin stripe drawn between two of one class votes).
+    others = np.zeros(classes.shape, np.int32)
     for k in np.unique(classes):
-        kept |= ndimage.binary_opening(classes == k, np.ones((3, 3), bool), border_value=1)
-    blocks, sure = to_blocks(classes), to_blocks(kept & (distance <= SKETCH_SURE))
+        others += ndimage.binary_dilation(classes == k, np.ones((3, 3), bool)) & (classes != k)
+    blocks, sure = to_blocks(classes), to_blocks((others < 2) & (distance <= SKETCH_SURE))
     sure |= ~sure.any(-1, keepdims=True)  # a block of seams only: all of its pixels vote
     block_class = np.stack([((blocks == k) & sure).sum(-1) for k in range(len(CLASSES))], -1).argmax(-1)
     classes = np.where(distance <= SKETCH_SURE, classes, -1)  # an obstacle's own pixels, placed exactly
