@@ -601,9 +601,10 @@ class TerrainForces:
     def contact_filter(self, m, d):
         """The depth cap, ground friction and soil ruts on MuJoCo's terrain contacts, then the analytic sole
         contacts. Where no foot is among MuJoCo's contacts (``feet_apart_from_filter``) the feet's cells are found
-        beside the first (parallel branches on a GPU, ``_in_parallel``): neither reads what the other writes. The launches are recorded once per (m, d) and replayed: their arguments are persistent arrays, and
-        on the CPU packing the sole kernel's ~60 arguments every substep would cost more than the heightfield
-        collision it replaces."""
+        beside the first (parallel branches on a GPU, ``_in_parallel``): neither reads what the other writes. The
+        launches are recorded once per (m, d) and replayed: their arguments are persistent arrays, and on the CPU
+        packing the sole kernel's ~60 arguments every substep would cost more than the heightfield collision it
+        replaces."""
         cells, contacts, *soles = self._recorded_filter(m, d)
         if self.feet_apart_from_filter:
             self._in_parallel(cells.launch, contacts.launch)

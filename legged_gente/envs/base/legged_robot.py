@@ -533,7 +533,8 @@ class LeggedRobot(VecEnv):
         # position target would otherwise reach the actuators, which clamp it to a torque limit)
         finite = torch.isfinite(self._step_actions).all(1, keepdim=True)
         self.nonfinite_actions.copy_(~finite[:, 0])
-        self.actions.copy_(torch.where(finite, torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions), 0.0))
+        clipped = torch.clamp(self._step_actions, -self.clip_actions, self.clip_actions)
+        self.actions.copy_(torch.where(finite, clipped, 0.0))
         self.sim.ctrl[:] = self.default_dof_pos + self.action_scale * self.actions
         self.sim.step(self.decimation)
         self._post_physics_step()

@@ -343,7 +343,8 @@ class OpenAIBackend:
             translation = translate_call(name, arguments, "multi", self.size_x, self.size_y, live=True,
                                          resolution=self.resolution)
             if translation.blocked:  # why first, then the notes (a part defaulted, an argument ignored)
-                raise ValidationError([i.message for i in sorted(translation.issues, key=lambda i: i.kind not in BLOCKING)])
+                reasons_first = sorted(translation.issues, key=lambda i: i.kind not in BLOCKING)
+                raise ValidationError([i.message for i in reasons_first])
             return translation.calls, [f"{translation.gente_tool}: {i.message}" for i in translation.issues]
         return [validate_call(name, arguments, self.size_x, self.size_y, self.registry, self.resolution)], []
 
