@@ -143,8 +143,8 @@ def evaluate(args) -> dict:
     from legged_gente.envs.task_registry import task_registry
     from legged_gente.evaluation.evaluator import Evaluation, check_settle, episode_steps, load_policy_and_file
     from legged_gente.evaluation.report import build_report, check_success_rule, short_measure_note, write_reports
-    from legged_gente.utils.provenance import code_version, command_line, file_sha256, platform_record
     from legged_gente.evaluation.tasks import check_task_settings, waypoint_episode_s
+    from legged_gente.utils.provenance import code_version, command_line, file_sha256, platform_record
 
     for name, given in (("--checkpoint", args.checkpoint), ("--exported", args.exported)):
         if given and not Path(given).exists():  # before the (slow) evaluation envs are built

@@ -51,7 +51,10 @@ def _positive(most: float = math.inf):
     return parse
 
 
-def _error(exc: BaseException, code: int) -> int:
+def _error(exc: BaseException, code: int, verbose: bool) -> int:
+    """The error as one line (its traceback before it with ``--verbose``); ``code``, the exit status."""
+    if verbose:
+        traceback.print_exc()
     print(f"gente-generate: error: {printable(one_line(exc))}", file=sys.stderr)
     return code
 
@@ -166,13 +169,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"note: replaced the terrain {args.out} held (its spec.json and the files beside it); evaluations "
                   f"of the old one are no longer comparable with new ones there", file=sys.stderr)
     except (ValidationError, GenerationError) as exc:  # the server or the model failed; the planner asks none, so
-        if args.verbose:
-            traceback.print_exc()
-        return _error(exc, 1 if args.backend == "openai" else 2)  # its refusal is of the text, image or tile
+        return _error(exc, 1 if args.backend == "openai" else 2, args.verbose)  # its refusal: the text, image or tile
     except (ValueError, OSError) as exc:  # the user's input (e.g. the API key's variable) or the output folder
-        if args.verbose:
-            traceback.print_exc()
-        return _error(exc, 2)
+        return _error(exc, 2, args.verbose)
     print(f"wrote {out.module} (class {out.class_name}), {out.spec}, {out.preview}" + (f", {out.mesh}" if out.mesh else ""))
     return 0
 
