@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import socket
+import struct
 import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
@@ -57,14 +58,20 @@ def test_an_empty_key_is_refused(monkeypatch):
         OpenAIBackend("http://127.0.0.1:1/v1", "m", registry=REGISTRY, api_key_env="GENTE_TEST_KEY")
 
 
-def test_a_server_that_hangs_up_is_named_as_one():
+@pytest.mark.parametrize("reset", [False, True])
+def test_a_server_that_hangs_up_is_named_as_one(reset):
+    """A server that closes the socket, politely (FIN) or with a reset (RST, as when it closes with the request
+    unread), hung up: both are named so."""
     listener = socket.socket()
     listener.bind(("127.0.0.1", 0))
     listener.listen()
 
     def hang_up():
         conn, _ = listener.accept()
-        conn.recv(65536)
+        if reset:  # linger 0: close sends RST
+            conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        else:
+            conn.recv(65536)
         conn.close()
 
     threading.Thread(target=hang_up, daemon=True).start()

@@ -61,6 +61,9 @@ from legged_gente.terrain.registry import ATOMIC_TERRAINS, AtomicTerrain
 DEFAULT_API_KEY_ENV = "GENTE_API_KEY"
 MAX_RESPONSE_BYTES = 8 * 2**20
 """Largest answer read from the server (a chat completion with tool calls is a few kB)."""
+HUNG_UP = (ConnectionResetError, ConnectionAbortedError, BrokenPipeError)
+"""A server that closed the connection: politely (http.client.RemoteDisconnected is a ConnectionResetError), or
+with a reset (it crashed, or closed with the request unread)."""
 MAX_DESCRIPTION_CHARS = 4000
 """Longest image description passed on to the language model in a two-phase run (the rest is cut)."""
 TOOLSETS = ("ours", "gente")
@@ -264,11 +267,13 @@ class OpenAIBackend:
         if worker.is_alive() or isinstance(box.get("error"), TimeoutError):
             raise timed_out
         error = box.get("error")
+        if isinstance(error, urllib.error.URLError) and isinstance(error.reason, HUNG_UP):
+            error = error.reason  # a reset while the request was being sent
         if isinstance(error, urllib.error.URLError):
             if isinstance(error.reason, TimeoutError):
                 raise timed_out
             raise GenerationError(f"could not reach {self.base_url} ({error.reason}); check --base-url and that the server runs.")
-        if isinstance(error, http.client.RemoteDisconnected):  # a server that crashed or closed mid-request
+        if isinstance(error, HUNG_UP):  # a server that crashed or closed mid-request (FIN or RST)
             raise GenerationError(f"the server at {self.base_url} closed the connection without an answer; check "
                                   f"that it runs and its log (out of memory? a request too large?).")
         if isinstance(error, http.client.HTTPException):  # a status line, headers or chunks that are not HTTP/1.x
