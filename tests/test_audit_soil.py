@@ -74,10 +74,12 @@ def _ground_friction_eval(fr_in: wp.array[K.vec5], foot: int, soilmap: K.SoilMap
     fr_out[0] = K.ground_friction(fr_in[0], wp.vec2i(0, 0), foot, 0, soilmap, feet)
 
 
-def _ground_friction(fr, cell_friction=1.0, soil=None, foot=0, load=400.0, slip=1.0, area=0.22 * 0.096):
+def _ground_friction(fr, cell_friction=1.0, soil=None, foot=0, load=400.0, slip=1.0, area=0.22 * 0.096,
+                     stance_load=None):
     """The friction ground_friction gives a contact (MuJoCo's friction ``fr``) on a one-cell map of friction
     ``cell_friction`` and soil ``soil`` = (c, tan phi, K) (None: rigid ground), under foot ``foot`` (-1: another
-    body) of load ``load`` (N) that has slid ``slip`` (m)."""
+    body) of load ``load`` (N; its mean over the stance ``stance_load``, None: the same) that has slid ``slip``
+    (m)."""
     soilmap = K.SoilMap()
     soilmap.origin, soilmap.resolution = wp.vec2(0.0, 0.0), 0.1
     soilmap.soil = wp.array(np.full((1, 1), -1 if soil is None else 0, np.int32), dtype=int, device=DEV)
@@ -91,7 +93,8 @@ def _ground_friction(fr, cell_friction=1.0, soil=None, foot=0, load=400.0, slip=
     feet.bulldozing_face = 0.096
     feet.soil_params = wp.array(params, dtype=float, device=DEV)
     one = lambda v: wp.array(np.full((1, 1), v, np.float32), dtype=float, device=DEV)  # noqa: E731
-    feet.load, feet.support, feet.slip, feet.sinkage = one(load), one(1.0), one(slip), one(0.0)
+    feet.load, feet.traction_load = one(load), one(load if stance_load is None else stance_load)
+    feet.support, feet.slip, feet.sinkage = one(1.0), one(slip), one(0.0)
     feet.soil = wp.array(np.full((1, 1), -1 if soil is None else 0, np.int32), dtype=int, device=DEV)
     out = wp.zeros(1, dtype=K.vec5, device=DEV)
     wp.launch(_ground_friction_eval, dim=1, device=DEV,
@@ -114,6 +117,11 @@ def test_soil_and_map_only_lower_the_sliding_friction():
     assert _ground_friction(rigid, cell_friction=0.05, soil=sand)[0] == pytest.approx(0.05)
     # another body than a foot on the sand: tan(phi) = 0.5317
     assert _ground_friction(rigid, soil=sand, foot=-1)[0] == pytest.approx(math.tan(math.radians(28.0)), rel=1e-6)
+    # the cohesion share divides by the larger of the load and its mean over the stance: a sliding contact's load
+    # sags in each hop, its stance mean does not (21.96 / 400 + tan 28 either way; 21.96 / 100 + tan 28 unsagged)
+    held = (1.04e3 * 0.22 * 0.096 + 400.0 * math.tan(math.radians(28.0))) / 400.0
+    assert _ground_friction(rigid, soil=sand, load=100.0, stance_load=400.0)[0] == pytest.approx(held, rel=1e-5)
+    assert _ground_friction(rigid, soil=sand, load=400.0, stance_load=100.0)[0] == pytest.approx(held, rel=1e-5)
     # random loads, slips and cell frictions: never above the rigid ground's scaled by the cell, nor Mohr-Coulomb
     rng = np.random.default_rng(3)
     for load, slip, cell in zip(rng.uniform(1.0, 800.0, 20), rng.uniform(0.0, 0.1, 20), rng.uniform(0.0, 1.5, 20)):
@@ -189,7 +197,7 @@ def test_noise_factors_stay_positive_however_wide_their_spread():
         counter = wp.zeros(1, dtype=int)
         table = wp.zeros((1, K.NSOILPARAM, 2), dtype=float)
         params = wp.zeros((n, 1, K.NSOILPARAM), dtype=float)
-        feet = [wp.zeros((n, 1), dtype=float) for _ in range(5)]
+        feet = [wp.zeros((n, 1), dtype=float) for _ in range(7)]
         mask = wp.array(np.ones(n, bool), dtype=bool)
         wp.launch(K.reset_kernel, dim=n, inputs=[mask, 3, counter, 1.0, table, eps, params, *feet])
         wp.launch(K.flow_noise_kernel, dim=n, inputs=[3, counter, 1.0, xi])
@@ -198,3 +206,36 @@ def test_noise_factors_stay_positive_however_wide_their_spread():
         floored = int(np.sum(draws == np.float32(0.1)))
         assert 300 < floored < 460  # binomial(2048, 0.184): 377 +- 3.5 sigma
         assert np.std(draws[draws > 0.1]) > 0.5
+
+
+def test_the_stance_load_is_the_mean_since_touchdown_and_survives_hops_near_the_ground():
+    """foot_state_kernel: a stance starts at the first substep with F_N above the threshold; its load is F_N's
+    plain mean since then (hops' zeros included) until traction_load_tau, its slip grows by |v| dt in every one of
+    its substeps (hops too); without load for liftoff_time it ends only if the sole is not near the ground."""
+    dt, tau, liftoff = 0.005, 0.3, 0.05
+    arrays = {name: wp.zeros((1, 1), dtype=float, device=DEV)
+              for name in ("fn", "slip", "air", "stance", "load", "traction_load", "sinkage")}
+    vel = wp.array(np.array([[[0.5, 0.0, 0.0]]], np.float32), dtype=wp.vec3, device=DEV)
+    near = wp.zeros((1, 1), dtype=int, device=DEV)
+
+    def substep(fn):
+        arrays["fn"].fill_(fn)
+        wp.launch(K.foot_state_kernel, dim=(1, 1), device=DEV,
+                  inputs=[dt, 1.0, dt / 0.05, dt / tau, arrays["fn"], vel, liftoff, near, arrays["slip"],
+                          arrays["air"], arrays["stance"], arrays["load"], arrays["traction_load"], arrays["sinkage"]])
+        return {name: float(a.numpy()[0, 0]) for name, a in arrays.items()}
+
+    substep(0.0)  # in the air before touchdown: no stance
+    assert substep(0.0)["stance"] == 0.0 and arrays["slip"].numpy()[0, 0] == 0.0
+    hops = [300.0, 0.0, 0.0, 0.0, 900.0, 0.0, 0.0, 0.0, 0.0, 0.0, 600.0, 0.0]  # 60 ms: 150 N on average
+    for fn in hops:
+        state = substep(fn)
+    assert state["traction_load"] == pytest.approx(np.mean(hops), rel=1e-5)
+    assert state["stance"] == pytest.approx(len(hops) * dt) and state["slip"] == pytest.approx(len(hops) * dt * 0.5)
+    near.fill_(1)  # a sliding sole hopping 1-2 cm high: no lift-off however long
+    for _ in range(20):
+        state = substep(0.0)
+    assert state["stance"] > 0.0 and state["slip"] > 0.0
+    near.fill_(0)  # clear of the ground and 100 ms without load: lifted off
+    state = substep(0.0)
+    assert state["stance"] == 0.0 and state["slip"] == 0.0

@@ -173,10 +173,10 @@ def test_slip_survives_load_dips_and_resets_at_liftoff():
     assert rut > 0.005
     rest = d.qpos.numpy().copy()
 
-    def lifted(substeps):
+    def lifted(substeps, height=0.05):
         for _ in range(substeps):
             up = rest.copy()
-            up[0, 1] += 0.05
+            up[0, 1] += height
             d.qpos.assign(up)
             d.qvel.zero_()
             mjw.step(m, d)
@@ -188,6 +188,8 @@ def test_slip_survives_load_dips_and_resets_at_liftoff():
     lifted(1)  # one substep without load (5 ms < liftoff_time 50 ms): same stance
     assert f.foot_slip.numpy()[0, 0] >= 0.05 and f.foot_sinkage.numpy()[0, 0] >= rut
     lifted(8)  # 40 ms: a sliding foot's hop (MuJoCo's sliding contacts push the body up)
+    assert f.foot_slip.numpy()[0, 0] >= 0.05
+    lifted(20, height=0.015)  # 100 ms, 1.5 cm up: a fast sliding foot's hop, within liftoff_clearance (2.5 cm)
     assert f.foot_slip.numpy()[0, 0] >= 0.05
     lifted(11)  # 55 ms in the air: lift-off, a new stance starts from a fresh rut and no slip
     assert f.foot_slip.numpy()[0, 0] < 1e-3 and f.foot_sinkage.numpy()[0, 0] < rut
@@ -682,3 +684,37 @@ def test_a_foot_pushed_below_its_traction_limit_on_a_firm_soil_stops():
     run(m, d, f, 300, push=0.95 * limit)
     assert float(d.qpos.numpy()[0, 0]) - start < 0.5  # it held: within a few 20 K
     assert abs(float(d.qvel.numpy()[0, 0])) < 0.05
+
+
+@pytest.mark.parametrize("soil, c, phi", [("t_mud", 5.17e3, 11.0), ("t_clay", 6.1e3, 26.6)])
+def test_a_foot_driven_along_the_soil_meets_its_shear_strength_at_any_speed(soil, c, phi):
+    """A 41.5 kg foot driven along x at 1 and 2 m/s (a stiff servo on a moving target; no bulldozing) meets the
+    soil's shear strength, T = c A + W tan(phi) (Mohr-Coulomb; Janosi-Hanamoto's j is metres, K centimetres, so the
+    traction is all mobilised): the servo's mean force over the second half of the drive. MuJoCo's sliding contact
+    hops the foot off for most substeps (F_N is 0 in 80-90 % of them, the foot up to 2 cm high), and two defects made
+    the resistance depend on the speed: the cohesion share c A / F_N divided by a load low-passed over 50 ms, which
+    sags in each hop and is lowest at the landings' impacts (1.25 T at 1 m/s and 1.68 T at 2 m/s on the mud), and
+    hops longer than liftoff_time forgot the slip, so each landing restarted the traction from 0 (0.74 T and 0.47 T
+    on the clay loam)."""
+    mjm = foot_world(41.5)
+    weight = float(sum(mjm.body_mass)) * 9.81
+    limit = c * SOLE_AREA + weight * math.tan(math.radians(phi))
+    speeds = np.array([1.0, 2.0])
+    m, d, f = make(mjm, soil_map(soil), nworld=len(speeds))
+    qpos = d.qpos.numpy()
+    qpos[:, 0] = -1.7
+    d.qpos.assign(qpos)
+    run(m, d, f, 200)
+    x0 = d.qpos.numpy()[:, 0].copy()
+    forces = []
+    qfrc = np.zeros((d.nworld, m.nv), np.float32)
+    for k in range(300):  # 1.5 s: at most 3 m along the 4 m map
+        x, v = d.qpos.numpy()[:, 0], d.qvel.numpy()[:, 0]
+        qfrc[:, 0] = 2.0e4 * (x0 + speeds * (k + 1) * 0.005 - x) + 2.0e3 * (speeds - v)
+        d.qfrc_applied.assign(qfrc)
+        mjw.step(m, d)
+        f.after_substep()
+        if k >= 150:
+            forces.append(qfrc[:, 0].copy())
+    resistance = np.mean(forces, axis=0) / limit
+    assert np.all(np.abs(resistance - 1.0) < 0.08), resistance

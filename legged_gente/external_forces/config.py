@@ -46,8 +46,14 @@ class ForcesConfig:
                           since touchdown, its lift-off); the env's ``foot_contacts()``, which the gait rewards read,
                           is legged_gym's vertical contact force above 1 N, not this
     liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
-                          off: its slip and rut are forgotten (shorter dips are solver chatter, or the 20-30 ms
-                          hops of a contact sliding on a firm soil, not lift-off; a gait's swing is ten times longer)
+                          off, if it is also no longer near the ground (liftoff_clearance): its slip and rut are
+                          forgotten (shorter dips are solver chatter, not lift-off; a gait's swing is ten times
+                          longer)
+    liftoff_clearance: float  height (m) of an analytic sole contact's sphere above the unlowered ground below which
+                          its foot has not lifted off, whatever its normal force: MuJoCo's contact sliding on a
+                          firm soil hops off for 20-100 ms at a time, by a millimetre or less, and a lift-off forgets
+                          the slip (Janosi-Hanamoto's traction restarts from 0). MuJoCo-collided feet (sole_contact
+                          off, box soles) have only liftoff_time
     min_friction: float   a ground contact whose friction is below this is made frictionless (condim 1): as mu -> 0
                           MuJoCo's pyramidal cone holds a tangential load by inflating the normal force (the foot
                           is launched) and its elliptic cone divides by mu
@@ -77,6 +83,11 @@ class ForcesConfig:
                           contacts' friction limit)
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
     sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
+    traction_load_tau: float  the load the soil's cohesion share of a foot's contact friction, c A / F, divides by
+                          is the larger of F_N low-passed over sinkage_load_tau and F_N's mean since touchdown,
+                          after this long (s) low-passed with this time constant: long against a sliding contact's
+                          hops (its friction force then averages to Mohr-Coulomb's c A + W tan(phi)), short against
+                          a stance; an unloading foot holds less than Mohr-Coulomb for about this long
     max_rut_depth: float  deepest a MuJoCo-collided foot (box soles, or sole_contact off) is shown lowered into its
                            rut (m); the forces use the full sinkage. MuJoCo's heightfield contacts go wrong once a
                            geom is ~3 cm inside a cell (docs/forces.md); analytic sole contacts show the full rut
@@ -108,6 +119,7 @@ class ForcesConfig:
     sole_width: float | None = None
     contact_threshold = 1.0
     liftoff_time = 0.05
+    liftoff_clearance = 0.025
     soil_friction_cap = 2.0
     min_friction = 0.01
     sole_contact = True
@@ -117,4 +129,5 @@ class ForcesConfig:
     sinkage_rate = 0.5
     max_rut_depth = 0.01
     sinkage_load_tau = 0.05
+    traction_load_tau = 0.3
     parallel_kernels = True

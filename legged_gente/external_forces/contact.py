@@ -330,7 +330,7 @@ def _sole_contact_kernel(with_legs: bool):
         # out
         foot_touch: wp.array2d[int],
         foot_cand: wp.array2d[float],
-        foot_inrut: wp.array2d[int],
+        foot_near: wp.array2d[int],
         contact_dist: wp.array[float],
         contact_pos: wp.array[wp.vec3],
         contact_frame: wp.array[wp.mat33],
@@ -393,10 +393,12 @@ def _sole_contact_kernel(with_legs: bool):
         gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
         # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
         reach = radius + wp.max(margin + gap, 0.0) + rut
+        if leg < 0:  # a foot has not lifted off while its sole is near the unlowered ground (or in its rut)
+            ground = surface_height_fn(heights, hf_origin, hf_res, centre[0], centre[1])
+            if centre[2] - radius - ground[3] < feet.liftoff_clearance:
+                foot_near[w, f] = 1
         if wp.static(not with_legs):
             res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, reach, max_depth)
-            if res[3] - rut < margin and rut > 0.0:
-                foot_inrut[w, f] = 1  # below the unlowered surface: the foot is still in its rut
             if res[3] >= margin + gap:
                 return
         else:
@@ -417,11 +419,8 @@ def _sole_contact_kernel(with_legs: bool):
                 r = sphere_contact_fn(heights, hf_origin, hf_res, centre + shift * axis, radius, rut, reach, max_depth)
                 if j == 0:
                     res = r
-                    if r[3] - rut < margin and rut > 0.0:
-                        if leg < 0:
-                            foot_inrut[w, f] = 1
-                        else:
-                            legs.inrut[w, leg] = 1
+                    if r[3] - rut < margin and rut > 0.0 and leg >= 0:
+                        legs.inrut[w, leg] = 1
                     if r[3] >= margin + gap:
                         touches = 0
                 elif (j == 1 and not res[3] < r[3]) or (j == 2 and not res[3] <= r[3]):

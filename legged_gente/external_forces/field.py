@@ -417,8 +417,8 @@ class TerrainForces:
             "seg_force": ((n, ns), wp.vec3), "foot_water_force": ((n, max(len(self.foot_water_geom), 1)), wp.vec3),
             "foot_fn": ((n, nf), float), "foot_vel": ((n, nf), wp.vec3), "foot_slip": ((n, nf), float),
             "foot_air": ((n, nf), float), "foot_sinkage": ((n, nf), float), "foot_soil": ((n, nf), int),
-            "foot_touch": ((n, nf), int), "foot_cand": ((n, nf), float), "foot_inrut": ((n, nf), int),
-            "foot_load": ((n, nf), float),
+            "foot_touch": ((n, nf), int), "foot_cand": ((n, nf), float), "foot_near": ((n, nf), int),
+            "foot_stance": ((n, nf), float), "foot_load": ((n, nf), float), "foot_traction_load": ((n, nf), float),
             # RFT's vertical stress under each sole's motion, in units of zeta (rft_force_kernel; 1: at rest)
             "foot_support": ((n, nf), float),
             "foot_force": ((n, nf), wp.vec3),
@@ -637,13 +637,14 @@ class TerrainForces:
         feet.sole_area, feet.bekker_width = self.sole_area, self.bekker_width
         feet.bulldozing_face = self.sole_length if self.sole_disc else min(self.sole_length, self.sole_width)
         feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
-        feet.sink_step = float(cfg.sinkage_rate) * self.dt
+        feet.sink_step, feet.liftoff_clearance = float(cfg.sinkage_rate) * self.dt, float(cfg.liftoff_clearance)
         feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support
+        feet.traction_load = self.foot_traction_load
         feet.slip, feet.sinkage, feet.soil = self.foot_slip, self.foot_sinkage, self.foot_soil
         launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev, block_dim=LIMB_BLOCK_DIM,
                   inputs=[self.foot_body, self.foot_offset, d.xpos, d.xmat, self.origin, self.resolution, self.soil,
                           int(feet.use_soil and self.nfoot > 0), self.foot_soil, self.foot_touch, self.foot_cand,
-                          self.foot_inrut, self.foot_fn],
+                          self.foot_near, self.foot_fn],
                   record_cmd=True))
         c = d.contact
         launches.append(wp.launch(
@@ -663,7 +664,7 @@ class TerrainForces:
                         m.pair_solimp, m.pair_adhesion, m.pair_friction, d.geom_xpos, d.geom_xmat, self.hf_heights,
                         self.hf_origin, self.hf_res, self.soilmap, feet, self.legs, float(cfg.sole_contact_max_depth),
                         d.naconmax,
-                        self.foot_touch, self.foot_cand, self.foot_inrut, c.dist, c.pos, c.frame, c.includemargin,
+                        self.foot_touch, self.foot_cand, self.foot_near, c.dist, c.pos, c.frame, c.includemargin,
                         c.friction, c.solref, c.solreffriction, c.solimp, c.dim, c.geom, c.efc_address, c.worldid,
                         c.type, c.geomcollisionid, c.adhesion, d.nacon], record_cmd=True,
             ))
@@ -796,9 +797,10 @@ class TerrainForces:
         self._normal_forces(self.geom_foot, self.foot_fn)
         wp.launch(
             K.foot_state_kernel, dim=(self.nworld, self.nfoot), device=self.device, block_dim=LIMB_BLOCK_DIM,
-            inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha, self.foot_fn, self.foot_vel,
-                    float(self.cfg.liftoff_time), self.foot_inrut, self.foot_slip, self.foot_air, self.foot_load,
-                    self.foot_sinkage],
+            inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha,
+                    min(self.dt / float(self.cfg.traction_load_tau), 1.0), self.foot_fn, self.foot_vel,
+                    float(self.cfg.liftoff_time), self.foot_near, self.foot_slip, self.foot_air, self.foot_stance,
+                    self.foot_load, self.foot_traction_load, self.foot_sinkage],
         )
 
     def _legs_state(self, load_alpha: float):
@@ -825,7 +827,7 @@ class TerrainForces:
         wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
                   inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
                           self.soil_params, self.foot_slip, self.foot_air, self.foot_sinkage,
-                          self.foot_load, self.foot_support])
+                          self.foot_load, self.foot_traction_load, self.foot_stance, self.foot_support])
         if self.has_rut_legs:
             wp.launch(K.leg_reset_kernel, dim=self.nworld, device=self.device, inputs=[mask, self.legs, self.leg_air])
         wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])

@@ -233,6 +233,8 @@ def reset_kernel(
     foot_air: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
     foot_load: wp.array2d[float],
+    foot_traction_load: wp.array2d[float],
+    foot_stance: wp.array2d[float],
     foot_support: wp.array2d[float],
 ):
     """Per-env episode draws: eps ~ N(1, noise_std) and soil parameters ~ N(mean, std) of each preset; the
@@ -259,6 +261,8 @@ def reset_kernel(
         foot_air[w, f] = 1.0e6
         foot_sinkage[w, f] = 0.0
         foot_load[w, f] = 0.0
+        foot_traction_load[w, f] = 0.0
+        foot_stance[w, f] = 0.0
         foot_support[w, f] = 1.0
 
 
@@ -293,7 +297,7 @@ def foot_cell_kernel(
     foot_soil: wp.array2d[int],
     foot_touch: wp.array2d[int],
     foot_cand: wp.array2d[float],
-    foot_inrut: wp.array2d[int],
+    foot_near: wp.array2d[int],
     foot_fn: wp.array2d[float],
 ):
     """Each foot's soil: the cell under its sole centre (one writer per foot: deterministic at soil borders). The
@@ -302,7 +306,7 @@ def foot_cell_kernel(
     w, f = wp.tid()
     foot_touch[w, f] = 0
     foot_cand[w, f] = 0.0
-    foot_inrut[w, f] = 0
+    foot_near[w, f] = 0
     foot_fn[w, f] = 0.0
     s = int(-1)
     if use_soil != 0:
@@ -336,8 +340,10 @@ class FootSoil:
     friction_cap: float
     min_friction: float
     sink_step: float  # sinkage_rate * dt
+    liftoff_clearance: float
     soil_params: wp.array3d[float]
-    load: wp.array2d[float]
+    load: wp.array2d[float]  # F_N low-passed over sinkage_load_tau (foot_state_kernel)
+    traction_load: wp.array2d[float]  # F_N averaged over the stance, over traction_load_tau (foot_state_kernel)
     support: wp.array2d[float]
     slip: wp.array2d[float]
     sinkage: wp.array2d[float]
@@ -362,11 +368,17 @@ class LegSoil:
 def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, feet: FootSoil) -> vec5:
     """Tangential friction of a ground contact in ``cell``: the rigid friction scaled by the cell's map friction;
     on soil, at most what the soil's shear strength gives (Mohr-Coulomb): under a foot ``f`` (>= 0) its mobilised
-    traction / F_N (Janosi-Hanamoto); under any other body (a knee, a shank, a fallen trunk), whose contact area is
+    traction / F (Janosi-Hanamoto); under any other body (a knee, a shank, a fallen trunk), whose contact area is
     unknown, tan(phi), the strength without its cohesion share (exact on a cohesionless sand, low on a mud).
     The torsional friction (condim 4, 6) scales with the sliding one: the spin torque a contact patch holds is
     Coulomb friction too, proportional to mu (a uniformly pressed disc of radius a: the integral of mu p r dA is
-    (2/3) mu N a)."""
+    (2/3) mu N a).
+
+    F is the larger of the foot's load low-passed over sinkage_load_tau (50 ms: it follows a load rise within a
+    few substeps) and its mean over the stance (traction_load_tau, 0.3 s): a sliding contact hops (MuJoCo's soft
+    cones push a sliding body up: F_N is 0 in most substeps and several times the weight in the others), and in
+    each hop the fast load sags, so that c A / F was largest at the landings' impacts and the friction force
+    mu F_N averaged to more than c A + W tan(phi) (1.6 T at 2 m/s on a mud); the stance's mean holds F there."""
     mu0 = fr[0]
     mu = mu0
     if feet.use_friction != 0:
@@ -377,7 +389,8 @@ def ground_friction(fr: vec5, cell: wp.vec2i, f: int, w: int, soilmap: SoilMap, 
         if f >= 0:
             bulldozing = bulldozing_force_fn(p[w, s, BULL_C], p[w, s, BULL_G], feet.bulldozing_face,
                                              feet.sinkage[w, f])
-            mu = soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, feet.load[w, f], feet.slip[w, f],
+            load = wp.max(feet.load[w, f], feet.traction_load[w, f])
+            mu = soil_friction_fn(p[w, s, COH], p[w, s, MU], feet.sole_area, load, feet.slip[w, f],
                                   p[w, s, K], mu, bulldozing, feet.friction_cap)
         else:
             mu = wp.min(mu, p[w, s, MU])
@@ -559,34 +572,47 @@ def foot_state_kernel(
     dt: float,
     contact_threshold: float,
     load_alpha: float,
+    traction_alpha: float,
     foot_fn: wp.array2d[float],
     foot_vel: wp.array2d[wp.vec3],
     liftoff_time: float,
-    foot_inrut: wp.array2d[int],
+    foot_near: wp.array2d[int],
     foot_slip: wp.array2d[float],
     foot_air: wp.array2d[float],
+    foot_stance: wp.array2d[float],
     foot_load: wp.array2d[float],
+    foot_traction_load: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
 ):
-    """Accumulate the distance slid since touchdown, low-pass the sinkage load, detect lift-off.
+    """Accumulate the distance slid since touchdown (Janosi-Hanamoto's j: over the whole stance, its hops too),
+    average the loads, detect lift-off.
 
-    foot_load is F_N through a first-order low-pass (load_alpha = dt / tau): the sinkage follows the
-    sustained load, not the solver's single-substep impact spikes. A foot has lifted off once its F_N has
-    stayed at or below contact_threshold for liftoff_time: only then are its slip and rut forgotten (MuJoCo's
-    sliding contacts dip below 1 N for single substeps, and hop off for several while sliding, as the
-    pyramidal cone inflates the normal force), and only once it is also out of its rut (``foot_inrut``: an
-    analytic sole contact still below the unlowered surface), else it would find itself deep in the ground.
+    foot_load is F_N through a first-order low-pass (load_alpha = dt / sinkage_load_tau): the sinkage follows the
+    sustained load, not the solver's single-substep impact spikes. foot_traction_load is F_N's mean since touchdown
+    (foot_stance: the time since the stance's first contact), then a low-pass with traction_alpha =
+    dt / traction_load_tau: a floor under the load that the soil's cohesion share of the friction divides by
+    (``ground_friction``). A foot has lifted off
+    once its F_N has stayed at or below contact_threshold for liftoff_time and it is no longer near the ground
+    (``foot_near``: an analytic sole contact less than liftoff_clearance above the unlowered surface, or still in
+    its rut): only then are its slip, rut and stance forgotten. A force alone would take a sliding contact's
+    longer hops for lift-offs, and each landing would restart the traction from 0.
     """
     w, f = wp.tid()
-    foot_load[w, f] = foot_load[w, f] + load_alpha * (foot_fn[w, f] - foot_load[w, f])
-    if foot_fn[w, f] > contact_threshold:
-        foot_air[w, f] = 0.0
+    fn = foot_fn[w, f]
+    foot_load[w, f] = foot_load[w, f] + load_alpha * (fn - foot_load[w, f])
+    if fn > contact_threshold or foot_stance[w, f] > 0.0:
+        foot_stance[w, f] = foot_stance[w, f] + dt
+        alpha = wp.max(traction_alpha, dt / foot_stance[w, f])
+        foot_traction_load[w, f] = foot_traction_load[w, f] + alpha * (fn - foot_traction_load[w, f])
         foot_slip[w, f] = foot_slip[w, f] + dt * wp.length(foot_vel[w, f])
+    if fn > contact_threshold:
+        foot_air[w, f] = 0.0
     else:
         foot_air[w, f] = foot_air[w, f] + dt
-        if foot_air[w, f] >= liftoff_time and foot_inrut[w, f] == 0:
+        if foot_air[w, f] >= liftoff_time and foot_near[w, f] == 0:
             foot_slip[w, f] = 0.0
             foot_sinkage[w, f] = 0.0
+            foot_stance[w, f] = 0.0
 
 
 @wp.kernel
