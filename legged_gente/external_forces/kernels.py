@@ -28,6 +28,9 @@ see :meth:`field.TerrainForces.privileged_obs`."""
 OBS_PER_FOOT = len(OBS_NAMES)
 
 PI = wp.constant(3.14159265358979)
+# how near the ground an analytic sole contact's foot is (``foot_near``; 0: clear of it), within liftoff_clearance:
+NEAR_GROUND = wp.constant(1)  # of the unlowered ground, or below it (in its rut)
+ON_FLOOR = wp.constant(2)  # of its rut's floor, where it stands (the ground itself, without a rut)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -591,11 +594,12 @@ def foot_state_kernel(
     sustained load, not the solver's single-substep impact spikes. foot_traction_load is F_N's mean since touchdown
     (foot_stance: the time since the stance's first contact), then a low-pass with traction_alpha =
     dt / traction_load_tau: a floor under the load that the soil's cohesion share of the friction divides by
-    (``ground_friction``). A foot has lifted off
-    once its F_N has stayed at or below contact_threshold for liftoff_time and it is no longer near the ground
-    (``foot_near``: an analytic sole contact less than liftoff_clearance above the unlowered surface, or still in
-    its rut): only then are its slip, rut and stance forgotten. A force alone would take a sliding contact's
-    longer hops for lift-offs, and each landing would restart the traction from 0.
+    (``ground_friction``). A stance ends once the foot's F_N has stayed at or below contact_threshold for
+    liftoff_time, unless its sole is still on the floor it stood on (``foot_near``: within liftoff_clearance of
+    it); the foot has lifted off, its slip and rut forgotten, if it is not near the ground either (within
+    liftoff_clearance of the unlowered surface, or in its rut). A force alone would take a sliding contact's longer
+    hops for lift-offs, and each landing would restart the traction from 0; a foot swinging inside a deep rut (snow)
+    has ended its stance but not left its rut.
     """
     w, f = wp.tid()
     fn = foot_fn[w, f]
@@ -609,10 +613,12 @@ def foot_state_kernel(
         foot_air[w, f] = 0.0
     else:
         foot_air[w, f] = foot_air[w, f] + dt
-        if foot_air[w, f] >= liftoff_time and foot_near[w, f] == 0:
-            foot_slip[w, f] = 0.0
-            foot_sinkage[w, f] = 0.0
+        if foot_air[w, f] >= liftoff_time and foot_near[w, f] < ON_FLOOR:
             foot_stance[w, f] = 0.0
+            foot_traction_load[w, f] = 0.0
+            if foot_near[w, f] < NEAR_GROUND:
+                foot_slip[w, f] = 0.0
+                foot_sinkage[w, f] = 0.0
 
 
 @wp.kernel
