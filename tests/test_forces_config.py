@@ -36,6 +36,8 @@ def build(**values):
 @pytest.mark.filterwarnings("ignore:forces. water geoms")
 @pytest.mark.parametrize("name, value", [
     ("sinkage_load_tau", 0.0),  # after_substep divided by it: ZeroDivisionError
+    ("traction_load_tau", 0.0),  # the same
+    ("liftoff_clearance", -0.01),  # a foot on the ground counted as lifted off: its slip forgotten at every hop
     ("bulldozing_speed_reg", 0.0),  # a foot at rest on soil: 0 / 0 -> NaN bulldozing force
     ("water_density", -1000.0),  # buoyancy pulling down
     ("drag_coefficient", -1.1),  # drag pushing along the motion: adds energy

@@ -6,7 +6,7 @@ Left: the foot's depth in the sim (what the viewer shows) over the stance, again
 computed here by hand, z = (p / (kc/b + kphi))^(1/n). Right: how far the foot slides against the push (over each
 soil's Mohr-Coulomb limit T = c A + W tan(phi)), with T + R_b marked, R_b = b (bulldoze_c z + bulldoze_g z^2) the
 bulldozing of a foot sunk z: up to T the soil's shear holds it, bar the slip that mobilises the shear
-(Janosi-Hanamoto: about 4 cm by 0.9 T on dry sand); beyond, the bulldozing (part of the contacts' friction limit)
+(Janosi-Hanamoto: about 3 cm by 0.9 T on dry sand); beyond, the bulldozing (part of the contacts' friction limit)
 holds it, and once the push passes T + R_b it slides away.
 
 Preset means (no per-episode scatter), CPU, about 15 s:

@@ -42,9 +42,10 @@ _ATTRS = [a for a in vars(ForcesConfig) if not a.startswith("_")]
 # numeric settings and the bound each must meet: below it a substep divides by zero, gives NaN forces (a foot at rest
 # on soil with bulldozing_speed_reg 0) or forces that add energy (negative drag coefficients or density)
 _POSITIVE = ("water_density", "friction_reference", "soil_friction_cap", "sole_contact_max_depth",
-             "terrain_contact_max_depth", "bulldozing_speed_reg", "sinkage_load_tau")
+             "terrain_contact_max_depth", "bulldozing_speed_reg", "sinkage_load_tau", "traction_load_tau")
 _NON_NEGATIVE = ("drag_coefficient", "added_mass_coefficient", "plate_drag_coefficient", "sphere_drag_coefficient",
-                 "noise_std", "contact_threshold", "liftoff_time", "min_friction", "sinkage_rate", "max_rut_depth")
+                 "noise_std", "contact_threshold", "liftoff_time", "liftoff_clearance", "min_friction",
+                 "sinkage_rate", "max_rut_depth")
 
 
 # threads a block for the kernels over (worlds, feet or leg segments): a few thousand robots' feet make a grid of a
