@@ -211,8 +211,8 @@ def test_noise_factors_stay_positive_however_wide_their_spread():
 def test_the_stance_load_is_the_mean_since_touchdown_and_survives_hops_near_the_ground():
     """foot_state_kernel: a stance starts at the first substep with F_N above the threshold; its load is F_N's
     plain mean since then (hops' zeros included) until traction_load_tau, its slip grows by |v| dt in every one of
-    its substeps (hops too); without load for liftoff_time it ends only if the sole is off the floor it stood on, and
-    slip and rut are forgotten only if it is not near the ground either."""
+    its substeps (hops too); without load for liftoff_time it ends only if the sole is off the floor it stood on, the
+    rut is forgotten if the sole is out of it, and the slip if both."""
     dt, tau, liftoff = 0.005, 0.3, 0.05
     arrays = {name: wp.zeros((1, 1), dtype=float, device=DEV)
               for name in ("fn", "slip", "air", "stance", "load", "traction_load", "sinkage")}
@@ -233,15 +233,18 @@ def test_the_stance_load_is_the_mean_since_touchdown_and_survives_hops_near_the_
         state = substep(fn)
     assert state["traction_load"] == pytest.approx(np.mean(hops), rel=1e-5)
     assert state["stance"] == pytest.approx(len(hops) * dt) and state["slip"] == pytest.approx(len(hops) * dt * 0.5)
-    near.fill_(int(K.ON_FLOOR))  # a sliding sole hopping 1-2 cm above the floor it stood on: one stance
+    arrays["sinkage"].fill_(0.1)
+    near.fill_(int(K.ON_FLOOR))  # a sliding sole hopping 1-2 cm above the floor it stood on, out of its rut
     for _ in range(20):
         state = substep(0.0)
     assert state["stance"] > len(hops) * dt and state["slip"] > len(hops) * dt * 0.5
+    assert state["sinkage"] == 0.0  # out of its rut: left behind
     slip = state["slip"]
-    near.fill_(int(K.NEAR_GROUND))  # swinging inside its deep rut: the stance has ended, the rut and slip stay
+    arrays["sinkage"].fill_(0.1)
+    near.fill_(int(K.IN_RUT))  # swinging inside its deep rut: the stance has ended, the rut and slip stay
     state = substep(0.0)
-    assert state["stance"] == 0.0 and state["traction_load"] == 0.0
+    assert state["stance"] == 0.0 and state["traction_load"] == 0.0 and state["sinkage"] == pytest.approx(0.1)
     assert state["slip"] == pytest.approx(slip + dt * 0.5)  # its last substep of stance counted
     near.fill_(0)  # clear of the ground and 100 ms without load: lifted off
     state = substep(0.0)
-    assert state["slip"] == 0.0
+    assert state["slip"] == 0.0 and state["sinkage"] == 0.0

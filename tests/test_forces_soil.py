@@ -10,6 +10,7 @@ import pytest
 import warp as wp
 
 from legged_gente.external_forces import contact as C
+from legged_gente.external_forces import kernels as K
 from legged_gente.external_forces.field import ForcesConfig, TerrainForces
 from legged_gente.terrain.soil import SOIL_PRESETS, register_custom_soil
 from legged_gente.terrain.materials import MaterialMap
@@ -718,3 +719,27 @@ def test_a_foot_driven_along_the_soil_meets_its_shear_strength_at_any_speed(soil
             forces.append(qfrc[:, 0].copy())
     resistance = np.mean(forces, axis=0) / limit
     assert np.all(np.abs(resistance - 1.0) < 0.08), resistance
+
+
+@pytest.mark.parametrize("gap, on_floor", [(0.020, True), (0.030, False)])
+def test_a_sole_is_on_the_floor_by_its_gap_along_the_slope_s_normal(gap, on_floor):
+    """A sole sphere above a 30 degree slope is on the floor it stands on (its stance goes on) within
+    liftoff_clearance (2.5 cm) of it along the face's normal: measured vertically, 2 cm along the normal read
+    (2 + 2) / cos 30 - 2 = 2.62 cm, and on steeper faces less still."""
+    wp.set_device(DEV)
+    slope = math.radians(30.0)
+    xs = ORIGIN[0] + RES * np.arange(SHAPE[0])
+    heights = np.repeat((xs * math.tan(slope))[:, None], SHAPE[1], axis=1).astype(np.float32)
+    mjm = foot_world(1.0, sole_xy=[(0.0, 0.0)], z0=0.0)
+    m = mjw.put_model(mjm)
+    d = mjw.make_data(mjm, nworld=1, nconmax=16, njmax=64)
+    f = TerrainForces(mjm, m, d, heights, ORIGIN, RES, soil_map(),
+                      type("C", (Cfg,), {"foot_geom_names": ["sole0"]})(), seed=1)
+    f.install()
+    x = 0.55  # the sphere's centre: (x, 0), (0.02 + gap) along the normal above the plane z = x tan 30
+    qpos = d.qpos.numpy()
+    qpos[0] = [x, x * math.tan(slope) + (0.02 + gap) / math.cos(slope)]
+    d.qpos.assign(qpos)
+    mjw.step(m, d)
+    f.after_substep()
+    assert bool(f.foot_near.numpy()[0, 0] & int(K.ON_FLOOR)) == on_floor

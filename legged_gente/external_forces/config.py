@@ -45,15 +45,16 @@ class ForcesConfig:
     contact_threshold: float  foot normal force (N) above which the force fields count a foot as in contact (its slip
                           since touchdown, its lift-off); the env's ``foot_contacts()``, which the gait rewards read,
                           is legged_gym's vertical contact force above 1 N, not this
-    liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has lifted
-                          off, if it is also no longer near the ground (liftoff_clearance): its slip and rut are
-                          forgotten (shorter dips are solver chatter, not lift-off; a gait's swing is ten times
-                          longer)
-    liftoff_clearance: float  height (m) of an analytic sole contact's sphere above the unlowered ground below which
-                          its foot has not lifted off, whatever its normal force: MuJoCo's contact sliding on a
-                          firm soil hops off for 20-100 ms at a time, by a millimetre or less, and a lift-off forgets
-                          the slip (Janosi-Hanamoto's traction restarts from 0). MuJoCo-collided feet (sole_contact
-                          off, box soles) have only liftoff_time
+    liftoff_time: float   a foot whose normal force stays at or below contact_threshold this long (s) has ended
+                          its stance, and lifted off, its slip and rut forgotten, if it is also clear of the ground
+                          (liftoff_clearance); shorter dips are solver chatter, not lift-off (a gait's swing is ten
+                          times longer)
+    liftoff_clearance: float  height (m) of an analytic sole contact's sphere above the floor it stood on (its rut's)
+                          below which its foot's stance goes on, and above the unlowered ground below which it has
+                          not lifted off, whatever its normal force: MuJoCo's contact sliding on a firm soil hops
+                          off for 20-150 ms at a time, up to 2.3 cm high at 2-4 m/s, and a lift-off forgets the slip
+                          (Janosi-Hanamoto's traction restarts from 0). MuJoCo-collided feet (sole_contact off, box
+                          soles) have only liftoff_time
     min_friction: float   a ground contact whose friction is below this is made frictionless (condim 1): as mu -> 0
                           MuJoCo's pyramidal cone holds a tangential load by inflating the normal force (the foot
                           is launched) and its elliptic cone divides by mu

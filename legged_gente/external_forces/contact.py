@@ -36,7 +36,7 @@ from mujoco_warp._src.math import make_frame
 from mujoco_warp._src.types import vec5
 
 from legged_gente.external_forces.kernels import (
-    NEAR_GROUND, ON_FLOOR, FootSoil, LegSoil, SoilMap, cell_of, ground_friction, rut_sinkage_fn,
+    IN_RUT, ON_FLOOR, FootSoil, LegSoil, SoilMap, cell_of, ground_friction, rut_sinkage_fn,
 )
 
 SOLE_TYPES = (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))
@@ -395,13 +395,14 @@ def _sole_contact_kernel(with_legs: bool):
         gap = geom_gap[gid, terrain_geom] + geom_gap[gid, g]
         # reach: contacts within margin + gap, and the unlowered surface (the foot still in its rut)
         reach = radius + wp.max(margin + gap, 0.0) + rut
-        if leg < 0:  # how near the ground the sole is (kernels.foot_state_kernel: what a lift-off takes)
+        if leg < 0:  # where the sole is (kernels.foot_state_kernel: what ends a stance, what a lift-off)
             ground = surface_height_fn(heights, hf_origin, hf_res, centre[0], centre[1])
-            above = centre[2] - radius - ground[3]  # above the unlowered ground (< 0 in its rut)
-            if above + rut < feet.liftoff_clearance:
-                wp.atomic_max(foot_near, w, f, ON_FLOOR)
-            elif above < feet.liftoff_clearance:
-                wp.atomic_max(foot_near, w, f, NEAR_GROUND)
+            # the sphere's gap to the unlowered ground along the face's normal (exact over a planar face)
+            above = (centre[2] - ground[3]) * ground[2] - radius
+            if above + rut * ground[2] < feet.liftoff_clearance:
+                wp.atomic_or(foot_near, w, f, ON_FLOOR)
+            if above < margin and rut > 0.0:
+                wp.atomic_or(foot_near, w, f, IN_RUT)
         if wp.static(not with_legs):
             res = sphere_contact_fn(heights, hf_origin, hf_res, centre, radius, rut, reach, max_depth)
             if res[3] >= margin + gap:

@@ -28,9 +28,9 @@ see :meth:`field.TerrainForces.privileged_obs`."""
 OBS_PER_FOOT = len(OBS_NAMES)
 
 PI = wp.constant(3.14159265358979)
-# how near the ground an analytic sole contact's foot is (``foot_near``; 0: clear of it), within liftoff_clearance:
-NEAR_GROUND = wp.constant(1)  # of the unlowered ground, or below it (in its rut)
-ON_FLOOR = wp.constant(2)  # of its rut's floor, where it stands (the ground itself, without a rut)
+# where an analytic sole contact's foot is (``foot_near``, bits; 0: clear of the ground):
+ON_FLOOR = wp.constant(1)  # within liftoff_clearance of the floor it stands on (its rut's, or the ground)
+IN_RUT = wp.constant(2)  # below the unlowered ground: still in its rut
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -594,12 +594,12 @@ def foot_state_kernel(
     sustained load, not the solver's single-substep impact spikes. foot_traction_load is F_N's mean since touchdown
     (foot_stance: the time since the stance's first contact), then a low-pass with traction_alpha =
     dt / traction_load_tau: a floor under the load that the soil's cohesion share of the friction divides by
-    (``ground_friction``). A stance ends once the foot's F_N has stayed at or below contact_threshold for
-    liftoff_time, unless its sole is still on the floor it stood on (``foot_near``: within liftoff_clearance of
-    it); the foot has lifted off, its slip and rut forgotten, if it is not near the ground either (within
-    liftoff_clearance of the unlowered surface, or in its rut). A force alone would take a sliding contact's longer
-    hops for lift-offs, and each landing would restart the traction from 0; a foot swinging inside a deep rut (snow)
-    has ended its stance but not left its rut.
+    (``ground_friction``). Once the foot's F_N has stayed at or below contact_threshold for liftoff_time, its
+    stance ends unless its sole is still on the floor it stood on (``foot_near``: within liftoff_clearance of it),
+    its rut is forgotten unless the sole is still in it, and its slip unless either: a force alone would take a
+    sliding contact's longer hops for lift-offs, and each landing would restart the traction from 0; a foot swinging
+    inside a deep rut (snow) has ended its stance but not left its rut; a foot skimming the ground out of its rut
+    leaves the rut behind (it would land in it elsewhere, a hole in undisturbed soil) but keeps its slip.
     """
     w, f = wp.tid()
     fn = foot_fn[w, f]
@@ -613,12 +613,15 @@ def foot_state_kernel(
         foot_air[w, f] = 0.0
     else:
         foot_air[w, f] = foot_air[w, f] + dt
-        if foot_air[w, f] >= liftoff_time and foot_near[w, f] < ON_FLOOR:
-            foot_stance[w, f] = 0.0
-            foot_traction_load[w, f] = 0.0
-            if foot_near[w, f] < NEAR_GROUND:
-                foot_slip[w, f] = 0.0
+        if foot_air[w, f] >= liftoff_time:
+            near = foot_near[w, f]
+            if (near & ON_FLOOR) == 0:
+                foot_stance[w, f] = 0.0
+                foot_traction_load[w, f] = 0.0
+            if (near & IN_RUT) == 0:
                 foot_sinkage[w, f] = 0.0
+            if near == 0:
+                foot_slip[w, f] = 0.0
 
 
 @wp.kernel
