@@ -6,7 +6,9 @@ import os
 import sys
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "soil_review_cpu"))
-from common import *  # noqa: E402,F403 - the outside review's foot world
+from common import (  # noqa: E402 - the outside review's foot world
+    G, PARAM_NAMES, SOIL_PRESETS, foot_model, make, np, register_custom_soil, step,
+)
 M = 20.0; L, B = 0.22, 0.096; A = L * B
 p = SOIL_PRESETS["mud"]
 register_custom_soil("cohesive", **{q: getattr(p, q)[0] for q in PARAM_NAMES} | dict(c=5.0e3, mu=0.2, bulldoze_c=0.0,
