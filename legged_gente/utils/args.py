@@ -176,8 +176,8 @@ def import_mujoco(prog: str) -> None:
 
 def _opengl_error(prog: str, error: BaseException) -> None:
     print(f"{prog}: error: MUJOCO_GL={os.environ.get('MUJOCO_GL')}: MuJoCo's OpenGL backend does not load "
-          f"({type(error).__name__}: {one_line(error)}); {GL_FIX}, or leave MUJOCO_GL unset for a run that renders nothing (no --video on a machine without a "
-          f"display)", file=sys.stderr)
+          f"({type(error).__name__}: {one_line(error)}); {GL_FIX}, or leave MUJOCO_GL unset for a run that renders "
+          f"nothing (no --video on a machine without a display)", file=sys.stderr)
     sys.exit(2)
 
 
