@@ -1,9 +1,12 @@
 #!/bin/bash
-# Steps run in order until DEADLINE seconds have passed; each step's files land in /tmp/res, tarred to $OUT.
+# The runs of this folder, from the project root on a host with a GPU: steps (bench, bench_q, graphs,
+# ev:<robot>:<benchmark>) run in order until DEADLINE seconds have passed, a step done in an earlier call skipped;
+# each step's files land in /tmp/res, tarred to $OUT_DIR/res.tar.gz after each step.
 DEADLINE=${DEADLINE:-500}
+OUT_DIR=${OUT_DIR:-rescore_out}
 start=$SECONDS
 export PYTHONUNBUFFERED=1
-mkdir -p /tmp/res /tmp/ev
+mkdir -p /tmp/res /tmp/ev "$OUT_DIR"
 py=python
 step() {  # name, command...
   local name=$1; shift
@@ -17,7 +20,7 @@ step() {  # name, command...
   echo "rc $rc wall $((SECONDS - t0)) s" >> /tmp/res/$name.log
   tail -n 12 /tmp/res/$name.log
   [ $rc -eq 0 ] && touch /tmp/res/$name.done
-  (cd /tmp && tar czf $OUT/res.tar.gz res)
+  tar czf "$OUT_DIR/res.tar.gz" -C /tmp res
 }
 ev() {  # robot benchmark
   local task=gente_$1 b=$2
