@@ -211,8 +211,12 @@ def test_rft_support_by_hand():
     assert models.rft_support(up, [0.025, 0.0, 0.0], reg) == pytest.approx(0.6875, abs=1e-12)
     # sinking at 45 deg while dragged: 0.375 + 0.625 sin(pi/4) = 0.8169
     assert models.rft_support(up, [0.2, 0.0, -0.2], reg) == pytest.approx(0.375 + 0.625 * np.sqrt(0.5), abs=1e-12)
-    # rising while dragged: gamma is taken as 0 (the sole's open rut has no grains above it)
+    # rising while dragged: the upward part is left out (the sole's open rut has no grains above it): level
     assert models.rft_support(up, [0.2, 0.0, 0.2], reg) == pytest.approx(0.375, abs=1e-12)
+    # rising straight up: unloading, supported as at rest (not as dragged sideways, 0.375)
+    assert models.rft_support(up, [0.0, 0.0, 0.3], reg) == pytest.approx(1.000, abs=1e-12)
+    # rising at 0.025 m/s while dragged at 0.025 m/s: faded by the drag's speed alone, 0.6875 as above
+    assert models.rft_support(up, [0.025, 0.0, 0.025], reg) == pytest.approx(0.6875, abs=1e-12)
     # a sole tilted 30 deg, dragged level along +x: leading edge up (a ski; normal tilted against the motion)
     # beta = +30 deg, leading edge down (normal tilted along the motion) beta = -30 deg; cos(2 beta) = 0.5,
     # sin(2 beta) = +-sqrt(3)/2: A00 + A10 0.5 +- (B11 - B-11) sqrt(3)/2 = 0.2905 +- 0.157 * 0.8660

@@ -240,6 +240,26 @@ def test_mud_sinks_centimetres_under_a_biped_foot():
     assert shown > 0.01 and shown == pytest.approx(z_bekker, rel=0.15), (shown, z_bekker)
 
 
+@pytest.mark.parametrize("soil, kc, kphi, n", [("t_mud", 0.77e3, 51.91e3, 0.5), ("t_rft", 0.0, 4.64e5, 1.0),
+                                              ("t_snow", 4.37e3, 196.72e3, 1.6)])
+def test_a_slowly_loaded_foot_settles_at_bekker_s_depth(soil, kc, kphi, n):
+    """At the default sinkage settings a 41.5 kg foot whose weight comes on linearly over 4 s settles at
+    z = (p / (kc / b + kphi))^(1 / n) (RFT: p / zeta, zeta = kphi). A deepening rut makes the contact chatter
+    (F_N 0 to 4 W); through one 50 ms low-pass the rut kept its peaks and settled 1.39 x (mud) and 1.42 x (RFT)
+    deeper (CPU), and a rising sole was given a dragged sole's RFT support."""
+    wp.set_device(DEV)
+    mass = 41.5
+    m, d, f = make(foot_world(mass, joints="z", z0=0.02), soil_map(soil))
+    weight = mass * G
+    for k in range(1000):  # 4 s ramp, 1 s held
+        d.qfrc_applied.assign(np.array([[weight * max(1.0 - k * 0.005 / 4.0, 0.0)]], np.float32))
+        mjw.step(m, d)
+        f.after_substep()
+    z_bekker = (weight / SOLE_AREA / (kc / 0.09 + kphi)) ** (1.0 / n)  # b: the sole's 9 cm side
+    rut = f.foot_sinkage.numpy()[0, 0]
+    assert rut == pytest.approx(z_bekker, rel=0.10), (rut, z_bekker)  # 1.08 / 1.01 / 1.02 x (CPU)
+
+
 def test_zero_friction_on_soil_neither_launches_nor_sinks_through():
     wp.set_device(DEV)
     # map friction 0 on sand (pyramidal cone) and on rigid ground with the elliptic cone

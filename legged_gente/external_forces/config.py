@@ -83,7 +83,9 @@ class ForcesConfig:
                           reported to the viewer, fade out linearly (Bekker's bulldozing acts through the
                           contacts' friction limit)
     sinkage_rate: float   fastest the rut under a foot deepens (m/s); keeps the force->sinkage loop stable
-    sinkage_load_tau: float  time constant (s) of the low-pass on F_N that drives the sinkage
+    sinkage_load_tau: float  time constant (s) of each of the two first-order low-passes in series on F_N that
+                          drive the sinkage (the first alone is the fast load of the friction limit, below): a
+                          foot's soft contact chatters while its rut deepens, and the rut keeps every peak
     traction_load_tau: float  the load the soil's cohesion share of a foot's contact friction, c A / F, divides by
                           is the larger of F_N low-passed over sinkage_load_tau and F_N's mean since touchdown,
                           after this long (s) low-passed with this time constant: long against a sliding contact's

@@ -357,11 +357,12 @@ def _sole_contact_kernel(with_legs: bool):
         touch, as MuJoCo's capsule against a plane, and an inner sphere only where it lies deeper than its neighbours
         (a step's edge between the ends), so a calf lying on flat ground makes two contacts, not one per sphere.
 
-        A rut deepens towards Bekker's z(F_N / area) (an RFT soil's: ``kernels.rut_sinkage_fn``) but at most
-        sink_step below the sphere's current depth (the rules of ``kernels.contact_filter_kernel``): a foot's under
-        its load over the sole, a leg's under its own load over its capsule's horizontal projection, 2r wide
-        (Bekker's b) and 2r + its axis's horizontal length long (exact for a leg lying in the soil; a leg striking
-        with its end alone presses a smaller patch, so it sinks at least this much). The solver sees at most
+        A rut deepens towards Bekker's z(F_N / area), F_N twice low-passed (an RFT soil's:
+        ``kernels.rut_sinkage_fn``), but at most sink_step below the sphere's current depth (the rules of
+        ``kernels.contact_filter_kernel``): a foot's under its load over the sole, a leg's under its own load
+        over its capsule's horizontal projection, 2r wide (Bekker's b) and 2r + its axis's horizontal length
+        long (exact for a leg lying in the soil; a leg striking with its end alone presses a smaller patch,
+        so it sinks at least this much). The solver sees at most
         ``max_depth`` of penetration (``ForcesConfig.sole_contact_max_depth`` says why).
         """
         w, k = wp.tid()
@@ -438,7 +439,7 @@ def _sole_contact_kernel(with_legs: bool):
         dist = res[3]
         normal = wp.vec3(res[0], res[1], res[2])
         if s_foot >= 0 and leg < 0:
-            z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
+            z = rut_sinkage_fn(feet.sink_load[w, f] / feet.sole_area, feet.soil_params, w, s_foot, feet.bekker_width,
                                feet.support[w, f])
             # dist - rut: the sphere's depth below the unlowered surface (exact on flat ground)
             wp.atomic_max(foot_cand, w, f, wp.min(z, rut - dist + feet.sink_step))
@@ -447,7 +448,7 @@ def _sole_contact_kernel(with_legs: bool):
             if s_leg >= 0:
                 across = wp.sqrt(axis[0] * axis[0] + axis[1] * axis[1])  # half the axis's horizontal length
                 area = 2.0 * radius * (2.0 * across + 2.0 * radius)
-                z = rut_sinkage_fn(legs.load[w, leg] / area, feet.soil_params, w, s_leg, 2.0 * radius, 1.0)
+                z = rut_sinkage_fn(legs.sink_load[w, leg] / area, feet.soil_params, w, s_leg, 2.0 * radius, 1.0)
                 wp.atomic_max(legs.cand, w, leg, wp.min(z, rut - dist + feet.sink_step))
                 legs.touch[w, leg] = 1
         pos = centre - (radius + 0.5 * dist) * normal

@@ -419,15 +419,16 @@ class TerrainForces:
             "foot_fn": ((n, nf), float), "foot_vel": ((n, nf), wp.vec3), "foot_slip": ((n, nf), float),
             "foot_air": ((n, nf), float), "foot_sinkage": ((n, nf), float), "foot_soil": ((n, nf), int),
             "foot_touch": ((n, nf), int), "foot_cand": ((n, nf), float), "foot_near": ((n, nf), int),
-            "foot_stance": ((n, nf), float), "foot_load": ((n, nf), float), "foot_traction_load": ((n, nf), float),
+            "foot_stance": ((n, nf), float), "foot_load": ((n, nf), float), "foot_sink_load": ((n, nf), float),
+            "foot_traction_load": ((n, nf), float),
             # RFT's vertical stress under each sole's motion, in units of zeta (rft_force_kernel; 1: at rest)
             "foot_support": ((n, nf), float),
             "foot_force": ((n, nf), wp.vec3),
         }
         # each rut leg's own soil state (kernels.LegSoil), its normal force and time in the air; without rut legs
         # one-element placeholders for the sole kernel's arguments, which are no per-world state to carry
-        legs = {"leg_fn": float, "leg_air": float, "leg_load": float, "leg_sinkage": float, "leg_cand": float,
-                "leg_touch": int, "leg_inrut": int}
+        legs = {"leg_fn": float, "leg_air": float, "leg_load": float, "leg_sink_load": float, "leg_sinkage": float,
+                "leg_cand": float, "leg_touch": int, "leg_inrut": int}
         if self.has_rut_legs:
             state.update({name: ((n, self.nleg), dtype) for name, dtype in legs.items()})
         else:
@@ -438,6 +439,7 @@ class TerrainForces:
         self.foot_support.fill_(1.0)
         self.legs = K.LegSoil()
         self.legs.load, self.legs.sinkage, self.legs.cand = self.leg_load, self.leg_sinkage, self.leg_cand
+        self.legs.sink_load = self.leg_sink_load
         self.legs.touch, self.legs.inrut = self.leg_touch, self.leg_inrut
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
         # the side branches of ``_in_parallel`` (the passive kernels' second and third, the contact filter's second)
@@ -640,6 +642,7 @@ class TerrainForces:
         feet.friction_cap, feet.min_friction = float(cfg.soil_friction_cap), float(cfg.min_friction)
         feet.sink_step, feet.liftoff_clearance = float(cfg.sinkage_rate) * self.dt, float(cfg.liftoff_clearance)
         feet.soil_params, feet.load, feet.support = self.soil_params, self.foot_load, self.foot_support
+        feet.sink_load = self.foot_sink_load
         feet.traction_load = self.foot_traction_load
         feet.slip, feet.sinkage, feet.soil = self.foot_slip, self.foot_sinkage, self.foot_soil
         launches.append(wp.launch(K.foot_cell_kernel, dim=(self.nworld, nf), device=dev, block_dim=LIMB_BLOCK_DIM,
@@ -801,7 +804,7 @@ class TerrainForces:
             inputs=[self.dt, float(self.cfg.contact_threshold), load_alpha,
                     min(self.dt / float(self.cfg.traction_load_tau), 1.0), self.foot_fn, self.foot_vel,
                     float(self.cfg.liftoff_time), self.foot_near, self.foot_slip, self.foot_air, self.foot_stance,
-                    self.foot_load, self.foot_traction_load, self.foot_sinkage],
+                    self.foot_load, self.foot_sink_load, self.foot_traction_load, self.foot_sinkage],
         )
 
     def _legs_state(self, load_alpha: float):
@@ -828,7 +831,8 @@ class TerrainForces:
         wp.launch(K.reset_kernel, dim=self.nworld, device=self.device,
                   inputs=[mask, self.seed, self.counter, float(self.cfg.noise_std), self.soil_table, self.eps,
                           self.soil_params, self.foot_slip, self.foot_air, self.foot_sinkage,
-                          self.foot_load, self.foot_traction_load, self.foot_stance, self.foot_support])
+                          self.foot_load, self.foot_sink_load, self.foot_traction_load, self.foot_stance,
+                          self.foot_support])
         if self.has_rut_legs:
             wp.launch(K.leg_reset_kernel, dim=self.nworld, device=self.device, inputs=[mask, self.legs, self.leg_air])
         wp.launch(K.increment_kernel, dim=1, device=self.device, inputs=[self.counter])

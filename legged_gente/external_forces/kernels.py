@@ -236,6 +236,7 @@ def reset_kernel(
     foot_air: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
     foot_load: wp.array2d[float],
+    foot_sink_load: wp.array2d[float],
     foot_traction_load: wp.array2d[float],
     foot_stance: wp.array2d[float],
     foot_support: wp.array2d[float],
@@ -264,6 +265,7 @@ def reset_kernel(
         foot_air[w, f] = 1.0e6
         foot_sinkage[w, f] = 0.0
         foot_load[w, f] = 0.0
+        foot_sink_load[w, f] = 0.0
         foot_traction_load[w, f] = 0.0
         foot_stance[w, f] = 0.0
         foot_support[w, f] = 1.0
@@ -346,6 +348,7 @@ class FootSoil:
     liftoff_clearance: float
     soil_params: wp.array3d[float]
     load: wp.array2d[float]  # F_N low-passed over sinkage_load_tau (foot_state_kernel)
+    sink_load: wp.array2d[float]  # load low-passed again over sinkage_load_tau: what the rut deepens under
     traction_load: wp.array2d[float]  # F_N averaged over the stance, over traction_load_tau (foot_state_kernel)
     support: wp.array2d[float]
     slip: wp.array2d[float]
@@ -360,7 +363,8 @@ class LegSoil:
     candidate, whether it touched soil, whether it is still below the unlowered surface), which
     ``leg_state_kernel`` takes in and clears after the step."""
 
-    load: wp.array2d[float]
+    load: wp.array2d[float]  # F_N low-passed over sinkage_load_tau
+    sink_load: wp.array2d[float]  # load low-passed again: what the rut deepens under (as a foot's)
     sinkage: wp.array2d[float]
     cand: wp.array2d[float]
     touch: wp.array2d[int]
@@ -429,17 +433,18 @@ def contact_filter_kernel(
     (soil: its traction limit); a MuJoCo-collided foot on soil sits in a rut of depth z (the analytic sole contacts
     of ``contact.py`` show theirs themselves).
 
-    The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration
-    (contact dist += z, at most max_rut): the solver holds the foot that much deeper with the contact's
-    usual stiffness, so the sinkage shows as a lowered foot. max_rut keeps geoms within the depth where
-    heightfield contacts stay correct; the forces and observations use the full z. The rut deepens towards
-    Bekker's z(F_N / sole area) (on an RFT soil: the depth whose RFT stress under the sole's motion,
-    ``foot_support``, carries F_N / sole area) but never further than the foot's current penetration
-    (counting the rut's unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance:
-    soil sinkage is plastic (Wong: unloading recovers little). Without these two rules the loop
-    F_N -> z -> contact chatters or ratchets: a rut deeper than the foot releases the contact, the foot falls
-    into it and the impact load digs it deeper still. A contact whose friction is below min_friction becomes
-    frictionless (condim 1).
+    The rut (foot_sinkage, from the previous substep) is subtracted from each contact's penetration (contact dist +=
+    z, at most max_rut): the solver holds the foot that much deeper with the contact's usual stiffness, so the
+    sinkage shows as a lowered foot. max_rut keeps geoms within the depth where heightfield contacts stay
+    correct; the forces and observations use the full z. The rut deepens towards Bekker's z(F_N / sole area), F_N
+    twice low-passed (``foot_state_kernel``) (on an RFT soil: the depth whose RFT stress under the sole's motion,
+    ``foot_support``, carries F_N / sole area) but never further than the foot's current penetration (counting
+    the rut's unshown part) plus sink_step (sinkage_rate * dt), and never rises during a stance: soil sinkage is
+    plastic (Wong: unloading recovers little). Without these two rules the loop F_N -> z -> contact chatters or
+    ratchets: a rut deeper than the foot releases the contact, the foot falls into it and the impact load digs it
+    deeper still. With them a deepening rut still chatters, by up to sink_step a substep: the load's two
+    low-passes keep the rut off its peaks. A contact whose friction is below min_friction becomes frictionless
+    (condim 1).
     """
     i = wp.tid()
     if i >= nacon[0]:
@@ -468,7 +473,8 @@ def contact_filter_kernel(
     s = feet.soil[w, f]
     if s < 0:
         return
-    z = rut_sinkage_fn(feet.load[w, f] / feet.sole_area, feet.soil_params, w, s, feet.bekker_width, feet.support[w, f])
+    z = rut_sinkage_fn(feet.sink_load[w, f] / feet.sole_area, feet.soil_params, w, s, feet.bekker_width,
+                       feet.support[w, f])
     rut = feet.sinkage[w, f]
     shown = wp.min(rut, max_rut)
     # the foot's depth counting the rut's unshown part: the rut deepens at most sink_step below it
@@ -584,14 +590,18 @@ def foot_state_kernel(
     foot_air: wp.array2d[float],
     foot_stance: wp.array2d[float],
     foot_load: wp.array2d[float],
+    foot_sink_load: wp.array2d[float],
     foot_traction_load: wp.array2d[float],
     foot_sinkage: wp.array2d[float],
 ):
     """Accumulate the distance slid since touchdown (Janosi-Hanamoto's j: over the whole stance, its hops too),
     average the loads, detect lift-off.
 
-    foot_load is F_N through a first-order low-pass (load_alpha = dt / sinkage_load_tau): the sinkage follows the
-    sustained load, not the solver's single-substep impact spikes. foot_traction_load is F_N's mean since touchdown
+    foot_load is F_N through a first-order low-pass (load_alpha = dt / sinkage_load_tau), foot_sink_load foot_load
+    through a second: the sinkage follows the sustained load, not the solver's impact spikes. A foot whose rut
+    deepens chatters (the rut drops ahead of the sole, the sole falls onto it: F_N 0 to 4 W at about 25 Hz); one
+    50 ms low-pass passes an eighth of such a ripple, the rut keeps each peak, and a slowly loaded foot settled
+    1.4 x Bekker's depth in mud; two in series pass a sixtieth. foot_traction_load is F_N's mean since touchdown
     (foot_stance: the time since the stance's first contact), then a low-pass with traction_alpha =
     dt / traction_load_tau: a floor under the load that the soil's cohesion share of the friction divides by
     (``ground_friction``). Once the foot's F_N has stayed at or below contact_threshold for liftoff_time, its
@@ -604,6 +614,7 @@ def foot_state_kernel(
     w, f = wp.tid()
     fn = foot_fn[w, f]
     foot_load[w, f] = foot_load[w, f] + load_alpha * (fn - foot_load[w, f])
+    foot_sink_load[w, f] = foot_sink_load[w, f] + load_alpha * (foot_load[w, f] - foot_sink_load[w, f])
     if fn > contact_threshold or foot_stance[w, f] > 0.0:
         foot_stance[w, f] = foot_stance[w, f] + dt
         alpha = wp.max(traction_alpha, dt / foot_stance[w, f])
@@ -687,6 +698,7 @@ def leg_state_kernel(
     The substep's findings (contact flags, candidate depth, normal force) are cleared for the next."""
     w, k = wp.tid()
     legs.load[w, k] = legs.load[w, k] + load_alpha * (leg_fn[w, k] - legs.load[w, k])
+    legs.sink_load[w, k] = legs.sink_load[w, k] + load_alpha * (legs.load[w, k] - legs.sink_load[w, k])
     if legs.touch[w, k] != 0:
         legs.sinkage[w, k] = wp.max(legs.sinkage[w, k], legs.cand[w, k])
     if leg_fn[w, k] > contact_threshold:
@@ -709,5 +721,6 @@ def leg_reset_kernel(mask: wp.array[bool], legs: LegSoil, leg_air: wp.array2d[fl
         return
     for k in range(leg_air.shape[1]):
         legs.load[w, k] = 0.0
+        legs.sink_load[w, k] = 0.0
         legs.sinkage[w, k] = 0.0
         leg_air[w, k] = 1.0e6

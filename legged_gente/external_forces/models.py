@@ -222,13 +222,16 @@ def rft_support(normal, velocity, speed_reg):
     zeta: alpha_z(beta, gamma) / zeta, faded linearly to 1 (a sole pushed straight down, alpha_z(0, pi/2) = zeta)
     as the speed drops below ``speed_reg`` (m/s), as the horizontal stress fades (``rft_element_force``).
 
-    gamma is taken at least 0: the sole bears on the medium with its lower face only, and RFT's smaller (down to
-    negative) alpha_z of a plate rising through the medium comes from the grains above a buried plate, which a
-    sole in its open rut does not have; a rising sole unloads, and its rut (plastic) keeps its depth.
+    The velocity's upward part is left out (gamma is then at least 0): the sole bears on the medium with its lower
+    face only, and RFT's smaller (down to negative) alpha_z of a plate rising through the medium comes from the
+    grains above a buried plate, which a sole in its open rut does not have; a rising sole unloads, and its rut
+    (plastic) keeps its depth, so a sole rising straight up is supported as at rest, not as one dragged sideways
+    (whose rut would deepen under it while it rebounds).
     """
     v = np.asarray(velocity, float)
+    v = np.array([v[0], v[1], min(v[2], 0.0)])
     beta, gamma, _ = rft_plane(normal, v)
-    _, az = rft_alpha(beta, max(gamma, 0.0), 1.0)
+    _, az = rft_alpha(beta, gamma, 1.0)
     fade = min(np.linalg.norm(v) / speed_reg, 1.0)
     return 1.0 + fade * (az - 1.0)
 

@@ -84,11 +84,12 @@ def rft_face_force_fn(velocity: wp.vec3, depth: float, face_width: float, zeta: 
 
 @wp.func
 def rft_support_fn(normal: wp.vec3, velocity: wp.vec3, speed_reg: float) -> float:
-    """alpha_z / zeta of a sole moving at ``velocity`` (gamma at least 0), faded to 1 below speed_reg (see
+    """alpha_z / zeta of a sole moving at ``velocity`` less its upward part, faded to 1 below speed_reg (see
     ``models.rft_support``)."""
-    beta, gamma, e = rft_plane_fn(normal, velocity)
-    alpha = rft_alpha_fn(beta, wp.max(gamma, 0.0), 1.0)
-    return 1.0 + wp.min(wp.length(velocity) / speed_reg, 1.0) * (alpha[1] - 1.0)
+    v = wp.vec3(velocity[0], velocity[1], wp.min(velocity[2], 0.0))
+    beta, gamma, e = rft_plane_fn(normal, v)
+    alpha = rft_alpha_fn(beta, gamma, 1.0)
+    return 1.0 + wp.min(wp.length(v) / speed_reg, 1.0) * (alpha[1] - 1.0)
 
 
 @wp.kernel
