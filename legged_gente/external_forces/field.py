@@ -401,7 +401,7 @@ class TerrainForces:
         self.counter = z(1, int)
         # the water points that carry added mass (each leg slice's Gauss point, then each foot): their geoms, their
         # added masses along the geom's axes (per kg of a slice: across its axis; a wholly wet foot's), the dofs
-        # moving each; every substep the water kernels write each point's scale and offset from the tree's centre
+        # moving each; every substep the points kernels write each point's scale and offset from the tree's centre
         # of mass (points x worlds), added_mass_kernel reads them
         point_geom = np.concatenate([np.repeat(seg, W.NGAUSS), foot_water]).astype(np.int32)
         axes = np.concatenate([np.tile([1.0, 1.0, 0.0], (W.NGAUSS * len(seg), 1)), foot_added_mass])
@@ -442,8 +442,8 @@ class TerrainForces:
         self.legs.sink_load = self.leg_sink_load
         self.legs.touch, self.legs.inrut = self.leg_touch, self.leg_inrut
         self._all = wp.array(np.ones(n, bool), dtype=bool, device=dev)
-        # the side branches of ``_in_parallel`` (the passive kernels' second and third, the contact filter's second)
-        self._side_streams = [wp.Stream(dev) for _ in range(2)] if dev.is_cuda and cfg.parallel_kernels else []
+        # the side branches of ``_in_parallel`` (the passive kernels' second to fifth, the contact filter's second)
+        self._side_streams = [wp.Stream(dev) for _ in range(4)] if dev.is_cuda and cfg.parallel_kernels else []
         self.reset(self._all)
         self.new_policy_step()
 
@@ -675,11 +675,13 @@ class TerrainForces:
         return launches
 
     def passive(self, m, d):
-        """A substep's terrain forces into the zeroed ``d.xfrc_applied``: the legs' water, the feet's water and the
-        soil (three independent groups: parallel branches on a GPU, see ``_in_parallel``); each water group adds its
-        points' added mass into the mass matrix after its forces (atomically, so the two branches may overlap)."""
+        """A substep's terrain forces into the zeroed ``d.xfrc_applied`` and the water's added mass into ``d.M``:
+        the legs' water, the feet's water, the soil, and each water group's added mass (computed apart from its
+        forces, which it does not need): five independent groups, parallel branches on a GPU (``_in_parallel``),
+        adding atomically."""
         d.xfrc_applied.zero_()
-        self._in_parallel(lambda: self._feet_water(m, d), lambda: self._legs_water(m, d), lambda: self._soil(m, d))
+        self._in_parallel(lambda: self._feet_water(m, d), lambda: self._legs_water(m, d), lambda: self._soil(m, d),
+                          lambda: self._feet_added_mass(m, d), lambda: self._legs_added_mass(m, d))
 
     def _in_parallel(self, *groups) -> None:
         """Launch each group of kernels (a callable; the groups independent, their forces added atomically) on a
@@ -715,7 +717,17 @@ class TerrainForces:
                         float(cfg.water_density), float(cfg.drag_coefficient), float(cfg.added_mass_coefficient),
                         self.g, int(bool(cfg.vertical_drag)), int(bool(cfg.paper_drag_area)),
                         int(bool(cfg.paper_added_mass)), int(bool(cfg.paper_flow_force)), self.eps, self.xi,
-                        d.xfrc_applied, self.seg_force, self.point_mass, self.point_offset],
+                        d.xfrc_applied, self.seg_force],
+            )
+
+    def _legs_added_mass(self, m, d):
+        cfg = self.cfg
+        if cfg.wading and self.nseg and not cfg.paper_added_mass:
+            wp.launch(
+                W.segment_points_kernel, dim=(self.nworld, self.nseg), device=self.device, block_dim=LIMB_BLOCK_DIM,
+                inputs=[self.seg_geom, self.seg_body, self.seg_radius, self.seg_halflen, m.body_rootid,
+                        d.geom_xpos, d.geom_xmat, d.subtree_com, self.water, float(cfg.water_density),
+                        float(cfg.added_mass_coefficient), self.point_mass, self.point_offset],
             )
             self._added_mass(m, d, 0, W.NGAUSS * self.nseg)
 
@@ -730,16 +742,24 @@ class TerrainForces:
                         d.geom_xpos, d.geom_xmat, d.xipos, d.cvel, d.cdof_dot, d.qvel, d.subtree_com, d.time,
                         self.water, float(cfg.water_density), self.g, float(cfg.plate_drag_coefficient),
                         float(cfg.sphere_drag_coefficient), int(bool(cfg.paper_added_mass)), self.eps, self.xi,
-                        d.xfrc_applied, self.foot_water_force, self.point_mass, self.point_offset,
-                        W.NGAUSS * self.nseg],
+                        d.xfrc_applied, self.foot_water_force, W.NGAUSS * self.nseg],
             )
-            self._added_mass(m, d, W.NGAUSS * self.nseg, len(self.foot_water_geom))
+
+    def _feet_added_mass(self, m, d):
+        cfg = self.cfg
+        if cfg.wading and len(self.foot_water_geom) and not cfg.paper_added_mass:
+            first = W.NGAUSS * self.nseg
+            wp.launch(
+                W.foot_points_kernel, dim=(self.nworld, len(self.foot_water_geom)), device=self.device,
+                block_dim=LIMB_BLOCK_DIM,
+                inputs=[self.foot_water_geom, m.geom_type, m.geom_size, m.geom_bodyid, m.body_rootid, d.geom_xpos,
+                        d.geom_xmat, d.subtree_com, self.water, first, self.point_mass, self.point_offset],
+            )
+            self._added_mass(m, d, first, len(self.foot_water_geom))
 
     def _added_mass(self, m, d, first_point: int, count: int):
         """The added mass of the water points ``first_point`` to ``first_point + count - 1`` into ``d.M``, from the
-        scales and offsets their water kernel has just written (none with ``paper_added_mass``)."""
-        if self.cfg.paper_added_mass:
-            return
+        scales and offsets their points kernel has just written."""
         wp.launch(
             W.added_mass_kernel, dim=(self.nworld, count, self.point_dofs.shape[1]), device=self.device,
             inputs=[self.point_dofs, self.point_geom, self.point_axes, m.dof_parentid, m.M_rownnz, m.M_rowadr,

@@ -1,10 +1,12 @@
 """Warp kernels of the strip-theory water forces (twins of ``water_models.py``), launched from the passive callback.
 
 ``segment_water_kernel`` (worlds x leg segments) writes drag, buoyancy and the flow's inertia force to
-``xfrc_applied`` at each slice's Gauss point and each slice's added mass (a scale and the point's offset from the
-tree's centre of mass); ``foot_water_kernel`` (worlds x foot geoms) does the same for each foot;
-``added_mass_kernel`` (worlds x points x dofs), launched after each of them for its own points, builds each point's
-tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``. mujoco_warp's ``step`` computes M
+``xfrc_applied`` at each slice's Gauss point; ``foot_water_kernel`` (worlds x foot geoms) does the same for each
+foot. ``segment_points_kernel`` and ``foot_points_kernel`` write each water point's added mass (a scale and the
+point's offset from the tree's centre of mass) from the same wet geometry (``segment_slices_fn``, ``foot_wet_fn``),
+and ``added_mass_kernel`` (worlds x points x dofs), launched after each of them for its own points, builds each
+point's tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``: the added mass does not wait
+for the forces. mujoco_warp's ``step`` computes M
 in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each substep), calls the passive callback in
 ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and builds the constraint solver's Hessian and
 the implicit integrators' matrices from it, so an addition made here is seen by the whole step: the added mass is
@@ -251,6 +253,55 @@ def point_vp_accel(sacc: wp.spatial_vector, omega: wp.vec3, rp: wp.vec3, v: wp.v
 # Kernels
 
 
+@wp.func
+def segment_slices_fn(water: WaterMap, c: wp.vec3, axis: wp.vec3, a_z: float, sin_t: float, r: float, half: float):
+    """A leg segment's three wet slices: each one's Gauss point (the rows) and submerged volume (m^3, all 0 when
+    dry). The wet interval lies under the highest of the surfaces at the two ends and at the whole cylinder part's
+    Gauss points (a leg across a water border, or over a stream narrower than itself); each slice then takes the
+    water at its own Gauss point."""
+    cell_a = water_cell(water, c - half * axis)
+    cell_b = water_cell(water, c + half * axis)
+    z_ref = wp.max(water.surface[cell_a[0], cell_a[1]], water.surface[cell_b[0], cell_b[1]])
+    for k in range(NGAUSS):
+        cell_k = water_cell(water, c + half * GX[k] * axis)
+        z_ref = wp.max(z_ref, water.surface[cell_k[0], cell_k[1]])
+    iv = wet_interval_fn(c[2], a_z, sin_t, r, half, z_ref)
+    pts = wp.mat33()
+    vols = wp.vec3()
+    if iv[1] <= iv[0]:
+        return pts, vols
+    mid = 0.5 * (iv[0] + iv[1])
+    hw = 0.5 * (iv[1] - iv[0])
+    e0 = iv[0]
+    for k in range(NGAUSS):
+        length = hw * GW[k]
+        p = c + (mid + hw * GX[k]) * axis
+        cell = water_cell(water, p)
+        vols[k] = cylinder_slice_volume_fn(r, sin_t, c[2] + e0 * a_z, c[2] + (e0 + length) * a_z,
+                                           water.surface[cell[0], cell[1]], length)
+        e0 = e0 + length
+        pts[k] = p
+    return pts, vols
+
+
+@wp.func
+def box_half_height_fn(half: wp.vec3, rot: wp.mat33) -> float:
+    """Half a box's vertical extent at its tilt."""
+    return wp.abs(rot[2, 0]) * half[0] + wp.abs(rot[2, 1]) * half[1] + wp.abs(rot[2, 2]) * half[2]
+
+
+@wp.func
+def foot_wet_fn(geom_type: int, size: wp.vec3, rot: wp.mat33, c: wp.vec3, z_w: float) -> wp.vec4:
+    """A foot geom's wet fraction (the last entry) and the point its water forces act at (the first three): a
+    sphere's centre; a box's middle of its submerged height (exact for a level box)."""
+    if geom_type == GEOM_SPHERE:
+        r = size[0]
+        return wp.vec4(c[0], c[1], c[2], sphere_cap_volume_fn(r, z_w - (c[2] - r)) / (4.0 / 3.0 * PI * r * r * r))
+    frac = box_submerged_fraction_fn(size, rot, c[2], z_w)
+    e_z = box_half_height_fn(size, rot)
+    return wp.vec4(c[0], c[1], c[2] - e_z * (1.0 - frac), frac)
+
+
 @wp.kernel
 def segment_water_kernel(
     # segments (host constants)
@@ -286,8 +337,6 @@ def segment_water_kernel(
     # out
     xfrc: wp.array2d[wp.spatial_vector],
     seg_force: wp.array2d[wp.vec3],
-    point_mass: wp.array2d[float],
-    point_offset: wp.array2d[wp.vec3],
 ):
     """Strip-theory water forces on one leg segment (3 Gauss slices along its wet part, see water_models.py)."""
     w, s = wp.tid()
@@ -315,44 +364,17 @@ def segment_water_kernel(
                 apply_force(xfrc, xipos, w, b, fb, q)
                 total = total + fb
 
-    # the wet interval under the highest of the surfaces at the two ends and at the whole cylinder part's Gauss
-    # points (a leg across a water border, or over a stream narrower than itself); each slice then takes the water
-    # at its own Gauss point
-    cell_a = water_cell(water, c - half * axis)
-    cell_b = water_cell(water, c + half * axis)
-    z_ref = wp.max(water.surface[cell_a[0], cell_a[1]], water.surface[cell_b[0], cell_b[1]])
-    for k in range(NGAUSS):
-        cell_k = water_cell(water, c + half * GX[k] * axis)
-        z_ref = wp.max(z_ref, water.surface[cell_k[0], cell_k[1]])
-    iv = wet_interval_fn(c[2], a_z, sin_t, r, half, z_ref)
-    if iv[1] <= iv[0]:
+    pts, vols = segment_slices_fn(water, c, axis, a_z, sin_t, r, half)
+    wet = vols[0] + vols[1] + vols[2]
+    if wet <= 0.0:
         seg_force[w, s] = total
-        for k in range(NGAUSS):
-            point_mass[NGAUSS * s + k, w] = 0.0  # dry: no added mass at its points
         return
-    mid = 0.5 * (iv[0] + iv[1])
-    hw = 0.5 * (iv[1] - iv[0])
 
     # spatial acceleration of the body at qacc = 0 (velocity-product terms), for the explicit part of the added mass
     sacc = velocity_product_accel(cdof_dot, qvel, point_dofs, NGAUSS * s, w)
     vb = cvel[w, b]
     omega = wp.vec3(vb[0], vb[1], vb[2])
 
-    # each slice's submerged volume, at its own surface
-    pts = wp.mat33()
-    vols = wp.vec3()
-    e0 = iv[0]
-    for k in range(NGAUSS):
-        length = hw * GW[k]
-        p = c + (mid + hw * GX[k]) * axis
-        cell = water_cell(water, p)
-        vols[k] = cylinder_slice_volume_fn(r, sin_t, c[2] + e0 * a_z, c[2] + (e0 + length) * a_z,
-                                           water.surface[cell[0], cell[1]], length)
-        e0 = e0 + length
-        pts[k] = p
-    wet = vols[0] + vols[1] + vols[2]
-
-    mass = wp.vec3()
     for k in range(NGAUSS):
         p = pts[k]
         cell = water_cell(water, p)
@@ -374,7 +396,6 @@ def segment_water_kernel(
             # explicit velocity-product part of -m_a P a_p: a_p(qacc = 0) = a_lin + alpha x rp + omega x v_p
             avp = point_vp_accel(sacc, omega, p - com, v)
             f = f - ma * (avp - wp.dot(avp, axis) * axis)
-            mass[k] = ma
         if paper_flow_force != 0:
             # GenTe's flow term as a force on the wet segment, shared by its slices by submerged volume
             i0 = cell[0]
@@ -386,11 +407,6 @@ def segment_water_kernel(
         apply_force(xfrc, xipos, w, b, f, p)
         total = total + f
     seg_force[w, s] = total
-
-    # each slice's added mass (across the axis) at its point, for added_mass_kernel (0 with paper_added_mass)
-    for k in range(NGAUSS):
-        point_mass[NGAUSS * s + k, w] = mass[k]
-        point_offset[NGAUSS * s + k, w] = pts[k] - com
 
 
 @wp.kernel
@@ -421,15 +437,14 @@ def foot_water_kernel(
     xi: wp.array[float],
     xfrc: wp.array2d[wp.spatial_vector],
     foot_water_force: wp.array2d[wp.vec3],
-    point_mass: wp.array2d[float],
-    point_offset: wp.array2d[wp.vec3],
     first_point: int,
 ):
     """Buoyancy, drag and added mass of a foot geom: a sphere (spherical cap, sphere drag) or a box (plate drag).
     Buoyancy is left out (``foot_buoyancy`` 0) for a sphere inside a leg segment, whose own buoyancy counts that
     volume. The added mass tensor (``foot_added_mass``: wholly submerged, along the geom's axes) times the wet
-    fraction goes into M through ``added_mass_kernel`` (point ``first_point + k``, its scale the wet fraction), as
-    the legs' does (not with ``paper_added_mass``, whose GenTe model has no feet)."""
+    fraction goes into M through ``added_mass_kernel`` (point ``first_point + k``, its scale the wet fraction:
+    ``foot_points_kernel``), as the legs' does (not with ``paper_added_mass``, whose GenTe model has no feet); here
+    only its explicit parts, the flow's acceleration and the velocity-product terms."""
     w, k = wp.tid()
     gid = foot_geom[k]
     b = geom_bodyid[gid]
@@ -438,34 +453,27 @@ def foot_water_kernel(
     size = geom_size[w % geom_size.shape[0], gid]
     cell = water_cell(water, c)
     z_w = water.surface[cell[0], cell[1]]
+    wet = foot_wet_fn(geom_type[gid], size, rot, c, z_w)
+    p = wp.vec3(wet[0], wet[1], wet[2])
+    frac = wet[3]
+    if frac <= 0.0:
+        foot_water_force[w, k] = wp.vec3(0.0)
+        return
     t = time[w]
     u = water_flow(water, cell, t, xi[w])
-    f = wp.vec3(0.0)
-    p = c
-    v = wp.vec3(0.0)
-    vol = float(0.0)
-    frac = float(0.0)
     # the drag takes the velocity v of the point p it acts at (the wetted part's middle): its power is never positive
+    v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
+    f = wp.vec3(0.0)
+    vol = float(0.0)
     if geom_type[gid] == GEOM_SPHERE:
         r = size[0]
-        vol = sphere_cap_volume_fn(r, z_w - (c[2] - r))
-        frac = vol / (4.0 / 3.0 * PI * r * r * r)
-        if frac > 0.0:
-            v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
-            f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, z_w - (c[2] - r), v - u)
-            f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
+        vol = frac * (4.0 / 3.0 * PI * r * r * r)
+        f = eps[w] * sphere_drag_fn(rho, cd_sphere, r, z_w - (c[2] - r), v - u)
     else:
-        frac = box_submerged_fraction_fn(size, rot, c[2], z_w)
-        if frac > 0.0:
-            vol = 8.0 * size[0] * size[1] * size[2] * frac
-            e_z = wp.abs(rot[2, 0]) * size[0] + wp.abs(rot[2, 1]) * size[1] + wp.abs(rot[2, 2]) * size[2]
-            p = c - wp.vec3(0.0, 0.0, e_z * (1.0 - frac))  # a level box: the middle of its submerged height
-            v = point_velocity(cvel, subtree_com, body_rootid, w, b, p)
-            f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - e_z), v - u)
-            f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
-    scale = float(0.0)
-    if frac > 0.0 and paper_added_mass == 0:
-        scale = frac
+        vol = 8.0 * size[0] * size[1] * size[2] * frac
+        f = eps[w] * plate_drag_fn(rho, cd_plate, size, rot, z_w - (c[2] - box_half_height_fn(size, rot)), v - u)
+    f = f + wp.vec3(0.0, 0.0, foot_buoyancy[k] * eps[w] * rho * g * vol)
+    if paper_added_mass == 0:
         added = frac * (rot * wp.diag(foot_added_mass[k]) * wp.transpose(rot))
         # Froude-Krylov and added mass in accelerating flow, and the explicit velocity-product part of -A a_p
         com = subtree_com[w, body_rootid[b]]
@@ -474,11 +482,67 @@ def foot_water_kernel(
         avp = point_vp_accel(sacc, wp.vec3(vb[0], vb[1], vb[2]), p - com, v)
         du = flow_accel(water, cell, t, xi[w])
         f = f + rho * vol * du + added * (du - avp)
-        point_offset[first_point + k, w] = p - com
-    if frac > 0.0:
-        apply_force(xfrc, xipos, w, b, f, p)
+    apply_force(xfrc, xipos, w, b, f, p)
     foot_water_force[w, k] = f
-    point_mass[first_point + k, w] = scale
+
+
+@wp.kernel
+def segment_points_kernel(
+    seg_geom: wp.array[int],
+    seg_body: wp.array[int],
+    seg_radius: wp.array[float],
+    seg_halflen: wp.array[float],
+    body_rootid: wp.array[int],
+    geom_xpos: wp.array2d[wp.vec3],
+    geom_xmat: wp.array2d[wp.mat33],
+    subtree_com: wp.array2d[wp.vec3],
+    water: WaterMap,
+    rho: float,
+    ca: float,
+    point_mass: wp.array2d[float],
+    point_offset: wp.array2d[wp.vec3],
+):
+    """Each leg slice's added mass across its axis, Ca rho V (kg, 0 where dry), and its Gauss point's offset from
+    the tree's centre of mass, for ``added_mass_kernel``. Apart from ``segment_water_kernel``, which needs neither,
+    so the added mass need not wait for the forces (``TerrainForces.passive``)."""
+    w, s = wp.tid()
+    gid = seg_geom[s]
+    c = geom_xpos[w, gid]
+    xm = geom_xmat[w, gid]
+    axis = wp.vec3(xm[0, 2], xm[1, 2], xm[2, 2])
+    sin_t = wp.sqrt(wp.max(1.0 - axis[2] * axis[2], 0.0))
+    pts, vols = segment_slices_fn(water, c, axis, axis[2], sin_t, seg_radius[s], seg_halflen[s])
+    com = subtree_com[w, body_rootid[seg_body[s]]]
+    for k in range(NGAUSS):
+        point_mass[NGAUSS * s + k, w] = ca * rho * wp.max(vols[k], 0.0)
+        point_offset[NGAUSS * s + k, w] = pts[k] - com
+
+
+@wp.kernel
+def foot_points_kernel(
+    foot_geom: wp.array[int],
+    geom_type: wp.array[int],
+    geom_size: wp.array2d[wp.vec3],
+    geom_bodyid: wp.array[int],
+    body_rootid: wp.array[int],
+    geom_xpos: wp.array2d[wp.vec3],
+    geom_xmat: wp.array2d[wp.mat33],
+    subtree_com: wp.array2d[wp.vec3],
+    water: WaterMap,
+    first_point: int,
+    point_mass: wp.array2d[float],
+    point_offset: wp.array2d[wp.vec3],
+):
+    """Each foot's added-mass scale, its wet fraction, and its point's offset from the tree's centre of mass (point
+    ``first_point + k``), for ``added_mass_kernel``: apart from ``foot_water_kernel``, as ``segment_points_kernel``."""
+    w, k = wp.tid()
+    gid = foot_geom[k]
+    c = geom_xpos[w, gid]
+    cell = water_cell(water, c)
+    wet = foot_wet_fn(geom_type[gid], geom_size[w % geom_size.shape[0], gid], geom_xmat[w, gid], c,
+                      water.surface[cell[0], cell[1]])
+    point_mass[first_point + k, w] = wp.max(wet[3], 0.0)
+    point_offset[first_point + k, w] = wp.vec3(wet[0], wet[1], wet[2]) - subtree_com[w, body_rootid[geom_bodyid[gid]]]
 
 
 @wp.kernel
