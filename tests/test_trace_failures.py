@@ -101,6 +101,45 @@ def test_bins_count_success_falls_and_the_stalled_share_of_robots_up_and_failing
     assert lines[6].split()[:2] == [">=", "0.70"] and lines[6].split()[-4:] == ["1", "0.0%", "100.0%", "-"]
 
 
+class PondTerrain:
+    """A 10 x 10 m grid of 0.1 m cells (origin at -1 m): ground at 0 m, a pond from x = 4 m on whose water
+    stands at 0.3 m over a bed sloping down from 0 m at x = 4 m to -0.5 m at x = 9 m, dry elsewhere."""
+
+    def __init__(self):
+        from legged_gente.terrain.materials import NO_WATER
+
+        self.resolution, self.origin_xy = 0.1, (-1.0, -1.0)
+        x = self.origin_xy[0] + np.arange(100) * self.resolution
+        self.material = type("M", (), {"water_surface": np.where(x[:, None] >= 4.0 + 0.0 * x[None, :], 0.3,
+                                                                 NO_WATER).astype(np.float32)})()
+
+    def height_at(self, x, y):
+        return np.where(np.asarray(x) >= 4.0, -0.1 * (np.asarray(x) - 4.0), 0.0) + 0.0 * np.asarray(y)
+
+
+def test_the_water_on_the_line_is_its_deepest_point(tool):
+    # the pond's depth at x is 0.3 m of water over a bed at -0.1 (x - 4): 0.3 m at its edge, 0.5 m at x = 6 m
+    depth = tool.water_depth(PondTerrain())
+    np.testing.assert_allclose(depth(np.array([0.0, 3.9, 4.0, 6.0]), np.zeros(4)), [0.0, 0.0, 0.3, 0.5], atol=1e-6)
+    # walking +x from the origin for 6 m reaches x = 6 m: 0.5 m deep; for 3 m it stays dry
+    assert tool.line_depth(depth, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 6.0) == pytest.approx(0.5, abs=1e-6)
+    assert tool.line_depth(depth, np.array([0.0, 0.0]), np.array([1.0, 0.0]), 3.0) == 0.0
+    # walking +y along x = 5 m stays 0.4 m deep; walking -x from x = 7 m (0.6 m) out of the pond keeps its start
+    assert tool.line_depth(depth, np.array([5.0, 0.0]), np.array([0.0, 1.0]), 4.0) == pytest.approx(0.4, abs=1e-6)
+    assert tool.line_depth(depth, np.array([7.0, 0.0]), np.array([-1.0, 0.0]), 5.0) == pytest.approx(0.6, abs=1e-6)
+
+
+def test_water_bins_count_dry_lines_apart(tool, capsys):
+    """Three robots: a dry line (succeeded), one 0.3 m deep (fell) and one 0.9 m deep (up, failed, stalled)."""
+    tool.print_bins(np.array([0.0, 0.3, 0.9]), np.array([True, False, False]), np.array([False, True, False]),
+                    np.array([False, False, True]), what="water", bins=tool.WATER_BINS)
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("water on the line (m)")
+    assert lines[1].split()[:2] == ["[0.00,", "0.01)"] and lines[1].split()[-4:] == ["1", "100.0%", "0.0%", "-"]
+    assert lines[3].split()[:2] == ["[0.20,", "0.40)"] and lines[3].split()[-4:] == ["1", "0.0%", "100.0%", "-"]
+    assert lines[-1].split()[:2] == [">=", "0.60"] and lines[-1].split()[-4:] == ["1", "0.0%", "0.0%", "100.0%"]
+
+
 def test_the_report_picks_terrains_where_robots_stay_up_and_fail(tool, tmp_path):
     report = tmp_path / "report.csv"
     report.write_text("row,name,success_rate,fall_rate\nterrain,up_and_failing,0.3,0.1\nterrain,falling,0.3,0.5\n"
@@ -131,3 +170,6 @@ def test_on_flat_ground_every_robot_has_a_line_without_a_step(tool, monkeypatch,
     assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[9:14])
     assert table[14].startswith(f"lines with no step or drop of 0.45 m or more: {moving} robots")
     assert table[15] == "lines with a step or a drop beyond: 0 robots, -"
+    assert table[16] == "water on the line (m)  robots  success     fell  up, failed: stalled"
+    assert table[17].split()[:3] == ["[0.00,", "0.01)", str(moving)]  # the flat benchmark is dry
+    assert all(row.split()[-4:] == ["0", "-", "-", "-"] for row in table[18:22])

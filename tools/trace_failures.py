@@ -12,7 +12,9 @@ share that had stalled (moved less than 30 % of the commanded speed over the las
 for the robots that succeed on such a line the tool says how they passed it (the rise past the distance the rule
 asks for, or the robot past the rise's distance along the line, with its largest sideways offset). A second table
 bins the same robots by the line's *drop* (the largest fall of the ground over ``run``: a bank down into a channel
-or a trench), and a last pair of lines splits them by whether the line holds a step or a drop of 0.45 m or more.
+or a trench), a pair of lines splits them by whether the line holds a step or a drop of 0.45 m or more, and a last
+table bins them by the deepest water on the line (the biped's pelvis stands about 1 m above its soles, the
+quadruped's trunk 0.3 m).
 
     python tools/trace_failures.py --task gente_biped --pretrained --benchmark gente_original \
         --report docs/results/heading_tracking/gente_original_eval_biped_29219.csv
@@ -31,6 +33,7 @@ import math
 import numpy as np
 
 STEP_BINS = (0.0, 0.1, 0.2, 0.3, 0.45, 0.7, math.inf)  # m
+WATER_BINS = (0.0, 0.01, 0.2, 0.4, 0.6, math.inf)  # m of water on the line: the first bin is dry
 WALL = STEP_BINS[-2]  # m: the last bin's rise
 REACH = STEP_BINS[-3]  # m: taller steps (up or down) than the curriculum's 0.30 m and the lone-step benchmark's reach
 LINE_MARGIN = 0.5  # m: how far the line runs past the distance the success rule asks for
@@ -57,12 +60,36 @@ def line_step(height, start_xy: np.ndarray, direction: np.ndarray, length: float
     return (float(rise[k]), float(r[k + lag])) if rise[k] > 0.0 else (0.0, 0.0)
 
 
+def water_depth(terrain):
+    """``depth(x, y)``: the water's depth (m) over the ground at world points, 0 where dry: the nearest cell's
+    surface, as the force kernels read it (``kernels.cell_of``), above the ground's height."""
+    from legged_gente.terrain.materials import NO_WATER
+
+    surface = terrain.material.water_surface
+    nx, ny = surface.shape
+
+    def depth(x, y):
+        i = np.clip(np.rint((np.asarray(x) - terrain.origin_xy[0]) / terrain.resolution), 0, nx - 1).astype(int)
+        j = np.clip(np.rint((np.asarray(y) - terrain.origin_xy[1]) / terrain.resolution), 0, ny - 1).astype(int)
+        top = surface[i, j]
+        return np.where(top > NO_WATER / 2, np.maximum(top - terrain.height_at(x, y), 0.0), 0.0)
+
+    return depth
+
+
+def line_depth(depth, start_xy: np.ndarray, direction: np.ndarray, length: float, spacing: float = 0.1) -> float:
+    """The deepest water (``depth(x, y)``, m) on the line from ``start_xy`` in ``direction`` for ``length`` metres,
+    sampled every ``spacing`` metres."""
+    r = np.arange(0.0, length + spacing / 2, spacing)
+    return float(depth(start_xy[0] + r * direction[0], start_xy[1] + r * direction[1]).max())
+
+
 def print_bins(steps: np.ndarray, success: np.ndarray, fell: np.ndarray, stalled: np.ndarray,
-               what: str = "step") -> None:
-    """Per bin of the line's step (or drop, ``what``): robots, success and fall rates, and the stalled share of
-    those that stayed up and failed (``stalled`` is read only there)."""
+               what: str = "step", bins: tuple = STEP_BINS) -> None:
+    """Per bin of the line's step (or drop, or water, ``what``, in ``bins``): robots, success and fall rates, and
+    the stalled share of those that stayed up and failed (``stalled`` is read only there)."""
     print(f"{what} on the line (m)".ljust(21) + "  robots  success     fell  up, failed: stalled")
-    for lo, hi in zip(STEP_BINS[:-1], STEP_BINS[1:]):
+    for lo, hi in zip(bins[:-1], bins[1:]):
         in_bin = (steps >= lo) & (steps < hi)
         up_failed = in_bin & ~success & ~fell
         label = f"[{lo:.2f}, {hi:.2f})" if math.isfinite(hi) else f">= {lo:.2f}"
@@ -190,6 +217,9 @@ def main() -> None:
                       for i in robots])
     print_bins(drops, success[robots], fell, stalled, what="drop")
     print_reach(steps, drops, success[robots], fell)
+    depth = water_depth(env.terrain)
+    waters = np.array([line_depth(depth, xy[i, start], direction[i], length[i]) for i in robots])
+    print_bins(waters, success[robots], fell, stalled, what="water", bins=WATER_BINS)
 
 
 if __name__ == "__main__":
