@@ -68,9 +68,12 @@ def water_depth(terrain):
     surface = terrain.material.water_surface
     nx, ny = surface.shape
 
+    def nearest(u, n):  # halves away from zero, as wp.round
+        return np.clip(np.sign(u) * np.floor(np.abs(u) + 0.5), 0, n - 1).astype(int)
+
     def depth(x, y):
-        i = np.clip(np.rint((np.asarray(x) - terrain.origin_xy[0]) / terrain.resolution), 0, nx - 1).astype(int)
-        j = np.clip(np.rint((np.asarray(y) - terrain.origin_xy[1]) / terrain.resolution), 0, ny - 1).astype(int)
+        i = nearest((np.asarray(x) - terrain.origin_xy[0]) / terrain.resolution, nx)
+        j = nearest((np.asarray(y) - terrain.origin_xy[1]) / terrain.resolution, ny)
         top = surface[i, j]
         return np.where(top > NO_WATER / 2, np.maximum(top - terrain.height_at(x, y), 0.0), 0.0)
 
@@ -218,7 +221,8 @@ def main() -> None:
     print_bins(drops, success[robots], fell, stalled, what="drop")
     print_reach(steps, drops, success[robots], fell)
     depth = water_depth(env.terrain)
-    waters = np.array([line_depth(depth, xy[i, start], direction[i], length[i]) for i in robots])
+    waters = np.array([line_depth(depth, xy[i, start], direction[i], length[i], spacing=env.terrain.resolution / 2)
+                       for i in robots])  # half a cell apart: a line crossing a stream one cell wide samples it
     print_bins(waters, success[robots], fell, stalled, what="water", bins=WATER_BINS)
 
 

@@ -6,8 +6,8 @@ foot. ``segment_points_kernel`` and ``foot_points_kernel`` write each water poin
 point's offset from the tree's centre of mass) from the same wet geometry (``segment_slices_fn``, ``foot_wet_fn``),
 and ``added_mass_kernel`` (worlds x points x dofs), launched after each of them for its own points, builds each
 point's tensor from its geom's axes and adds it to the joint-space mass matrix ``d.M``: the added mass does not wait
-for the forces. mujoco_warp's ``step`` computes M
-in ``fwd_position`` (``smooth.crb``, which rebuilds it from scratch each substep), calls the passive callback in
+for the forces. mujoco_warp's ``step`` computes M in ``fwd_position`` (``smooth.crb``, which rebuilds it from
+scratch each substep), calls the passive callback in
 ``fwd_velocity`` and only then factorises M (``fwd_acceleration``) and builds the constraint solver's Hessian and
 the implicit integrators' matrices from it, so an addition made here is seen by the whole step: the added mass is
 implicit, acts in the same substep and cannot destabilise a light body (an explicit reaction -m_a * a, from last
@@ -564,9 +564,9 @@ def added_mass_kernel(
     i one of the dofs moving its body (``point_dofs[pt, n]``, -1 past the chain) and j each ancestor of i (or i
     itself). A = s R diag(point_axes) R^T, R its geom's axes, s = ``point_mass`` (a slice's m_k with axes (1, 1, 0):
     across the axis only; a foot's wet fraction with its added masses along its axes). One thread per (world,
-    point, dof) keeps the chains' loops short; the water kernels write only a scale and an offset per point. A
+    point, dof) keeps the chains' loops short; the points kernels write only a scale and an offset per point. A
     launch covers the points from ``first_point`` on, as many as its second dimension: the legs' and the feet's
-    are launched apart, each after its own water kernel (``TerrainForces.passive``)."""
+    are launched apart, each after its own points kernel (``TerrainForces.passive``)."""
     w, k, n = wp.tid()
     pt = first_point + k
     i = point_dofs[pt, n]
