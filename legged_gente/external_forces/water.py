@@ -291,15 +291,14 @@ def box_half_height_fn(half: wp.vec3, rot: wp.mat33) -> float:
 
 
 @wp.func
-def foot_wet_fn(geom_type: int, size: wp.vec3, rot: wp.mat33, c: wp.vec3, z_w: float) -> wp.vec4:
-    """A foot geom's wet fraction (the last entry) and the point its water forces act at (the first three): a
-    sphere's centre; a box's middle of its submerged height (exact for a level box)."""
+def foot_wet_fn(geom_type: int, size: wp.vec3, rot: wp.mat33, c: wp.vec3, z_w: float):
+    """A foot geom's point its water forces act at and its wet fraction: a sphere's centre; a box's middle of its
+    submerged height (exact for a level box)."""
     if geom_type == GEOM_SPHERE:
         r = size[0]
-        return wp.vec4(c[0], c[1], c[2], sphere_cap_volume_fn(r, z_w - (c[2] - r)) / (4.0 / 3.0 * PI * r * r * r))
+        return c, sphere_cap_volume_fn(r, z_w - (c[2] - r)) / (4.0 / 3.0 * PI * r * r * r)
     frac = box_submerged_fraction_fn(size, rot, c[2], z_w)
-    e_z = box_half_height_fn(size, rot)
-    return wp.vec4(c[0], c[1], c[2] - e_z * (1.0 - frac), frac)
+    return c - wp.vec3(0.0, 0.0, box_half_height_fn(size, rot) * (1.0 - frac)), frac
 
 
 @wp.kernel
@@ -453,9 +452,7 @@ def foot_water_kernel(
     size = geom_size[w % geom_size.shape[0], gid]
     cell = water_cell(water, c)
     z_w = water.surface[cell[0], cell[1]]
-    wet = foot_wet_fn(geom_type[gid], size, rot, c, z_w)
-    p = wp.vec3(wet[0], wet[1], wet[2])
-    frac = wet[3]
+    p, frac = foot_wet_fn(geom_type[gid], size, rot, c, z_w)
     if frac <= 0.0:
         foot_water_force[w, k] = wp.vec3(0.0)
         return
@@ -539,10 +536,10 @@ def foot_points_kernel(
     gid = foot_geom[k]
     c = geom_xpos[w, gid]
     cell = water_cell(water, c)
-    wet = foot_wet_fn(geom_type[gid], geom_size[w % geom_size.shape[0], gid], geom_xmat[w, gid], c,
-                      water.surface[cell[0], cell[1]])
-    point_mass[first_point + k, w] = wp.max(wet[3], 0.0)
-    point_offset[first_point + k, w] = wp.vec3(wet[0], wet[1], wet[2]) - subtree_com[w, body_rootid[geom_bodyid[gid]]]
+    p, frac = foot_wet_fn(geom_type[gid], geom_size[w % geom_size.shape[0], gid], geom_xmat[w, gid], c,
+                          water.surface[cell[0], cell[1]])
+    point_mass[first_point + k, w] = wp.max(frac, 0.0)
+    point_offset[first_point + k, w] = p - subtree_com[w, body_rootid[geom_bodyid[gid]]]
 
 
 @wp.kernel
