@@ -576,6 +576,12 @@ def normal_force_kernel(
     wp.atomic_add(limb_fn, w, f, wp.max(frc[0], 0.0))
 
 
+@wp.func
+def low_pass_fn(value: float, target: float, alpha: float) -> float:
+    """One step of a first-order low-pass towards ``target`` (alpha = dt / tau)."""
+    return value + alpha * (target - value)
+
+
 @wp.kernel
 def foot_state_kernel(
     dt: float,
@@ -613,12 +619,12 @@ def foot_state_kernel(
     """
     w, f = wp.tid()
     fn = foot_fn[w, f]
-    foot_load[w, f] = foot_load[w, f] + load_alpha * (fn - foot_load[w, f])
-    foot_sink_load[w, f] = foot_sink_load[w, f] + load_alpha * (foot_load[w, f] - foot_sink_load[w, f])
+    foot_load[w, f] = low_pass_fn(foot_load[w, f], fn, load_alpha)
+    foot_sink_load[w, f] = low_pass_fn(foot_sink_load[w, f], foot_load[w, f], load_alpha)
     if fn > contact_threshold or foot_stance[w, f] > 0.0:
         foot_stance[w, f] = foot_stance[w, f] + dt
         alpha = wp.max(traction_alpha, dt / foot_stance[w, f])
-        foot_traction_load[w, f] = foot_traction_load[w, f] + alpha * (fn - foot_traction_load[w, f])
+        foot_traction_load[w, f] = low_pass_fn(foot_traction_load[w, f], fn, alpha)
         foot_slip[w, f] = foot_slip[w, f] + dt * wp.length(foot_vel[w, f])
     if fn > contact_threshold:
         foot_air[w, f] = 0.0
@@ -697,8 +703,8 @@ def leg_state_kernel(
     liftoff_time and it is out of its rut, the rut is forgotten (the leg meets the undisturbed surface again).
     The substep's findings (contact flags, candidate depth, normal force) are cleared for the next."""
     w, k = wp.tid()
-    legs.load[w, k] = legs.load[w, k] + load_alpha * (leg_fn[w, k] - legs.load[w, k])
-    legs.sink_load[w, k] = legs.sink_load[w, k] + load_alpha * (legs.load[w, k] - legs.sink_load[w, k])
+    legs.load[w, k] = low_pass_fn(legs.load[w, k], leg_fn[w, k], load_alpha)
+    legs.sink_load[w, k] = low_pass_fn(legs.sink_load[w, k], legs.load[w, k], load_alpha)
     if legs.touch[w, k] != 0:
         legs.sinkage[w, k] = wp.max(legs.sinkage[w, k], legs.cand[w, k])
     if leg_fn[w, k] > contact_threshold:
