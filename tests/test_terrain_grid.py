@@ -62,7 +62,7 @@ def test_allocate_columns_by_proportions():
 
 
 def test_parse_terrain_type():
-    assert parse_tile_type("river+water:depth=0.2") == [("river", {}), ("water", {"depth": 0.2})]
+    assert parse_tile_type("river+water:depth=0.2") == [[("river", {}), ("water", {"depth": 0.2})]]
     assert parse_terrain_type("water:flow=current,speed=0.5") == ("water", {"flow": "current", "speed": 0.5})
     with pytest.raises(ValueError, match="unknown atomic terrain 'lava'"):
         parse_terrain_type("lava")

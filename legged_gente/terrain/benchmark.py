@@ -28,7 +28,7 @@ def benchmark_grid(
     num_rows: int = 10, num_cols: int = len(BENCHMARK_TYPES), tile_size: float = 8.0, resolution: float = 0.1, repeats: int = 3
 ) -> dict[str, Any]:
     """Build the curriculum grid ``repeats`` times; return the best and mean build seconds and the grid facts."""
-    covered = {name for entry in BENCHMARK_TYPES for name, _ in parse_tile_type(entry)}
+    covered = {name for entry in BENCHMARK_TYPES for ops in parse_tile_type(entry) for name, _ in ops}
     missing = sorted(set(ATOMIC_TERRAINS) - covered)
     if missing:
         raise RuntimeError(f"benchmark types miss the atomic terrains {missing}; add them to BENCHMARK_TYPES.")

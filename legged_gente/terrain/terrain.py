@@ -11,7 +11,11 @@ A ``terrain_types`` entry is an atomic terrain name, optionally with fixed param
 atomics joined by ``+`` are applied in order to the whole tile, each at the tile's difficulty:
 ``"river+water"`` (a filled channel), ``"hills+soil:preset=dry_sand"`` (dunes). The first geometric atomic sets
 the heights and each later one adds to them: ``"hills+rocks"`` is rocks on hills. Physical terrains alone
-(water, soil, low_friction) lie on flat ground. Tile sizes and the border are whole numbers of cells.
+(water, soil, low_friction) lie on flat ground. Entries joined by ``|`` make a mosaic: each of the tile's four
+quadrants is one of them, drawn from the tile's seed, at the tile's difficulty, and the quadrants meet through the
+composition's seam blend as the parts of a generated terrain do (``"pyramid_stairs|rocks|natural_ground"``: where
+stairs that rise to a quadrant's edge meet rocks, a step as tall as the stairs). Tile sizes and the border are
+whole numbers of cells.
 """
 
 from __future__ import annotations
@@ -23,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .composition import Operation, Part, Region, TileSpec, build_tile, read_json, tile_spec_from_document
+from .composition import (QUADRANTS, Operation, Part, Region, TileSpec, build_tile, quadrant, read_json,
+                          tile_spec_from_document)
 from .materials import MaterialMap
 from .registry import ATOMIC_TERRAINS, MAX_DIFFICULTY
 
@@ -34,6 +39,9 @@ SPAWN_MAX_RANGE = 0.05
 """Largest height difference (m) inside the spawn footprint: more means a slope, a step or an obstacle."""
 
 MODES = ("plane", "curriculum", "random", "selected", "generated")
+
+MOSAIC_STREAM = 1
+"""Spawn key (after the tile's row and column) of the random stream that picks a mosaic's quadrants."""
 
 
 def parse_terrain_type(entry: str) -> tuple[str, dict[str, Any]]:
@@ -65,9 +73,10 @@ def normalised_proportions(proportions: list[float]) -> np.ndarray:
     return p / p.sum()
 
 
-def parse_tile_type(entry: str) -> list[tuple[str, dict[str, Any]]]:
-    """A ``terrain_types`` entry -> the (name, fixed params) of each atomic joined by ``+``."""
-    return [parse_terrain_type(part) for part in entry.split("+")]
+def parse_tile_type(entry: str) -> list[list[tuple[str, dict[str, Any]]]]:
+    """A ``terrain_types`` entry -> its alternatives (joined by ``|``: a mosaic's), each the (name, fixed params)
+    of its atomics joined by ``+``. An entry without ``|`` has one alternative: the whole tile."""
+    return [[parse_terrain_type(part) for part in alternative.split("+")] for alternative in entry.split("|")]
 
 
 def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
@@ -180,34 +189,40 @@ class Terrain:
     def _tile_seed(self, r: int, c: int) -> int:
         return int(np.random.SeedSequence(int(self.cfg.seed), spawn_key=(r, c)).generate_state(1)[0])
 
-    def _atomic_tile(self, r: int, c: int, entry: str, ops: list[tuple[str, dict[str, Any]]],
+    def _atomic_tile(self, r: int, c: int, entry: str, alternatives: list[list[tuple[str, dict[str, Any]]]],
                      difficulty: float | None):
-        """Builder of the tile ``entry``: ``ops`` on the whole tile, at ``difficulty`` (None: the params as given).
-
-        The first geometric atomic sets the heights and each later one adds to them ("hills+rocks": rocks on
-        hills); physical atomics paint the final ground.
-        """
-        operations, heights_set = [], False
-        for name, fixed in ops:
-            atomic = ATOMIC_TERRAINS[name]
-            if difficulty is None:
-                params = atomic.check_params(fixed)
-            else:
-                params = atomic.params_for_difficulty(difficulty, fixed)
-            geometric = atomic.kind == "geometric"
-            operations.append(Operation(name, params, "add" if geometric and heights_set else "set"))
-            heights_set = heights_set or geometric
+        """Builder of the tile ``entry`` at ``difficulty`` (None: the params as given): its one alternative over the
+        whole tile, or, for a mosaic, one alternative per quadrant drawn from the tile's seed."""
         size_x, size_y = self.tile_size
-        spec = TileSpec(size_x, size_y, self.resolution, self._tile_seed(r, c),
-                        [Part(Region(0.0, 0.0, size_x, size_y), operations)])
+        if len(alternatives) == 1:
+            parts = [Part(Region(0.0, 0.0, size_x, size_y), self._operations(alternatives[0], difficulty))]
+        else:  # its own stream of the tile's seed: the parts' atomics draw from (part, op) streams of it
+            rng = np.random.default_rng(np.random.SeedSequence(int(self.cfg.seed), spawn_key=(r, c, MOSAIC_STREAM)))
+            picks = rng.integers(len(alternatives), size=len(QUADRANTS))
+            parts = [Part(quadrant(name, size_x, size_y), self._operations(alternatives[k], difficulty))
+                     for name, k in zip(QUADRANTS, picks)]
+        spec = TileSpec(size_x, size_y, self.resolution, self._tile_seed(r, c), parts)
 
         def build():
             try:
                 return build_tile(spec, float(self.cfg.static_friction))
-            except ValueError as exc:  # e.g. the height bound: say which tile and entry, the part is the whole tile
+            except ValueError as exc:  # e.g. the height bound: say which tile and entry
                 raise ValueError(f"tile ({r}, {c}) {entry!r}: {exc}") from None
 
         return build
+
+    @staticmethod
+    def _operations(ops: list[tuple[str, dict[str, Any]]], difficulty: float | None) -> list[Operation]:
+        """One part's operations: the first geometric atomic sets the heights and each later one adds to them
+        ("hills+rocks": rocks on hills); physical atomics paint the final ground."""
+        operations, heights_set = [], False
+        for name, fixed in ops:
+            atomic = ATOMIC_TERRAINS[name]
+            params = atomic.check_params(fixed) if difficulty is None else atomic.params_for_difficulty(difficulty, fixed)
+            geometric = atomic.kind == "geometric"
+            operations.append(Operation(name, params, "add" if geometric and heights_set else "set"))
+            heights_set = heights_set or geometric
+        return operations
 
     def _plan(self) -> dict[tuple[int, int], tuple[str, Any]]:
         """(row, col) -> (tile name, zero-argument builder of (heights, material))."""
@@ -250,7 +265,7 @@ class Terrain:
             ops = [(name, dict(cfg.selected_params or {}))]
             for r in range(rows):
                 for c in range(cols):
-                    plan[r, c] = (name, self._atomic_tile(r, c, name, ops, None))
+                    plan[r, c] = (name, self._atomic_tile(r, c, name, [ops], None))
         else:  # generated
             paths = [Path(p) for p in cfg.generated_specs or []]
             if not paths:
