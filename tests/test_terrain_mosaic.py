@@ -57,6 +57,9 @@ def test_an_entry_with_bars_parses_into_alternatives():
     assert parse_tile_type("hills+rocks") == [[("hills", {}), ("rocks", {})]]
     with pytest.raises(ValueError, match="unknown atomic terrain 'hils'"):
         parse_tile_type("flat|hils")
+    for entry in ("flat||rocks", "flat|", "|rocks", "hills+|rocks", "hills+"):
+        with pytest.raises(ValueError, match=r"has an empty name before or after a '\|' or '\+'"):
+            parse_tile_type(entry)
 
 
 def test_each_quadrant_is_one_alternative_drawn_per_tile():

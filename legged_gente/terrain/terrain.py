@@ -76,7 +76,11 @@ def normalised_proportions(proportions: list[float]) -> np.ndarray:
 def parse_tile_type(entry: str) -> list[list[tuple[str, dict[str, Any]]]]:
     """A ``terrain_types`` entry -> its alternatives (joined by ``|``: a mosaic's), each the (name, fixed params)
     of its atomics joined by ``+``. An entry without ``|`` has one alternative: the whole tile."""
-    return [[parse_terrain_type(part) for part in alternative.split("+")] for alternative in entry.split("|")]
+    alternatives = [alternative.split("+") for alternative in entry.split("|")]
+    if any(not part.strip() for parts in alternatives for part in parts):
+        raise ValueError(f"terrain type {entry!r} has an empty name before or after a '|' or '+'; join atomic "
+                         f"terrains, e.g. 'hills+rocks' or 'pyramid_stairs|rocks'.")
+    return [[parse_terrain_type(part) for part in parts] for parts in alternatives]
 
 
 def allocate_columns(proportions: list[float], num_cols: int) -> np.ndarray:
