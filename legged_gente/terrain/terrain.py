@@ -200,7 +200,7 @@ class Terrain:
         size_x, size_y = self.tile_size
         if len(alternatives) == 1:
             parts = [Part(Region(0.0, 0.0, size_x, size_y), self._operations(alternatives[0], difficulty))]
-        else:  # its own stream of the tile's seed: the parts' atomics draw from (part, op) streams of it
+        else:  # a stream of its own, apart from the (part, op) streams of the tile's seed its parts draw from
             rng = np.random.default_rng(np.random.SeedSequence(int(self.cfg.seed), spawn_key=(r, c, MOSAIC_STREAM)))
             picks = rng.integers(len(alternatives), size=len(QUADRANTS))
             parts = [Part(quadrant(name, size_x, size_y), self._operations(alternatives[k], difficulty))
