@@ -1,4 +1,5 @@
-"""Documentation assets from the registry: a preview PNG per atomic terrain, the curriculum grid, the docs table.
+"""Documentation assets from the registry: a preview PNG per atomic terrain, the curriculum grid, a mosaic's tiles,
+the docs table.
 
 ``python -m legged_gente.terrain.gallery [--img docs/img] [--doc docs/terrain.md]`` rewrites the images and the
 table of atomic terrains between the ``<!-- atomics:start -->`` / ``<!-- atomics:end -->`` markers of the doc.
@@ -46,6 +47,22 @@ def curriculum_terrain() -> Terrain:
     return Terrain(Cfg, num_robots=1)
 
 
+GALLERY_MOSAIC = "pyramid_stairs|pyramid_stairs:direction=down|discrete_obstacles|rocks|natural_ground|pyramid_slope"
+"""The mosaic shown in docs/terrain.md: four tiles of it at each of four difficulties."""
+
+
+def mosaic_terrain() -> Terrain:
+    class Cfg:
+        mesh_type, mode, resolution, border_size = "heightfield", "curriculum", 0.1, 2.0
+        terrain_length = terrain_width = 8.0
+        num_rows, num_cols = 4, 4
+        terrain_types, terrain_proportions = [GALLERY_MOSAIC], [1.0]
+        selected_terrain, selected_params, generated_specs = "flat", {}, []
+        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 0, True, 1.0, 0
+
+    return Terrain(Cfg, num_robots=1)
+
+
 def _format(value) -> str:
     if isinstance(value, float):
         return f"{value:.4g}"
@@ -87,9 +104,10 @@ def write_gallery(img_dir: Path, doc: Path | None) -> list[Path]:
         path = img_dir / f"terrain_{name}.png"
         Image.fromarray(atomic_preview(name)).save(path, optimize=True)
         written.append(path)
-    grid = curriculum_terrain().save_preview(img_dir / "terrain_curriculum.png", max_size=1000)
-    Image.open(grid).quantize(colors=128).save(grid, optimize=True)  # docs asset: keep it small
-    written.append(grid)
+    for terrain, name in ((curriculum_terrain(), "terrain_curriculum.png"), (mosaic_terrain(), "terrain_mosaic.png")):
+        grid = terrain.save_preview(img_dir / name, max_size=1000)
+        Image.open(grid).quantize(colors=128).save(grid, optimize=True)  # docs asset: keep it small
+        written.append(grid)
     if doc is not None:
         text = doc.read_text()
         if START not in text or END not in text:
