@@ -24,6 +24,22 @@ BENCHMARK_TYPES = [
 basin, sand, slippery ground and a frozen pond (its ice 5 cm above the basin's floor, below the rim as it deepens)."""
 
 
+def curriculum_config(types: list[str], num_rows: int, num_cols: int, tile_size: float = 8.0,
+                      resolution: float = 0.1, border_size: float = 5.0) -> type:
+    """A terrain config of a curriculum grid: a column per entry of ``types`` (in equal shares of ``num_cols``),
+    difficulty 0 to 1 over ``num_rows`` rows of ``tile_size`` m tiles."""
+
+    class Cfg:
+        mesh_type, mode = "heightfield", "curriculum"
+        terrain_length = terrain_width = tile_size
+        terrain_types, terrain_proportions = types, [1.0 / len(types)] * len(types)
+        selected_terrain, selected_params, generated_specs = "flat", {}, []
+        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 0, True, 1.0, 0
+
+    Cfg.resolution, Cfg.border_size, Cfg.num_rows, Cfg.num_cols = resolution, border_size, num_rows, num_cols
+    return Cfg
+
+
 def benchmark_grid(
     num_rows: int = 10, num_cols: int = len(BENCHMARK_TYPES), tile_size: float = 8.0, resolution: float = 0.1, repeats: int = 3
 ) -> dict[str, Any]:
@@ -33,17 +49,7 @@ def benchmark_grid(
     if missing:
         raise RuntimeError(f"benchmark types miss the atomic terrains {missing}; add them to BENCHMARK_TYPES.")
 
-    class Cfg:
-        mesh_type = "heightfield"
-        mode = "curriculum"
-        border_size = 5.0
-        terrain_length = terrain_width = tile_size
-        terrain_types = BENCHMARK_TYPES
-        terrain_proportions = [1.0 / len(BENCHMARK_TYPES)] * len(BENCHMARK_TYPES)
-        selected_terrain, selected_params, generated_specs = "flat", {}, []
-        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 5, True, 1.0, 0
-
-    Cfg.resolution, Cfg.num_rows, Cfg.num_cols = resolution, num_rows, num_cols
+    Cfg = curriculum_config(BENCHMARK_TYPES, num_rows, num_cols, tile_size, resolution)
     times = []
     for _ in range(repeats):
         start = time.perf_counter()

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .benchmark import BENCHMARK_TYPES
+from .benchmark import BENCHMARK_TYPES, curriculum_config
 from .composition import Operation, Part, Region, TileSpec
 from .registry import ATOMIC_TERRAINS, Param
 from .terrain import Terrain, preview_rgb
@@ -35,16 +35,7 @@ def atomic_preview(name: str, size: float = 8.0, resolution: float = 0.1, pixels
 
 
 def curriculum_terrain() -> Terrain:
-    class Cfg:
-        mesh_type, mode, resolution, border_size = "heightfield", "curriculum", 0.1, 2.0
-        terrain_length = terrain_width = 8.0
-        num_rows, num_cols = 10, len(BENCHMARK_TYPES)
-        terrain_types = BENCHMARK_TYPES
-        terrain_proportions = [1.0 / len(BENCHMARK_TYPES)] * len(BENCHMARK_TYPES)
-        selected_terrain, selected_params, generated_specs = "flat", {}, []
-        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 5, True, 1.0, 0
-
-    return Terrain(Cfg, num_robots=1)
+    return Terrain(curriculum_config(BENCHMARK_TYPES, 10, len(BENCHMARK_TYPES), border_size=2.0), num_robots=1)
 
 
 GALLERY_MOSAIC = "pyramid_stairs|pyramid_stairs:direction=down|discrete_obstacles|rocks|natural_ground|pyramid_slope"
@@ -52,15 +43,7 @@ GALLERY_MOSAIC = "pyramid_stairs|pyramid_stairs:direction=down|discrete_obstacle
 
 
 def mosaic_terrain() -> Terrain:
-    class Cfg:
-        mesh_type, mode, resolution, border_size = "heightfield", "curriculum", 0.1, 2.0
-        terrain_length = terrain_width = 8.0
-        num_rows, num_cols = 4, 4
-        terrain_types, terrain_proportions = [GALLERY_MOSAIC], [1.0]
-        selected_terrain, selected_params, generated_specs = "flat", {}, []
-        max_difficulty, max_init_terrain_level, curriculum, static_friction, seed = 1.0, 0, True, 1.0, 0
-
-    return Terrain(Cfg, num_robots=1)
+    return Terrain(curriculum_config([GALLERY_MOSAIC], 4, 4, border_size=2.0), num_robots=1)
 
 
 def _format(value) -> str:
